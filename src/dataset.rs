@@ -1,0 +1,100 @@
+//! The dataset: a deterministic train/val/test split and the Ultralytics layout
+//! (`images/{train,val,test}`, `labels/{train,val,test}`, `data.yaml`).
+
+use rand::RngExt;
+use serde::Serialize;
+
+use crate::campaign::Split;
+use crate::rng::{Purpose, stream};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, PartialOrd, Ord)]
+#[serde(rename_all = "lowercase")]
+pub enum Subset {
+    Train,
+    Val,
+    Test,
+}
+
+impl Subset {
+    pub fn name(self) -> &'static str {
+        match self {
+            Subset::Train => "train",
+            Subset::Val => "val",
+            Subset::Test => "test",
+        }
+    }
+}
+
+/// The subset of every image: counts are round(n * ratio) for train and val, the rest test;
+/// which images go where is a seeded shuffle, so it depends on nothing but (seed, n, ratios).
+pub fn assign(seed: u64, n: usize, split: &Split) -> Vec<Subset> {
+    let n_train = ((n as f64) * split.train).round() as usize;
+    let n_val = (((n as f64) * split.val).round() as usize).min(n - n_train.min(n));
+    let n_train = n_train.min(n);
+    let mut order: Vec<usize> = (0..n).collect();
+    let mut rng = stream(seed, 0, Purpose::Split);
+    // Fisher-Yates.
+    for i in (1..n).rev() {
+        let j = rng.random_range(0..=i);
+        order.swap(i, j);
+    }
+    let mut subsets = vec![Subset::Test; n];
+    for (rank, &image) in order.iter().enumerate() {
+        subsets[image] = if rank < n_train {
+            Subset::Train
+        } else if rank < n_train + n_val {
+            Subset::Val
+        } else {
+            Subset::Test
+        };
+    }
+    subsets
+}
+
+/// `data.yaml` for Ultralytics. It names no `path`, so Ultralytics takes the folder of the YAML
+/// file itself: the dataset trains from wherever it is moved, and its hash does not depend on
+/// the output directory.
+pub fn data_yaml(campaign_name: &str, campaign_hash: &str) -> String {
+    format!(
+        "# Ultralytics dataset written by soig, campaign `{campaign_name}` ({campaign_hash})\n\
+         train: images/train\n\
+         val: images/val\n\
+         test: images/test\n\
+         nc: 1\n\
+         names:\n  0: debris\n"
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn split_counts_and_determinism() {
+        let split = Split::default();
+        let a = assign(7, 100, &split);
+        assert_eq!(a, assign(7, 100, &split));
+        assert_ne!(a, assign(8, 100, &split));
+        let count = |s| a.iter().filter(|&&x| x == s).count();
+        assert_eq!(
+            (
+                count(Subset::Train),
+                count(Subset::Val),
+                count(Subset::Test)
+            ),
+            (70, 20, 10)
+        );
+        let small = assign(1, 3, &split);
+        assert_eq!(small.len(), 3);
+        let all_train = assign(
+            1,
+            5,
+            &Split {
+                train: 1.0,
+                val: 0.0,
+                test: 0.0,
+            },
+        );
+        assert!(all_train.iter().all(|&s| s == Subset::Train));
+    }
+}

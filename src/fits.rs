@@ -1,0 +1,94 @@
+//! FITS images with a WCS and provenance keywords, through cfitsio (the `fitsio` crate).
+//!
+//! The noisy image is float32 ADU (BITPIX = -32): photons / gain is fractional and the
+//! enhancement reads the full precision. The optional noise-free image is int32 photo-electrons.
+//! Array row j is FITS row j + 1, so the WCS describes the same pixels as labels and PNGs.
+
+use std::path::Path;
+
+use fitsio::FitsFile;
+use fitsio::images::{ImageDescription, ImageType};
+
+use crate::sky::projection::{Tan, WcsValue};
+
+/// A header card value.
+#[derive(Clone, Debug)]
+pub enum Card {
+    Int(i64),
+    Real(f64),
+    Str(String),
+}
+
+/// Header cards (keyword, value, comment) in writing order.
+pub type Cards = Vec<(String, Card, String)>;
+
+/// The WCS cards of a projection.
+pub fn wcs_cards(tan: &Tan) -> Cards {
+    tan.wcs_cards()
+        .into_iter()
+        .map(|(k, v, c)| {
+            let v = match v {
+                WcsValue::Int(i) => Card::Int(i),
+                WcsValue::Real(r) => Card::Real(r),
+                WcsValue::Str(s) => Card::Str(s.to_string()),
+            };
+            (k.to_string(), v, c.to_string())
+        })
+        .collect()
+}
+
+/// Pixel data of a FITS image.
+pub enum Pixels<'a> {
+    F32(&'a [f32]),
+    I32(&'a [i32]),
+}
+
+/// Write a single-HDU FITS image. `path` must not exist (outputs are written into a fresh
+/// directory and moved into place as a whole).
+pub fn write_image(
+    path: &Path,
+    width: usize,
+    height: usize,
+    pixels: Pixels,
+    cards: &Cards,
+) -> Result<(), fitsio::errors::Error> {
+    let data_type = match pixels {
+        Pixels::F32(_) => ImageType::Float,
+        Pixels::I32(_) => ImageType::Long,
+    };
+    let desc = ImageDescription {
+        data_type,
+        dimensions: &[height, width],
+    };
+    let mut f = FitsFile::create(path).with_custom_primary(&desc).open()?;
+    let hdu = f.primary_hdu()?;
+    for (key, value, comment) in cards {
+        match value {
+            Card::Int(i) => hdu.write_key(&mut f, key, (*i, comment.as_str()))?,
+            Card::Real(r) => hdu.write_key(&mut f, key, (*r, comment.as_str()))?,
+            Card::Str(s) => hdu.write_key(&mut f, key, (s.as_str(), comment.as_str()))?,
+        }
+    }
+    match pixels {
+        Pixels::F32(d) => hdu.write_image(&mut f, d)?,
+        Pixels::I32(d) => hdu.write_image(&mut f, d)?,
+    }
+    Ok(())
+}
+
+/// Read back a float image and its size (rows, cols), for checks and tests.
+pub fn read_f32(path: &Path) -> Result<(Vec<f32>, usize, usize), fitsio::errors::Error> {
+    let mut f = FitsFile::open(path)?;
+    let hdu = f.primary_hdu()?;
+    let (rows, cols) = match &hdu.info {
+        fitsio::hdu::HduInfo::ImageInfo { shape, .. } if shape.len() == 2 => (shape[0], shape[1]),
+        _ => {
+            return Err(fitsio::errors::Error::Message(format!(
+                "{}: not a 2-D image",
+                path.display()
+            )));
+        }
+    };
+    let data: Vec<f32> = hdu.read_image(&mut f)?;
+    Ok((data, rows, cols))
+}

@@ -1,0 +1,17 @@
+//! soig: a space optical image generator. A campaign file becomes a reproducible experiment:
+//! scenes of space debris seen from a satellite, photon-mapped images, enhanced PNGs, an
+//! Ultralytics dataset, and a manifest hashing every artifact.
+//!
+//! Data flows one way: `campaign` -> `scene` -> `render` -> `fits` / `enhance` -> `dataset`,
+//! driven by `pipeline`, recorded by `manifest`.
+
+pub mod campaign;
+pub mod dataset;
+pub mod enhance;
+pub mod fits;
+pub mod manifest;
+pub mod pipeline;
+pub mod render;
+pub mod rng;
+pub mod scene;
+pub mod sky;

@@ -1,0 +1,198 @@
+//! The manifest: sha256 of every artifact, the resolved campaign and its hash, the tool version,
+//! and one `digest` over all of it. `verify` recomputes everything and names each difference.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use crate::campaign::hex;
+
+pub const MANIFEST: &str = "manifest.json";
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct FileEntry {
+    pub sha256: String,
+    pub bytes: u64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Manifest {
+    pub tool: String,
+    pub version: String,
+    pub campaign_hash: String,
+    /// The resolved campaign (every default filled in, TLE files replaced by their lines).
+    pub campaign: serde_json::Value,
+    /// Every artifact, by path relative to the output directory ('/' separated), sorted.
+    pub files: BTreeMap<String, FileEntry>,
+    /// sha256 of the canonical JSON of everything above.
+    pub digest: String,
+}
+
+pub fn sha256_file(path: &Path) -> std::io::Result<(String, u64)> {
+    let mut f = std::fs::File::open(path)?;
+    let mut h = Sha256::new();
+    let bytes = std::io::copy(&mut f, &mut h)?;
+    Ok((hex(&h.finalize()), bytes))
+}
+
+/// All files under `dir` except the manifest, as sorted relative paths.
+pub fn list_files(dir: &Path) -> std::io::Result<Vec<String>> {
+    fn walk(root: &Path, dir: &Path, out: &mut Vec<String>) -> std::io::Result<()> {
+        for entry in std::fs::read_dir(dir)? {
+            let entry = entry?;
+            let path = entry.path();
+            if entry.file_type()?.is_dir() {
+                walk(root, &path, out)?;
+            } else {
+                let rel: PathBuf = path.strip_prefix(root).expect("under root").to_path_buf();
+                let rel = rel
+                    .components()
+                    .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                    .collect::<Vec<_>>()
+                    .join("/");
+                if rel != MANIFEST {
+                    out.push(rel);
+                }
+            }
+        }
+        Ok(())
+    }
+    let mut out = Vec::new();
+    walk(dir, dir, &mut out)?;
+    out.sort();
+    Ok(out)
+}
+
+fn digest_of(m: &Manifest) -> String {
+    let mut v = serde_json::to_value(m).expect("manifest serialises");
+    v.as_object_mut().expect("object").remove("digest");
+    hex(&Sha256::digest(
+        serde_json::to_string(&v).expect("json").as_bytes(),
+    ))
+}
+
+impl Manifest {
+    /// Hash every file in `dir` and build the manifest.
+    pub fn build(
+        dir: &Path,
+        campaign_hash: &str,
+        campaign: serde_json::Value,
+    ) -> std::io::Result<Manifest> {
+        let mut files = BTreeMap::new();
+        for rel in list_files(dir)? {
+            let (sha256, bytes) = sha256_file(&dir.join(&rel))?;
+            files.insert(rel, FileEntry { sha256, bytes });
+        }
+        let mut m = Manifest {
+            tool: "soig".into(),
+            version: env!("CARGO_PKG_VERSION").into(),
+            campaign_hash: campaign_hash.into(),
+            campaign,
+            files,
+            digest: String::new(),
+        };
+        m.digest = digest_of(&m);
+        Ok(m)
+    }
+
+    pub fn write(&self, dir: &Path) -> std::io::Result<()> {
+        let text = serde_json::to_string_pretty(self).expect("manifest serialises") + "\n";
+        std::fs::write(dir.join(MANIFEST), text)
+    }
+
+    pub fn read(dir: &Path) -> Result<Manifest, String> {
+        let path = dir.join(MANIFEST);
+        let text =
+            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        serde_json::from_str(&text)
+            .map_err(|e| format!("{}: not a soig manifest: {e}", path.display()))
+    }
+}
+
+/// One way an output directory differs from its manifest.
+#[derive(Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Problem {
+    Mismatch(String),
+    Missing(String),
+    Extra(String),
+    Digest,
+}
+
+impl std::fmt::Display for Problem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Problem::Mismatch(p) => write!(f, "changed: {p} (sha256 differs from the manifest)"),
+            Problem::Missing(p) => write!(f, "missing: {p}"),
+            Problem::Extra(p) => write!(f, "extra: {p} (not in the manifest)"),
+            Problem::Digest => write!(
+                f,
+                "the manifest's digest does not match its contents (manifest edited?)"
+            ),
+        }
+    }
+}
+
+/// Recompute every hash of `dir` against its manifest.
+pub fn verify(dir: &Path) -> Result<(Manifest, Vec<Problem>), String> {
+    let m = Manifest::read(dir)?;
+    let mut problems = Vec::new();
+    if digest_of(&m) != m.digest {
+        problems.push(Problem::Digest);
+    }
+    let present = list_files(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    for rel in &present {
+        match m.files.get(rel) {
+            None => problems.push(Problem::Extra(rel.clone())),
+            Some(entry) => {
+                let (sha, _) = sha256_file(&dir.join(rel)).map_err(|e| format!("{rel}: {e}"))?;
+                if sha != entry.sha256 {
+                    problems.push(Problem::Mismatch(rel.clone()));
+                }
+            }
+        }
+    }
+    for rel in m.files.keys() {
+        if !present.contains(rel) {
+            problems.push(Problem::Missing(rel.clone()));
+        }
+    }
+    problems.sort();
+    Ok((m, problems))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn verify_names_each_problem() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::create_dir_all(d.join("a")).unwrap();
+        std::fs::write(d.join("a/x.txt"), b"x").unwrap();
+        std::fs::write(d.join("y.txt"), b"y").unwrap();
+        let m = Manifest::build(d, "h", serde_json::json!({"k": 1})).unwrap();
+        m.write(d).unwrap();
+        assert_eq!(verify(d).unwrap().1, vec![]);
+        assert_eq!(
+            m.digest,
+            Manifest::build(d, "h", serde_json::json!({"k": 1}))
+                .unwrap()
+                .digest
+        );
+        std::fs::write(d.join("a/x.txt"), b"z").unwrap();
+        std::fs::remove_file(d.join("y.txt")).unwrap();
+        std::fs::write(d.join("new.txt"), b"n").unwrap();
+        let problems = verify(d).unwrap().1;
+        assert_eq!(
+            problems,
+            vec![
+                Problem::Mismatch("a/x.txt".into()),
+                Problem::Missing("y.txt".into()),
+                Problem::Extra("new.txt".into())
+            ]
+        );
+    }
+}

@@ -1,0 +1,295 @@
+//! The scheduler: runs every image of a campaign (in parallel with rayon; each image a pure
+//! function of the campaign and its index), writes the artifacts into a fresh directory beside
+//! the output, adds `data.yaml` and the manifest last, and moves the whole into place, so a
+//! failed run never leaves a half-written output.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+
+use crate::campaign::{Campaign, PointingMode, Stage};
+use crate::dataset::{self, Subset};
+use crate::enhance;
+use crate::fits::{self, Card, Cards, Pixels};
+use crate::manifest::{MANIFEST, Manifest};
+use crate::render::{self, Exposure};
+use crate::rng::{Purpose, stream};
+use crate::scene::{self, StarField};
+
+/// What a finished run reports.
+#[derive(Debug)]
+pub struct RunSummary {
+    pub output: PathBuf,
+    pub digest: String,
+    pub images: usize,
+    pub seconds: f64,
+}
+
+/// File stem of image i.
+pub fn stem(i: u64) -> String {
+    format!("img_{i:06}")
+}
+
+/// Run the campaign into `output`. An existing `output` is replaced only if it is a soig output
+/// (it holds a manifest).
+pub fn run(campaign: &Campaign, output: &Path, progress: bool) -> anyhow::Result<RunSummary> {
+    use anyhow::Context;
+    if output.exists() {
+        let is_ours = output.join(MANIFEST).is_file();
+        let empty = output.is_dir() && std::fs::read_dir(output)?.next().is_none();
+        if !is_ours && !empty {
+            anyhow::bail!(
+                "{} exists and is not a soig output (no {MANIFEST}); refusing to overwrite it",
+                output.display()
+            );
+        }
+    }
+    let name = output
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "soig-out".into());
+    let parent = output
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent)
+        .with_context(|| format!("cannot create {}", parent.display()))?;
+    let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+    if staging.exists() {
+        std::fs::remove_dir_all(&staging)?;
+    }
+    let result = write_all(campaign, &staging, progress);
+    match result {
+        Ok((digest, images, seconds)) => {
+            if output.exists() {
+                std::fs::remove_dir_all(output)
+                    .with_context(|| format!("cannot replace {}", output.display()))?;
+            }
+            std::fs::rename(&staging, output).with_context(|| {
+                format!("cannot move {} to {}", staging.display(), output.display())
+            })?;
+            Ok(RunSummary {
+                output: output.to_path_buf(),
+                digest,
+                images,
+                seconds,
+            })
+        }
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&staging);
+            Err(e)
+        }
+    }
+}
+
+fn write_all(
+    campaign: &Campaign,
+    dir: &Path,
+    progress: bool,
+) -> anyhow::Result<(String, usize, f64)> {
+    use anyhow::Context;
+    let c = &campaign.resolved;
+    let n = c.images as usize;
+    let stages = &c.stages;
+    let enhance_stage = stages.contains(&Stage::Enhance);
+    let dataset_stage = stages.contains(&Stage::Dataset);
+    let subsets = dataset::assign(c.seed, n, &c.split);
+
+    let mut dirs = vec![dir.join("truth")];
+    if c.artifacts.fits || c.artifacts.noise_free_fits {
+        dirs.push(dir.join("fits"));
+    }
+    if enhance_stage {
+        if dataset_stage {
+            for s in [Subset::Train, Subset::Val, Subset::Test] {
+                dirs.push(dir.join("images").join(s.name()));
+                dirs.push(dir.join("labels").join(s.name()));
+            }
+        } else {
+            dirs.push(dir.join("images"));
+            dirs.push(dir.join("labels"));
+        }
+    }
+    for d in &dirs {
+        std::fs::create_dir_all(d).with_context(|| format!("cannot create {}", d.display()))?;
+    }
+
+    let stars = StarField::load(campaign).map_err(anyhow::Error::msg)?;
+    let bar = if progress {
+        ProgressBar::new(n as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} images, {per_sec}, ETA {eta}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(format!("soig {}", c.name));
+    let started = Instant::now();
+    (0..n as u64)
+        .into_par_iter()
+        .try_for_each(|i| -> anyhow::Result<()> {
+            let subset = dataset_stage.then(|| subsets[i as usize]);
+            image(campaign, &stars, i, dir, enhance_stage, subset)?;
+            bar.inc(1);
+            Ok(())
+        })?;
+    bar.finish_and_clear();
+    let seconds = started.elapsed().as_secs_f64();
+
+    if dataset_stage {
+        std::fs::write(
+            dir.join("data.yaml"),
+            dataset::data_yaml(&c.name, &campaign.hash),
+        )?;
+    }
+    let manifest = Manifest::build(dir, &campaign.hash, serde_json::to_value(c)?)?;
+    manifest.write(dir)?;
+    Ok((manifest.digest, n, seconds))
+}
+
+/// Draw, render and write one image.
+fn image(
+    campaign: &Campaign,
+    stars: &StarField,
+    i: u64,
+    dir: &Path,
+    enhance_stage: bool,
+    subset: Option<Subset>,
+) -> anyhow::Result<()> {
+    use anyhow::Context;
+    let c = &campaign.resolved;
+    let seed = c.seed;
+    let scene = scene::draw(campaign, stars, i, &mut stream(seed, i, Purpose::Scene))?;
+    let exposure = render::render(
+        campaign,
+        &scene,
+        &mut stream(seed, i, Purpose::Photons),
+        &mut stream(seed, i, Purpose::Noise),
+    );
+    let stem = stem(i);
+    let cards = provenance_cards(campaign, &scene, &exposure);
+    let (w, h) = (exposure.width, exposure.height);
+    if c.artifacts.fits {
+        let mut cards = cards.clone();
+        cards.push((
+            "BUNIT".into(),
+            Card::Str("adu".into()),
+            "Eq. 11: e-/gain + background + bias".into(),
+        ));
+        let path = dir.join("fits").join(format!("{stem}.fits"));
+        fits::write_image(&path, w, h, Pixels::F32(&exposure.adu), &cards)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if c.artifacts.noise_free_fits {
+        let mut cards = cards;
+        cards.push((
+            "BUNIT".into(),
+            Card::Str("electron".into()),
+            "noise-free photo-electrons".into(),
+        ));
+        let path = dir.join("fits").join(format!("{stem}_clean.fits"));
+        let e: Vec<i32> = exposure
+            .electrons
+            .iter()
+            .map(|&v| v.min(i32::MAX as u32) as i32)
+            .collect();
+        fits::write_image(&path, w, h, Pixels::I32(&e), &cards)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    let truth_path = dir.join("truth").join(format!("{stem}.json"));
+    std::fs::write(
+        &truth_path,
+        serde_json::to_string_pretty(&exposure.truth)? + "\n",
+    )?;
+
+    if enhance_stage {
+        let sqrt = c.enhance.sqrt && c.pointing.mode == PointingMode::Fixed;
+        let png = enhance::enhance(&exposure.adu, w, h, &c.enhance, sqrt);
+        let label = exposure
+            .truth
+            .label_box_px
+            .map(|b| b.yolo_line(w, h))
+            .unwrap_or_default();
+        let (img_dir, lbl_dir) = match subset {
+            Some(s) => (
+                dir.join("images").join(s.name()),
+                dir.join("labels").join(s.name()),
+            ),
+            None => (dir.join("images"), dir.join("labels")),
+        };
+        enhance::write_png(&img_dir.join(format!("{stem}.png")), &png)?;
+        std::fs::write(lbl_dir.join(format!("{stem}.txt")), label)?;
+    }
+    Ok(())
+}
+
+/// WCS and provenance keywords of an image.
+fn provenance_cards(campaign: &Campaign, scene: &scene::Scene, exposure: &Exposure) -> Cards {
+    let c = &campaign.resolved;
+    let t = &exposure.truth;
+    let mut cards = fits::wcs_cards(&scene.projection(campaign));
+    let mut push =
+        |k: &str, v: Card, comment: &str| cards.push((k.to_string(), v, comment.to_string()));
+    push(
+        "ORIGIN",
+        Card::Str("soig".into()),
+        "space optical image generator",
+    );
+    push(
+        "SOIGVER",
+        Card::Str(env!("CARGO_PKG_VERSION").into()),
+        "soig version",
+    );
+    push("CAMPAIGN", Card::Str(c.name.clone()), "campaign name");
+    push(
+        "CAMPHASH",
+        Card::Str(campaign.hash.clone()),
+        "sha256 of the resolved campaign",
+    );
+    push("SEED", Card::Int(c.seed as i64), "campaign seed");
+    push(
+        "IMGINDEX",
+        Card::Int(scene.image_index as i64),
+        "image index in the campaign",
+    );
+    push("OBJECT", Card::Str(t.object.clone()), "debris in the field");
+    push(
+        "NORAD",
+        Card::Int(t.norad as i64),
+        "NORAD catalogue number of the debris",
+    );
+    push(
+        "OBSERVER",
+        Card::Str(campaign.observer.name.clone()),
+        "observing satellite",
+    );
+    push(
+        "DATE-OBS",
+        Card::Str(t.start_utc.clone()),
+        "UTC start of exposure",
+    );
+    push("TIMESYS", Card::Str("UTC".into()), "");
+    push(
+        "MJD-OBS",
+        Card::Real(scene.start.to_mjd_utc_days()),
+        "[d] UTC start of exposure",
+    );
+    push("EXPTIME", Card::Real(t.exposure_s), "[s] exposure time");
+    push("GAIN", Card::Real(c.sensor.gain_e_per_adu), "[e-/ADU]");
+    push("POINTING", Card::Str("fixed".into()), "fixed or survey");
+    push(
+        "MAGZERO",
+        Card::Real(c.sensor.zero_point_mag),
+        "magnitude of 1 e-/s",
+    );
+    push(
+        "DEBMAG",
+        Card::Real(t.magnitude),
+        "debris magnitude at mid-exposure (Eq. 6)",
+    );
+    cards
+}

@@ -1,0 +1,399 @@
+//! Photon mapping (paper 2.2, 3.2.4-3.2.6): expected photons per source (Eq. 3), a Poisson
+//! draw, arrival times, Brownian jitter shared by every source (Eq. 2), a Gaussian PSF, the
+//! gnomonic projection, counting per pixel (one pixel convention, see `sky::projection`), and
+//! the detector (Eq. 11). Also the label box and the truth of the debris as rendered.
+
+use rand::RngExt;
+use rand_chacha::ChaCha12Rng;
+use rand_distr::StandardNormal;
+use serde::Serialize;
+
+use crate::campaign::Campaign;
+use crate::rng::poisson;
+use crate::scene::{Pointing, Scene};
+use crate::sky::photometry::photon_rate;
+
+/// Above this many packets per source the packet weight grows so that no source traces more
+/// (only reached by sources far brighter than a scene allows, e.g. a magnitude -1 star).
+const MAX_PACKETS_PER_SOURCE: u64 = 50_000_000;
+
+/// A box in pixel coordinates, edges included: pixel i spans [i - 0.5, i + 0.5).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct BoxPx {
+    pub x_min: f64,
+    pub y_min: f64,
+    pub x_max: f64,
+    pub y_max: f64,
+}
+
+impl BoxPx {
+    /// The YOLO line `0 xc yc w h`, normalised by the image size.
+    pub fn yolo_line(&self, width: usize, height: usize) -> String {
+        let (w, h) = (width as f64, height as f64);
+        let xc = ((self.x_min + self.x_max) / 2.0 + 0.5) / w;
+        let yc = ((self.y_min + self.y_max) / 2.0 + 0.5) / h;
+        format!(
+            "0 {:.6} {:.6} {:.6} {:.6}\n",
+            xc,
+            yc,
+            (self.x_max - self.x_min) / w,
+            (self.y_max - self.y_min) / h
+        )
+    }
+}
+
+/// The truth of one image, written as the JSON sidecar.
+#[derive(Clone, Debug, Serialize)]
+pub struct Truth {
+    pub image_index: u64,
+    pub object: String,
+    pub norad: u64,
+    /// UTC start of the exposure (ISO 8601).
+    pub start_utc: String,
+    pub exposure_s: f64,
+    pub pointing: Pointing,
+    /// Pixel coordinates of the debris at the first and last trajectory samples (may lie
+    /// outside the image).
+    pub streak_start_px: [f64; 2],
+    pub streak_end_px: [f64; 2],
+    /// The label box of the debris as rendered (None when no debris photon landed).
+    pub label_box_px: Option<BoxPx>,
+    pub magnitude: f64,
+    pub magnitude_min: f64,
+    pub magnitude_max: f64,
+    pub area_m2: f64,
+    pub range_km: f64,
+    pub phase_angle_deg: f64,
+    pub earth_angle_deg: f64,
+    pub sun_angle_deg: f64,
+    pub moon_angle_deg: f64,
+    pub tumble: Option<crate::scene::Tumble>,
+    pub expected_debris_electrons: f64,
+    pub rendered_debris_electrons: u64,
+    pub snr: f64,
+    pub stars_in_cone: usize,
+    pub stars_traced: usize,
+    pub background_sigma_adu: f64,
+    pub attempts: u32,
+    pub rejections: std::collections::BTreeMap<&'static str, u32>,
+}
+
+/// A rendered exposure.
+pub struct Exposure {
+    pub width: usize,
+    pub height: usize,
+    /// Noise-free image: photo-electrons per pixel from all sources.
+    pub electrons: Vec<u32>,
+    /// Noisy image in ADU (Eq. 11).
+    pub adu: Vec<f32>,
+    pub truth: Truth,
+}
+
+/// The shared Brownian pointing jitter, as pixel shifts of every source, on a regular time grid.
+struct Jitter {
+    dt: f64,
+    shift: Vec<(f64, f64)>,
+}
+
+impl Jitter {
+    fn draw(
+        rng: &mut ChaCha12Rng,
+        sigma_deg_sqrt_s: f64,
+        exposure_s: f64,
+        steps: usize,
+        scale_deg: f64,
+    ) -> Jitter {
+        let dt = exposure_s / steps as f64;
+        let step_px = sigma_deg_sqrt_s * dt.sqrt() / scale_deg;
+        let mut shift = Vec::with_capacity(steps + 1);
+        let (mut x, mut y) = (0.0, 0.0);
+        shift.push((x, y));
+        for _ in 0..steps {
+            // The pointing moves by (dA, dD); the sky, and every source on it, moves the other way.
+            let da: f64 = rng.sample(StandardNormal);
+            let dd: f64 = rng.sample(StandardNormal);
+            x -= da * step_px;
+            y -= dd * step_px;
+            shift.push((x, y));
+        }
+        Jitter { dt, shift }
+    }
+
+    /// Linear interpolation between grid points.
+    fn at(&self, t: f64) -> (f64, f64) {
+        let u = (t / self.dt).max(0.0);
+        let i = (u as usize).min(self.shift.len() - 2);
+        let f = (u - i as f64).min(1.0);
+        let (a, b) = (self.shift[i], self.shift[i + 1]);
+        (a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1))
+    }
+
+    fn max_excursion(&self) -> f64 {
+        self.shift
+            .iter()
+            .map(|(x, y)| x.abs().max(y.abs()))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Photon counts on the detector, plus debris-only marginals for the label box.
+struct Canvas {
+    width: usize,
+    height: usize,
+    electrons: Vec<u32>,
+    debris_x: Vec<u64>,
+    debris_y: Vec<u64>,
+    debris_total: u64,
+}
+
+impl Canvas {
+    fn add(&mut self, x: f64, y: f64, weight: u32, debris: bool) {
+        // Pixel = floor(coordinate + 0.5); the image spans [-0.5, n - 0.5).
+        let (px, py) = ((x + 0.5).floor(), (y + 0.5).floor());
+        if px < 0.0 || py < 0.0 || px >= self.width as f64 || py >= self.height as f64 {
+            return;
+        }
+        let (i, j) = (px as usize, py as usize);
+        let cell = &mut self.electrons[j * self.width + i];
+        *cell = cell.saturating_add(weight);
+        if debris {
+            self.debris_x[i] += weight as u64;
+            self.debris_y[j] += weight as u64;
+            self.debris_total += weight as u64;
+        }
+    }
+
+    /// The box holding all but `tail` of the debris photons on each side of each axis, so at
+    /// least 1 - 4 tail of the rendered debris flux is inside.
+    fn debris_box(&self, tail: f64) -> Option<BoxPx> {
+        if self.debris_total == 0 {
+            return None;
+        }
+        let cut = (tail * self.debris_total as f64).floor() as u64;
+        let range = |hist: &[u64]| {
+            let mut acc = 0;
+            let mut lo = 0;
+            for (i, &c) in hist.iter().enumerate() {
+                acc += c;
+                if acc > cut {
+                    lo = i;
+                    break;
+                }
+            }
+            acc = 0;
+            let mut hi = hist.len() - 1;
+            for (i, &c) in hist.iter().enumerate().rev() {
+                acc += c;
+                if acc > cut {
+                    hi = i;
+                    break;
+                }
+            }
+            (lo as f64 - 0.5, hi as f64 + 0.5)
+        };
+        let (x_min, x_max) = range(&self.debris_x);
+        let (y_min, y_max) = range(&self.debris_y);
+        Some(BoxPx {
+            x_min,
+            y_min,
+            x_max,
+            y_max,
+        })
+    }
+}
+
+/// Trace `count` photons of one source: positions at arrival time `time(rng)`, plus jitter and
+/// PSF. Sources above the merge threshold are traced in packets of `merge_factor` photons
+/// (the paper's approximation), the remainder singly so the total is exact.
+#[allow(clippy::too_many_arguments)]
+fn trace(
+    canvas: &mut Canvas,
+    rng: &mut ChaCha12Rng,
+    count: u64,
+    merge: (u64, u32),
+    jitter: &Jitter,
+    psf_px: f64,
+    debris: bool,
+    mut position: impl FnMut(&mut ChaCha12Rng) -> (f64, f64, f64),
+) {
+    let (threshold, factor) = merge;
+    let weight = if count > threshold {
+        (factor as u64).max(count.div_ceil(MAX_PACKETS_PER_SOURCE))
+    } else {
+        1
+    };
+    let packets = count / weight;
+    let singles = count % weight;
+    let w32 = weight.min(u32::MAX as u64) as u32;
+    for n in 0..packets + singles {
+        let (t, x0, y0) = position(rng);
+        let (jx, jy) = jitter.at(t);
+        let gx: f64 = rng.sample(StandardNormal);
+        let gy: f64 = rng.sample(StandardNormal);
+        let w = if n < packets { w32 } else { 1 };
+        canvas.add(x0 + jx + gx * psf_px, y0 + jy + gy * psf_px, w, debris);
+    }
+}
+
+/// Render a scene: photons (one stream), then detector noise (another stream).
+pub fn render(
+    campaign: &Campaign,
+    scene: &Scene,
+    photons_rng: &mut ChaCha12Rng,
+    noise_rng: &mut ChaCha12Rng,
+) -> Exposure {
+    let c = &campaign.resolved;
+    let s = &c.sensor;
+    let (width, height) = (s.width_px as usize, s.height_px as usize);
+    let tan = scene.projection(campaign);
+    let scale = tan.scale_deg;
+    let psf_px = s.psf_sigma_arcsec / 3600.0 / scale;
+    let t_exp = scene.exposure_s;
+    let jitter = Jitter::draw(
+        photons_rng,
+        s.jitter_deg_per_sqrt_s,
+        t_exp,
+        c.render.jitter_steps as usize,
+        scale,
+    );
+    let merge = (c.render.merge_threshold, c.render.merge_factor);
+    let mut canvas = Canvas {
+        width,
+        height,
+        electrons: vec![0; width * height],
+        debris_x: vec![0; width],
+        debris_y: vec![0; height],
+        debris_total: 0,
+    };
+
+    // Stars: fixed on the sky, photons uniform over the exposure. Stars too far outside the
+    // image for any photon to land are skipped (no work a scene does not need).
+    let margin = 8.0 * psf_px + jitter.max_excursion() + 1.0;
+    let near = |x: f64, y: f64| {
+        x > -0.5 - margin
+            && y > -0.5 - margin
+            && x < width as f64 - 0.5 + margin
+            && y < height as f64 - 0.5 + margin
+    };
+    let mut stars_traced = 0;
+    for star in &scene.stars {
+        let Some((x0, y0)) = tan.pixel(star.ra_deg, star.dec_deg) else {
+            continue;
+        };
+        if !near(x0, y0) {
+            continue;
+        }
+        stars_traced += 1;
+        let count = poisson(photons_rng, photon_rate(star.mag, s.zero_point_mag) * t_exp);
+        trace(
+            &mut canvas,
+            photons_rng,
+            count,
+            merge,
+            &jitter,
+            psf_px,
+            false,
+            |r| (r.random_range(0.0..t_exp), x0, y0),
+        );
+    }
+
+    // Debris: each trajectory sample is a source whose photons arrive at its time.
+    let mut expected_debris = 0.0;
+    let mut mag_min = f64::INFINITY;
+    let mut mag_max = f64::NEG_INFINITY;
+    for p in &scene.trajectory {
+        expected_debris += p.expected_electrons;
+        mag_min = mag_min.min(p.mag);
+        mag_max = mag_max.max(p.mag);
+        let Some((x0, y0)) = tan.pixel(p.ra_deg, p.dec_deg) else {
+            continue;
+        };
+        if !near(x0, y0) {
+            continue;
+        }
+        let count = poisson(photons_rng, p.expected_electrons);
+        trace(
+            &mut canvas,
+            photons_rng,
+            count,
+            merge,
+            &jitter,
+            psf_px,
+            true,
+            |_| (p.t_s, x0, y0),
+        );
+    }
+
+    // Detector, Eq. 11: ADU = electrons / gain + background + bias, background uniform in its
+    // range scaled linearly with exposure.
+    let k = t_exp / s.background_exposure_s;
+    let (bg_lo, bg_hi) = (s.background_min_adu * k, s.background_max_adu * k);
+    let (b_lo, b_hi) = (s.bias_min_adu, s.bias_max_adu);
+    let uniform = |r: &mut ChaCha12Rng, lo: f64, hi: f64| {
+        if hi > lo { r.random_range(lo..hi) } else { lo }
+    };
+    let adu: Vec<f32> = canvas
+        .electrons
+        .iter()
+        .map(|&e| {
+            let bg = uniform(noise_rng, bg_lo, bg_hi);
+            let bias = uniform(noise_rng, b_lo, b_hi);
+            (e as f64 / s.gain_e_per_adu + bg + bias) as f32
+        })
+        .collect();
+
+    let first = scene
+        .trajectory
+        .first()
+        .and_then(|p| tan.pixel(p.ra_deg, p.dec_deg));
+    let last = scene
+        .trajectory
+        .last()
+        .and_then(|p| tan.pixel(p.ra_deg, p.dec_deg));
+    let g = &scene.geometry;
+    let truth = Truth {
+        image_index: scene.image_index,
+        object: scene.debris_name.clone(),
+        norad: scene.norad,
+        start_utc: iso_utc(scene.start),
+        exposure_s: t_exp,
+        pointing: scene.pointing.clone(),
+        streak_start_px: first.map(|(x, y)| [x, y]).unwrap_or([f64::NAN; 2]),
+        streak_end_px: last.map(|(x, y)| [x, y]).unwrap_or([f64::NAN; 2]),
+        label_box_px: canvas.debris_box(0.0025),
+        magnitude: g.magnitude,
+        magnitude_min: mag_min,
+        magnitude_max: mag_max,
+        area_m2: scene.area_m2,
+        range_km: g.range_km,
+        phase_angle_deg: g.phase_angle_deg,
+        earth_angle_deg: g.earth_angle_deg,
+        sun_angle_deg: g.sun_angle_deg,
+        moon_angle_deg: g.moon_angle_deg,
+        tumble: scene.tumble,
+        expected_debris_electrons: expected_debris,
+        rendered_debris_electrons: canvas.debris_total,
+        snr: scene.snr,
+        stars_in_cone: scene.stars.len(),
+        stars_traced,
+        background_sigma_adu: crate::scene::background_sigma_adu(campaign, t_exp),
+        attempts: scene.attempts,
+        rejections: scene.rejections.clone(),
+    };
+    Exposure {
+        width,
+        height,
+        electrons: canvas.electrons,
+        adu,
+        truth,
+    }
+}
+
+/// ISO 8601 UTC with milliseconds, e.g. `2022-03-04T05:06:07.891`.
+pub fn iso_utc(t: hifitime::Epoch) -> String {
+    let (y, mo, d, h, mi, s, ns) = t.to_gregorian_utc();
+    format!(
+        "{y:04}-{mo:02}-{d:02}T{h:02}:{mi:02}:{s:02}.{:03}",
+        ns / 1_000_000
+    )
+}

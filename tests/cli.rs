@@ -1,0 +1,203 @@
+//! CLI-level behaviour: bad input fails cleanly, runs are reproducible and verifiable.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn soig(args: &[&str], threads: Option<usize>) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_soig"));
+    cmd.args(args);
+    if let Some(t) = threads {
+        cmd.env("RAYON_NUM_THREADS", t.to_string());
+    }
+    cmd.output().expect("soig runs")
+}
+
+fn tle_file() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/tle/catalog-2022-01-22.tle")
+}
+
+/// A small, fast campaign: 256 px images, few samples.
+fn small_campaign(dir: &Path, extra: &str) -> PathBuf {
+    let tle = tle_file();
+    let text = format!(
+        r#"
+name = "small"
+seed = 7
+images = 6
+[observer]
+tle_file = "{tle}"
+norad = 41335
+[[debris]]
+tle_file = "{tle}"
+norad = 37476
+[[debris]]
+norad = 40649
+elements = {{ period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }}
+[sensor]
+width_px = 256
+height_px = 256
+fov_radius_deg = 0.025
+[render]
+trajectory_samples = 500
+[artifacts]
+noise_free_fits = true
+{extra}
+"#,
+        tle = tle.display()
+    );
+    let path = dir.join("small.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn digest_of(out: &Output) -> String {
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("digest "))
+        .unwrap_or_else(|| {
+            panic!(
+                "no digest in {stdout}\nstderr: {}",
+                String::from_utf8_lossy(&out.stderr)
+            )
+        })
+        .to_string()
+}
+
+#[test]
+fn same_digest_on_any_thread_count_and_verify_catches_one_byte() {
+    let tmp = tempfile::tempdir().unwrap();
+    let campaign = small_campaign(tmp.path(), "");
+    let c = campaign.to_str().unwrap();
+    let mut digests = Vec::new();
+    for (k, threads) in [(0, None), (1, Some(1)), (2, Some(2))] {
+        let out = tmp.path().join(format!("out{k}"));
+        let o = soig(
+            &["run", c, "--quiet", "--out", out.to_str().unwrap()],
+            threads,
+        );
+        assert!(
+            o.status.success(),
+            "run failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        digests.push(digest_of(&o));
+    }
+    assert_eq!(digests[0], digests[1]);
+    assert_eq!(digests[0], digests[2]);
+
+    let out = tmp.path().join("out0");
+    let v = soig(&["verify", out.to_str().unwrap()], None);
+    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+
+    // The dataset is in the Ultralytics layout.
+    assert!(out.join("data.yaml").is_file());
+    let pngs: Vec<PathBuf> = ["train", "val", "test"]
+        .iter()
+        .flat_map(|s| std::fs::read_dir(out.join("images").join(s)).unwrap())
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(pngs.len(), 6);
+    for p in &pngs {
+        let label = p
+            .to_str()
+            .unwrap()
+            .replace("/images/", "/labels/")
+            .replace(".png", ".txt");
+        assert!(Path::new(&label).is_file(), "{label}");
+    }
+
+    // Change one byte of one PNG: verify fails and names the file.
+    let victim = &pngs[0];
+    let mut bytes = std::fs::read(victim).unwrap();
+    let last = bytes.len() - 20;
+    bytes[last] ^= 0x01;
+    std::fs::write(victim, bytes).unwrap();
+    let v = soig(&["verify", out.to_str().unwrap()], None);
+    assert!(!v.status.success());
+    let err = String::from_utf8_lossy(&v.stderr);
+    let name = victim.file_name().unwrap().to_str().unwrap();
+    assert!(err.contains("changed") && err.contains(name), "{err}");
+}
+
+fn assert_clean_failure(campaign: &Path, out: &Path, expect: &[&str]) {
+    let o = soig(
+        &[
+            "run",
+            campaign.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    for e in expect {
+        assert!(err.contains(e), "expected {e:?} in: {err}");
+    }
+    assert!(!out.exists(), "an output directory was left behind");
+    let leftovers: Vec<_> = std::fs::read_dir(out.parent().unwrap())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains("partial"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
+#[test]
+fn bad_campaigns_fail_with_a_clear_message_and_no_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    // Unknown field: named, with its line.
+    let c = small_campaign(tmp.path(), "[exposure]\nmin_s = 2.0\nmaximum_s = 3.0\n");
+    assert_clean_failure(&c, &out, &["small.toml:", "maximum_s", "min_s"]);
+    // Negative exposure.
+    let c = small_campaign(tmp.path(), "[exposure]\nmin_s = -1.0\n");
+    assert_clean_failure(&c, &out, &["small.toml:", "exposure.min_s", "positive"]);
+    // Split ratios that do not sum to 1.
+    let c = small_campaign(tmp.path(), "[split]\ntrain = 0.7\nval = 0.2\ntest = 0.2\n");
+    assert_clean_failure(&c, &out, &["small.toml:", "split", "sum to 1"]);
+    // A TLE with a bad checksum.
+    let tle = std::fs::read_to_string(tle_file()).unwrap();
+    let l1 = tle.lines().find(|l| l.starts_with("1 37476")).unwrap();
+    let l2 = tle.lines().find(|l| l.starts_with("2 37476")).unwrap();
+    let bad_digit = if l1.ends_with('0') { '1' } else { '0' };
+    let bad_l1 = format!("{}{}", &l1[..68], bad_digit);
+    let text = format!(
+        "name = \"bad\"\nimages = 1\n[observer]\ntle = [\"{}\", \"{}\"]\n[[debris]]\ntle = [\"{bad_l1}\", \"{l2}\"]\n",
+        tle.lines().find(|l| l.starts_with("1 41335")).unwrap(),
+        tle.lines().find(|l| l.starts_with("2 41335")).unwrap(),
+    );
+    let c = tmp.path().join("bad.toml");
+    std::fs::write(&c, text).unwrap();
+    assert_clean_failure(&c, &out, &["bad.toml:", "debris[0]", "checksum"]);
+    // A missing TLE file.
+    let c = small_campaign(tmp.path(), "").with_file_name("missing.toml");
+    std::fs::write(&c, "name = \"m\"\n[observer]\ntle_file = \"nope.tle\"\nnorad = 1\n[[debris]]\ntle_file = \"nope.tle\"\nnorad = 2\n").unwrap();
+    assert_clean_failure(
+        &c,
+        &out,
+        &["missing.toml:", "observer.tle_file", "nope.tle"],
+    );
+    // A missing campaign file.
+    assert_clean_failure(
+        &tmp.path().join("absent.toml"),
+        &out,
+        &["absent.toml", "cannot read"],
+    );
+}
+
+#[test]
+fn verify_rejects_a_directory_without_manifest() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = soig(&["verify", tmp.path().to_str().unwrap()], None);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("manifest.json"));
+}
