@@ -349,6 +349,10 @@ pub struct Artifacts {
     /// The noise-free image (photon counts) as FITS.
     #[serde(default)]
     pub noise_free_fits: bool,
+    /// The stars traced in each image (ra, dec, mag, pixel x, y) as `truth/<image>_stars.csv`,
+    /// for astrometric checks.
+    #[serde(default)]
+    pub star_list: bool,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]

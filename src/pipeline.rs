@@ -200,6 +200,15 @@ fn image(
         fits::write_image(&path, w, h, Pixels::I32(&e), &cards)
             .with_context(|| format!("writing {}", path.display()))?;
     }
+    if c.artifacts.star_list {
+        let path = dir.join("truth").join(format!("{stem}_stars.csv"));
+        let mut w =
+            csv::Writer::from_path(&path).with_context(|| format!("writing {}", path.display()))?;
+        for s in &exposure.stars {
+            w.serialize(s)?;
+        }
+        w.flush()?;
+    }
     let truth_path = dir.join("truth").join(format!("{stem}.json"));
     std::fs::write(
         &truth_path,
@@ -231,7 +240,8 @@ fn image(
 fn provenance_cards(campaign: &Campaign, scene: &scene::Scene, exposure: &Exposure) -> Cards {
     let c = &campaign.resolved;
     let t = &exposure.truth;
-    let mut cards = fits::wcs_cards(&scene.projection(campaign));
+    let [jx, jy] = t.jitter_mean_px;
+    let mut cards = fits::wcs_cards(&scene.projection(campaign).shifted(jx, jy));
     let mut push =
         |k: &str, v: Card, comment: &str| cards.push((k.to_string(), v, comment.to_string()));
     push(

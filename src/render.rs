@@ -52,8 +52,11 @@ pub struct Truth {
     pub start_utc: String,
     pub exposure_s: f64,
     pub pointing: Pointing,
-    /// Pixel coordinates of the debris at the first and last trajectory samples (may lie
-    /// outside the image).
+    /// Mean pointing-jitter shift of every source over the exposure, pixels. The FITS WCS
+    /// includes it (CRPIX is moved by it), as an astrometric fit of the image would.
+    pub jitter_mean_px: [f64; 2],
+    /// Pixel coordinates of the debris at the first and last trajectory samples, jitter
+    /// included (may lie outside the image).
     pub streak_start_px: [f64; 2],
     pub streak_end_px: [f64; 2],
     /// The label box of the debris as rendered (None when no debris photon landed).
@@ -78,6 +81,19 @@ pub struct Truth {
     pub rejections: std::collections::BTreeMap<&'static str, u32>,
 }
 
+/// A star as traced in an image.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct TracedStar {
+    pub ra_deg: f64,
+    pub dec_deg: f64,
+    pub mag: f64,
+    /// Mean pixel coordinates over the exposure (0-based, pixel centres at integers): the
+    /// nominal position plus the mean jitter shift, where the FITS WCS puts the star.
+    pub x: f64,
+    pub y: f64,
+    pub expected_electrons: f64,
+}
+
 /// A rendered exposure.
 pub struct Exposure {
     pub width: usize,
@@ -87,6 +103,7 @@ pub struct Exposure {
     /// Noisy image in ADU (Eq. 11).
     pub adu: Vec<f32>,
     pub truth: Truth,
+    pub stars: Vec<TracedStar>,
 }
 
 /// The shared Brownian pointing jitter, as pixel shifts of every source, on a regular time grid.
@@ -126,6 +143,17 @@ impl Jitter {
         let f = (u - i as f64).min(1.0);
         let (a, b) = (self.shift[i], self.shift[i + 1]);
         (a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1))
+    }
+
+    /// Time average of the shift over the exposure (trapezoid rule on the grid).
+    fn mean(&self) -> (f64, f64) {
+        let n = self.shift.len() - 1;
+        let (mut x, mut y) = (0.0, 0.0);
+        for w in self.shift.windows(2) {
+            x += (w[0].0 + w[1].0) / 2.0;
+            y += (w[0].1 + w[1].1) / 2.0;
+        }
+        (x / n as f64, y / n as f64)
     }
 
     fn max_excursion(&self) -> f64 {
@@ -256,6 +284,7 @@ pub fn render(
         c.render.jitter_steps as usize,
         scale,
     );
+    let jitter_mean = jitter.mean();
     let merge = (c.render.merge_threshold, c.render.merge_factor);
     let mut canvas = Canvas {
         width,
@@ -275,7 +304,7 @@ pub fn render(
             && x < width as f64 - 0.5 + margin
             && y < height as f64 - 0.5 + margin
     };
-    let mut stars_traced = 0;
+    let mut traced = Vec::new();
     for star in &scene.stars {
         let Some((x0, y0)) = tan.pixel(star.ra_deg, star.dec_deg) else {
             continue;
@@ -283,8 +312,16 @@ pub fn render(
         if !near(x0, y0) {
             continue;
         }
-        stars_traced += 1;
-        let count = poisson(photons_rng, photon_rate(star.mag, s.zero_point_mag) * t_exp);
+        let expected = photon_rate(star.mag, s.zero_point_mag) * t_exp;
+        traced.push(TracedStar {
+            ra_deg: star.ra_deg,
+            dec_deg: star.dec_deg,
+            mag: star.mag,
+            x: x0 + jitter_mean.0,
+            y: y0 + jitter_mean.1,
+            expected_electrons: expected,
+        });
+        let count = poisson(photons_rng, expected);
         trace(
             &mut canvas,
             photons_rng,
@@ -342,14 +379,15 @@ pub fn render(
         })
         .collect();
 
-    let first = scene
-        .trajectory
-        .first()
-        .and_then(|p| tan.pixel(p.ra_deg, p.dec_deg));
-    let last = scene
-        .trajectory
-        .last()
-        .and_then(|p| tan.pixel(p.ra_deg, p.dec_deg));
+    let at = |p: Option<&crate::scene::TrajectorySample>| {
+        p.and_then(|p| {
+            let (jx, jy) = jitter.at(p.t_s);
+            tan.pixel(p.ra_deg, p.dec_deg)
+                .map(|(x, y)| [x + jx, y + jy])
+        })
+    };
+    let first = at(scene.trajectory.first());
+    let last = at(scene.trajectory.last());
     let g = &scene.geometry;
     let truth = Truth {
         image_index: scene.image_index,
@@ -358,8 +396,9 @@ pub fn render(
         start_utc: iso_utc(scene.start),
         exposure_s: t_exp,
         pointing: scene.pointing.clone(),
-        streak_start_px: first.map(|(x, y)| [x, y]).unwrap_or([f64::NAN; 2]),
-        streak_end_px: last.map(|(x, y)| [x, y]).unwrap_or([f64::NAN; 2]),
+        jitter_mean_px: [jitter_mean.0, jitter_mean.1],
+        streak_start_px: first.unwrap_or([f64::NAN; 2]),
+        streak_end_px: last.unwrap_or([f64::NAN; 2]),
         label_box_px: canvas.debris_box(0.0025),
         magnitude: g.magnitude,
         magnitude_min: mag_min,
@@ -375,7 +414,7 @@ pub fn render(
         rendered_debris_electrons: canvas.debris_total,
         snr: scene.snr,
         stars_in_cone: scene.stars.len(),
-        stars_traced,
+        stars_traced: traced.len(),
         background_sigma_adu: crate::scene::background_sigma_adu(campaign, t_exp),
         attempts: scene.attempts,
         rejections: scene.rejections.clone(),
@@ -386,6 +425,7 @@ pub fn render(
         electrons: canvas.electrons,
         adu,
         truth,
+        stars: traced,
     }
 }
 
@@ -396,4 +436,231 @@ pub fn iso_utc(t: hifitime::Epoch) -> String {
         "{y:04}-{mo:02}-{d:02}T{h:02}:{mi:02}:{s:02}.{:03}",
         ns / 1_000_000
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::Campaign;
+    use crate::rng::{Purpose, stream};
+    use crate::scene::{Geometry, TrajectorySample};
+    use crate::sky::stars::Star;
+    use std::path::Path;
+
+    fn campaign(extra: &str) -> Campaign {
+        let el = "elements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }";
+        let text = format!(
+            "name = \"t\"\n[observer]\nnorad = 1\n{el}\n[[debris]]\nnorad = 2\n{el}\n[sensor]\nwidth_px = 128\nheight_px = 128\nfov_radius_deg = 0.0125\n{extra}"
+        );
+        Campaign::from_toml(&text, Path::new("t.toml")).unwrap()
+    }
+
+    /// A scene centred on (10, 20) with the given stars and a debris streak along +x.
+    fn scene(c: &Campaign, stars: Vec<Star>, debris_mag: f64, exposure_s: f64) -> Scene {
+        let tan = crate::sky::projection::Tan::new(
+            10.0,
+            20.0,
+            crate::scene::pixel_scale_deg(c),
+            128,
+            128,
+        );
+        let n = 200;
+        let trajectory = (0..n)
+            .map(|k| {
+                let t_s = (k as f64 + 0.5) * exposure_s / n as f64;
+                let (ra_deg, dec_deg) = tan.sky(30.0 + 60.0 * k as f64 / n as f64, 40.0);
+                TrajectorySample {
+                    t_s,
+                    ra_deg,
+                    dec_deg,
+                    mag: debris_mag,
+                    expected_electrons: photon_rate(debris_mag, c.resolved.sensor.zero_point_mag)
+                        * exposure_s
+                        / n as f64,
+                }
+            })
+            .collect();
+        Scene {
+            image_index: 0,
+            debris_index: 0,
+            debris_name: "d".into(),
+            norad: 2,
+            start: hifitime::Epoch::from_gregorian_utc_at_midnight(2022, 1, 1),
+            exposure_s,
+            pointing: Pointing::Fixed {
+                ra_deg: 10.0,
+                dec_deg: 20.0,
+            },
+            area_m2: 1.0,
+            tumble: None,
+            geometry: Geometry {
+                range_km: 1000.0,
+                phase_angle_deg: 90.0,
+                earth_angle_deg: 120.0,
+                sun_angle_deg: 90.0,
+                moon_angle_deg: 90.0,
+                magnitude: debris_mag,
+            },
+            trajectory,
+            stars,
+            snr: 1.0,
+            attempts: 1,
+            rejections: Default::default(),
+        }
+    }
+
+    #[test]
+    fn mean_photons_match_eq3_within_poisson_error() {
+        // One star in the middle, far from the edges, and a debris streak: over many seeds the
+        // mean of the rendered photo-electrons matches t 10^(-0.4 (m - ZP)) within Poisson error.
+        let c = campaign("");
+        let tan = crate::sky::projection::Tan::new(
+            10.0,
+            20.0,
+            crate::scene::pixel_scale_deg(&c),
+            128,
+            128,
+        );
+        let (ra, dec) = tan.sky(90.0, 90.0);
+        let star_mag = 15.0;
+        let debris_mag = 14.0;
+        let exposure = 5.0;
+        let s = scene(
+            &c,
+            vec![Star {
+                ra_deg: ra,
+                dec_deg: dec,
+                mag: star_mag,
+            }],
+            debris_mag,
+            exposure,
+        );
+        let zp = c.resolved.sensor.zero_point_mag;
+        let star_expected = exposure * 10f64.powf(-0.4 * (star_mag - zp));
+        let debris_expected = exposure * 10f64.powf(-0.4 * (debris_mag - zp));
+        let runs = 200;
+        let (mut star_sum, mut debris_sum) = (0.0, 0.0);
+        for i in 0..runs {
+            let e = render(
+                &c,
+                &s,
+                &mut stream(1, i, Purpose::Photons),
+                &mut stream(1, i, Purpose::Noise),
+            );
+            let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
+            debris_sum += e.truth.rendered_debris_electrons as f64;
+            star_sum += (total - e.truth.rendered_debris_electrons) as f64;
+            assert!(
+                (e.truth.expected_debris_electrons - debris_expected).abs()
+                    < 1e-6 * debris_expected
+            );
+        }
+        for (sum, expected) in [(star_sum, star_expected), (debris_sum, debris_expected)] {
+            let mean = sum / runs as f64;
+            let sigma_of_mean = (expected / runs as f64).sqrt();
+            assert!(
+                (mean - expected).abs() < 4.0 * sigma_of_mean,
+                "mean {mean} vs Eq. 3 {expected} (sigma of mean {sigma_of_mean})"
+            );
+        }
+    }
+
+    #[test]
+    fn merged_packets_keep_the_total_and_the_label_holds_the_streak() {
+        // A source above the merge threshold is traced in packets; the count stays exact.
+        let c = campaign("[render]\nmerge_threshold = 1000\nmerge_factor = 5\n");
+        let s = scene(&c, vec![], 10.0, 2.0);
+        let e = render(
+            &c,
+            &s,
+            &mut stream(2, 0, Purpose::Photons),
+            &mut stream(2, 0, Purpose::Noise),
+        );
+        let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
+        assert_eq!(total, e.truth.rendered_debris_electrons);
+        let b = e.truth.label_box_px.unwrap();
+        // The streak runs from x = 30 to 90 at y = 40; the box holds it with PSF margins.
+        assert!(b.x_min <= 30.0 && b.x_max >= 89.5, "{b:?}");
+        assert!(
+            b.y_min <= 40.0 && b.y_max >= 40.0 && b.y_max - b.y_min < 12.0,
+            "{b:?}"
+        );
+        // Background and bias scale as Eq. 11: with no source the mean ADU is the mean of
+        // background (scaled to 2 s) plus bias.
+        let mean_adu = e.adu.iter().map(|&a| a as f64).sum::<f64>() / e.adu.len() as f64;
+        let expected_bg = 200.0 * 2.0 / 5.0 + 2.5 + total as f64 / 1.6 / e.adu.len() as f64;
+        assert!(
+            (mean_adu - expected_bg).abs() < 0.1,
+            "{mean_adu} vs {expected_bg}"
+        );
+    }
+
+    #[test]
+    fn yolo_line_uses_the_pixel_convention() {
+        let b = BoxPx {
+            x_min: -0.5,
+            y_min: -0.5,
+            x_max: 127.5,
+            y_max: 63.5,
+        };
+        assert_eq!(
+            b.yolo_line(128, 128),
+            "0 0.500000 0.250000 1.000000 0.500000\n"
+        );
+    }
+
+    #[test]
+    fn star_centroid_lands_where_the_wcs_says() {
+        // With the pointing jitter on, a bright star's flux centroid is the traced position
+        // (nominal + mean jitter), which is where the FITS WCS (CRPIX shifted) puts it.
+        let c = campaign("jitter_deg_per_sqrt_s = 0.0003\n");
+        let tan = crate::sky::projection::Tan::new(
+            10.0,
+            20.0,
+            crate::scene::pixel_scale_deg(&c),
+            128,
+            128,
+        );
+        let (ra, dec) = tan.sky(64.3, 70.8);
+        let s = scene(
+            &c,
+            vec![Star {
+                ra_deg: ra,
+                dec_deg: dec,
+                mag: 12.0,
+            }],
+            30.0,
+            8.0,
+        );
+        for i in 0..5 {
+            let e = render(
+                &c,
+                &s,
+                &mut stream(3, i, Purpose::Photons),
+                &mut stream(3, i, Purpose::Noise),
+            );
+            let st = e.stars[0];
+            let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
+            for y in 0..128 {
+                for x in 0..128 {
+                    let v = e.electrons[y * 128 + x] as f64;
+                    sx += v * x as f64;
+                    sy += v * y as f64;
+                    sw += v;
+                }
+            }
+            let (cx, cy) = (sx / sw, sy / sw);
+            assert!(
+                (cx - st.x).abs() < 0.05 && (cy - st.y).abs() < 0.05,
+                "centroid {cx},{cy} vs {},{}",
+                st.x,
+                st.y
+            );
+            let wcs = s
+                .projection(&c)
+                .shifted(e.truth.jitter_mean_px[0], e.truth.jitter_mean_px[1]);
+            let (wx, wy) = wcs.pixel(ra, dec).unwrap();
+            assert!((wx - st.x).abs() < 1e-9 && (wy - st.y).abs() < 1e-9);
+        }
+    }
 }

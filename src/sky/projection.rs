@@ -40,6 +40,16 @@ impl Tan {
         }
     }
 
+    /// The same projection with the tangent point moved by (dx, dy) pixels: the WCS of an image
+    /// whose sources all landed shifted by (dx, dy), e.g. by the mean pointing jitter.
+    pub fn shifted(&self, dx: f64, dy: f64) -> Tan {
+        Tan {
+            cx: self.cx + dx,
+            cy: self.cy + dy,
+            ..*self
+        }
+    }
+
     /// Standard coordinates (xi east, eta north) of a sky position, degrees; None behind the
     /// tangent plane.
     pub fn standard(&self, ra_deg: f64, dec_deg: f64) -> Option<(f64, f64)> {
@@ -159,5 +169,31 @@ mod tests {
         assert!(((xe - 511.5) * 0.1 / 512.0 - 0.01 * 30f64.to_radians().cos()).abs() < 1e-7);
         // Behind the plane.
         assert!(tan.pixel(280.0, -30.0).is_none());
+    }
+
+    #[test]
+    fn matches_astropy_wcs() {
+        // (ra0, dec0, ra, dec, x, y): astropy.wcs all_world2pix(origin 0) of the header soig
+        // writes, printed by tests/reference/wcs_reference.py (astropy 8.0).
+        let cases = [
+            (123.4, -56.7, 123.4, -56.7, 511.500000000, 511.500000000),
+            (123.4, -56.7, 123.45, -56.68, 652.124528173, 613.848731590),
+            (123.4, -56.7, 123.33, -56.75, 314.991636453, 255.399547067),
+            (359.98, 10.0, 0.03, 10.02, 763.595328514, 613.919142810),
+            (359.98, 10.0, 359.93, 9.97, 259.365878084, 357.919033013),
+            (45.0, 89.95, 225.0, 89.97, 511.500000000, 921.100266179),
+            (45.0, 89.95, 100.0, 89.9, 930.906065839, 473.828664292),
+        ];
+        for (ra0, dec0, ra, dec, x, y) in cases {
+            let tan = Tan::new(ra0, dec0, 0.1 / 512.0, 1024, 1024);
+            let cards = tan.wcs_cards();
+            let crpix1 = cards.iter().find(|c| c.0 == "CRPIX1").map(|c| c.1);
+            assert!(matches!(crpix1, Some(WcsValue::Real(v)) if v == 512.5));
+            let (px, py) = tan.pixel(ra, dec).unwrap();
+            assert!(
+                (px - x).abs() < 1e-6 && (py - y).abs() < 1e-6,
+                "{ra},{dec}: {px},{py} vs astropy {x},{y}"
+            );
+        }
     }
 }
