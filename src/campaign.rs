@@ -128,7 +128,7 @@ pub enum PointingMode {
     /// Inertially fixed on a random direction around the debris.
     #[default]
     Fixed,
-    /// Following the observer's nadir-pointing attitude (not implemented yet: issue #3).
+    /// Following the observer's nadir-pointing attitude: star trails across the image.
     Survey,
 }
 
@@ -325,6 +325,21 @@ pub struct Enhance {
     /// Power-law correction O = I^gamma on [0, 1].
     #[serde(default = "defaults::gamma")]
     pub gamma: f64,
+    /// Frame of the PNGs and labels: `original`, `padded` (noise border of `pad_px` on each
+    /// side: 1024 -> 1088) or `rotated` (survey only: star trails horizontal, 1024 -> 1472).
+    #[serde(default)]
+    pub geometry: GeometryKind,
+    #[serde(default = "defaults::pad_px")]
+    pub pad_px: u32,
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum GeometryKind {
+    #[default]
+    Original,
+    Padded,
+    Rotated,
 }
 
 /// Dataset split ratios; they must sum to 1.
@@ -497,6 +512,9 @@ pub mod defaults {
     }
     pub fn gamma() -> f64 {
         0.7
+    }
+    pub fn pad_px() -> u32 {
+        32
     }
     pub fn split_train() -> f64 {
         0.7
@@ -744,11 +762,6 @@ fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "must be at most 3600 s",
     )?;
     check(
-        c.pointing.mode == PointingMode::Fixed,
-        "pointing.mode",
-        "`survey` pointing is not implemented yet (issue #3); use `fixed`",
-    )?;
-    check(
         c.pointing.placement_fraction > 0.0 && c.pointing.placement_fraction <= 1.0,
         "pointing.placement_fraction",
         "must be in (0, 1]",
@@ -933,6 +946,12 @@ fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "each must be between 1 and 64",
     )?;
     check(pos(en.gamma), "enhance.gamma", "must be positive")?;
+    check(en.pad_px <= 4096, "enhance.pad_px", "must be at most 4096")?;
+    check(
+        en.geometry != GeometryKind::Rotated || c.pointing.mode == PointingMode::Survey,
+        "enhance.geometry",
+        "`rotated` needs survey pointing (fixed images have no star trails to align)",
+    )?;
     let sp = &c.split;
     for (f, x) in [
         ("split.train", sp.train),

@@ -9,6 +9,7 @@ pub mod campaign;
 pub mod dataset;
 pub mod enhance;
 pub mod fits;
+pub mod geometry;
 pub mod manifest;
 pub mod pipeline;
 pub mod render;

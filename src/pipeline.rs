@@ -9,13 +9,17 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::campaign::{Campaign, PointingMode, Stage};
+use rand_chacha::ChaCha12Rng;
+
+use crate::campaign::{Campaign, GeometryKind, PointingMode, Stage};
 use crate::dataset::{self, Subset};
 use crate::enhance;
 use crate::fits::{self, Card, Cards, Pixels};
+use crate::geometry::{self, Fill, Frame, LABEL_SHARE};
 use crate::manifest::{MANIFEST, Manifest};
 use crate::render::{self, Exposure};
 use crate::rng::{Purpose, stream};
+use crate::scene::Pointing;
 use crate::scene::{self, StarField};
 
 /// What a finished run reports.
@@ -164,15 +168,40 @@ fn image(
     let c = &campaign.resolved;
     let seed = c.seed;
     let scene = scene::draw(campaign, stars, i, &mut stream(seed, i, Purpose::Scene))?;
-    let exposure = render::render(
+    let mut exposure = render::render(
         campaign,
         &scene,
         &mut stream(seed, i, Purpose::Photons),
         &mut stream(seed, i, Purpose::Noise),
     );
     let stem = stem(i);
-    let cards = provenance_cards(campaign, &scene, &exposure);
     let (w, h) = (exposure.width, exposure.height);
+
+    // The final frame of the PNG and its label: the debris alone is warped like the image, so
+    // the box is the tight box of the rendered streak in that frame.
+    let final_image = enhance_stage.then(|| {
+        let frame = match c.enhance.geometry {
+            GeometryKind::Original => Frame::original(w, h),
+            GeometryKind::Padded => Frame::padded(w, h, c.enhance.pad_px as usize),
+            GeometryKind::Rotated => match scene.pointing {
+                Pointing::Survey(track) => Frame::rotated(w, h, track.trail_angle_deg),
+                Pointing::Fixed { .. } => unreachable!("validated: rotated needs survey pointing"),
+            },
+        };
+        let mut rng = stream(seed, i, Purpose::Enhance);
+        let adu = geometry::warp(&exposure.adu, w, h, &frame, Fill::SkyNoise(&mut rng));
+        let debris: Vec<f32> = exposure
+            .debris_electrons
+            .iter()
+            .map(|&v| v as f32)
+            .collect();
+        let debris = geometry::warp::<ChaCha12Rng>(&debris, w, h, &frame, Fill::Zero);
+        let label = geometry::flux_box(&debris, frame.width, frame.height, LABEL_SHARE);
+        exposure.truth.frame = Some(frame.clone());
+        exposure.truth.label_box_final_px = label;
+        (frame, adu, label)
+    });
+    let cards = provenance_cards(campaign, &scene, &exposure);
     if c.artifacts.fits {
         let mut cards = cards.clone();
         cards.push((
@@ -215,13 +244,11 @@ fn image(
         serde_json::to_string_pretty(&exposure.truth)? + "\n",
     )?;
 
-    if enhance_stage {
+    if let Some((frame, adu, label)) = final_image {
         let sqrt = c.enhance.sqrt && c.pointing.mode == PointingMode::Fixed;
-        let png = enhance::enhance(&exposure.adu, w, h, &c.enhance, sqrt);
-        let label = exposure
-            .truth
-            .label_box_px
-            .map(|b| b.yolo_line(w, h))
+        let png = enhance::enhance(&adu, frame.width, frame.height, &c.enhance, sqrt);
+        let label = label
+            .map(|b| b.yolo_line(frame.width, frame.height))
             .unwrap_or_default();
         let (img_dir, lbl_dir) = match subset {
             Some(s) => (
@@ -290,7 +317,49 @@ fn provenance_cards(campaign: &Campaign, scene: &scene::Scene, exposure: &Exposu
     );
     push("EXPTIME", Card::Real(t.exposure_s), "[s] exposure time");
     push("GAIN", Card::Real(c.sensor.gain_e_per_adu), "[e-/ADU]");
-    push("POINTING", Card::Str("fixed".into()), "fixed or survey");
+    match scene.pointing {
+        Pointing::Fixed { .. } => push("POINTING", Card::Str("fixed".into()), "fixed or survey"),
+        Pointing::Survey(track) => {
+            push(
+                "POINTING",
+                Card::Str("survey".into()),
+                "fixed or survey; WCS at mid-exposure",
+            );
+            push(
+                "DRIFTANG",
+                Card::Real(track.trail_angle_deg),
+                "[deg] star-trail direction from +x to +y (Eq. 13)",
+            );
+            push(
+                "DRIFT",
+                Card::Real(track.drift_deg),
+                "[deg] boresight drift over the exposure",
+            );
+        }
+    }
+    if let Some(f) = &t.frame {
+        push(
+            "GEOMETRY",
+            Card::Str(f.kind.clone()),
+            "frame of the PNG and its label",
+        );
+        push(
+            "GEOANGLE",
+            Card::Real(f.angle_deg),
+            "[deg] rotation undone in the PNG",
+        );
+        push("GEONAX1", Card::Int(f.width as i64), "PNG width");
+        push("GEONAX2", Card::Int(f.height as i64), "PNG height");
+        for (r, row) in f.matrix.iter().enumerate() {
+            for (k, v) in row.iter().enumerate() {
+                push(
+                    &format!("GEOA{}{}", r + 1, k + 1),
+                    Card::Real(*v),
+                    "PNG pixel = A (x, y, 1), 0-based",
+                );
+            }
+        }
+    }
     push(
         "MAGZERO",
         Card::Real(c.sensor.zero_point_mag),

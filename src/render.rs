@@ -9,6 +9,7 @@ use rand_distr::StandardNormal;
 use serde::Serialize;
 
 use crate::campaign::Campaign;
+use crate::geometry::{BoxPx, Frame, LABEL_SHARE, flux_box};
 use crate::rng::poisson;
 use crate::scene::{Pointing, Scene};
 use crate::sky::photometry::photon_rate;
@@ -17,30 +18,8 @@ use crate::sky::photometry::photon_rate;
 /// (only reached by sources far brighter than a scene allows, e.g. a magnitude -1 star).
 const MAX_PACKETS_PER_SOURCE: u64 = 50_000_000;
 
-/// A box in pixel coordinates, edges included: pixel i spans [i - 0.5, i + 0.5).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct BoxPx {
-    pub x_min: f64,
-    pub y_min: f64,
-    pub x_max: f64,
-    pub y_max: f64,
-}
-
-impl BoxPx {
-    /// The YOLO line `0 xc yc w h`, normalised by the image size.
-    pub fn yolo_line(&self, width: usize, height: usize) -> String {
-        let (w, h) = (width as f64, height as f64);
-        let xc = ((self.x_min + self.x_max) / 2.0 + 0.5) / w;
-        let yc = ((self.y_min + self.y_max) / 2.0 + 0.5) / h;
-        format!(
-            "0 {:.6} {:.6} {:.6} {:.6}\n",
-            xc,
-            yc,
-            (self.x_max - self.x_min) / w,
-            (self.y_max - self.y_min) / h
-        )
-    }
-}
+/// Spacing of the time nodes along a survey star trail, pixels.
+const SURVEY_NODE_SPACING_PX: f64 = 4.0;
 
 /// The truth of one image, written as the JSON sidecar.
 #[derive(Clone, Debug, Serialize)]
@@ -59,8 +38,12 @@ pub struct Truth {
     /// included (may lie outside the image).
     pub streak_start_px: [f64; 2],
     pub streak_end_px: [f64; 2],
-    /// The label box of the debris as rendered (None when no debris photon landed).
+    /// The label box of the debris as rendered, in the original image (None when no debris
+    /// photon landed).
     pub label_box_px: Option<BoxPx>,
+    /// The frame of the final PNG (original, padded or rotated) and the label box in it.
+    pub frame: Option<Frame>,
+    pub label_box_final_px: Option<BoxPx>,
     pub magnitude: f64,
     pub magnitude_min: f64,
     pub magnitude_max: f64,
@@ -100,6 +83,8 @@ pub struct Exposure {
     pub height: usize,
     /// Noise-free image: photo-electrons per pixel from all sources.
     pub electrons: Vec<u32>,
+    /// Noise-free photo-electrons of the debris alone, for its label box in any frame.
+    pub debris_electrons: Vec<u32>,
     /// Noisy image in ADU (Eq. 11).
     pub adu: Vec<f32>,
     pub truth: Truth,
@@ -164,13 +149,12 @@ impl Jitter {
     }
 }
 
-/// Photon counts on the detector, plus debris-only marginals for the label box.
+/// Photon counts on the detector, all sources and debris alone.
 struct Canvas {
     width: usize,
     height: usize,
     electrons: Vec<u32>,
-    debris_x: Vec<u64>,
-    debris_y: Vec<u64>,
+    debris: Vec<u32>,
     debris_total: u64,
 }
 
@@ -181,52 +165,12 @@ impl Canvas {
         if px < 0.0 || py < 0.0 || px >= self.width as f64 || py >= self.height as f64 {
             return;
         }
-        let (i, j) = (px as usize, py as usize);
-        let cell = &mut self.electrons[j * self.width + i];
-        *cell = cell.saturating_add(weight);
+        let k = py as usize * self.width + px as usize;
+        self.electrons[k] = self.electrons[k].saturating_add(weight);
         if debris {
-            self.debris_x[i] += weight as u64;
-            self.debris_y[j] += weight as u64;
+            self.debris[k] = self.debris[k].saturating_add(weight);
             self.debris_total += weight as u64;
         }
-    }
-
-    /// The box holding all but `tail` of the debris photons on each side of each axis, so at
-    /// least 1 - 4 tail of the rendered debris flux is inside.
-    fn debris_box(&self, tail: f64) -> Option<BoxPx> {
-        if self.debris_total == 0 {
-            return None;
-        }
-        let cut = (tail * self.debris_total as f64).floor() as u64;
-        let range = |hist: &[u64]| {
-            let mut acc = 0;
-            let mut lo = 0;
-            for (i, &c) in hist.iter().enumerate() {
-                acc += c;
-                if acc > cut {
-                    lo = i;
-                    break;
-                }
-            }
-            acc = 0;
-            let mut hi = hist.len() - 1;
-            for (i, &c) in hist.iter().enumerate().rev() {
-                acc += c;
-                if acc > cut {
-                    hi = i;
-                    break;
-                }
-            }
-            (lo as f64 - 0.5, hi as f64 + 0.5)
-        };
-        let (x_min, x_max) = range(&self.debris_x);
-        let (y_min, y_max) = range(&self.debris_y);
-        Some(BoxPx {
-            x_min,
-            y_min,
-            x_max,
-            y_max,
-        })
     }
 }
 
@@ -290,13 +234,13 @@ pub fn render(
         width,
         height,
         electrons: vec![0; width * height],
-        debris_x: vec![0; width],
-        debris_y: vec![0; height],
+        debris: vec![0; width * height],
         debris_total: 0,
     };
 
-    // Stars: fixed on the sky, photons uniform over the exposure. Stars too far outside the
-    // image for any photon to land are skipped (no work a scene does not need).
+    // Stars too far outside the image for any photon to land are skipped, and in survey
+    // images a star is exposed only while its trail is in the field (no work a scene does not
+    // need).
     let margin = 8.0 * psf_px + jitter.max_excursion() + 1.0;
     let near = |x: f64, y: f64| {
         x > -0.5 - margin
@@ -305,33 +249,100 @@ pub fn render(
             && y < height as f64 - 0.5 + margin
     };
     let mut traced = Vec::new();
-    for star in &scene.stars {
-        let Some((x0, y0)) = tan.pixel(star.ra_deg, star.dec_deg) else {
-            continue;
-        };
-        if !near(x0, y0) {
-            continue;
+    match scene.pointing {
+        Pointing::Fixed { .. } => {
+            // Fixed on the sky, photons uniform over the exposure.
+            for star in &scene.stars {
+                let Some((x0, y0)) = tan.pixel(star.ra_deg, star.dec_deg) else {
+                    continue;
+                };
+                if !near(x0, y0) {
+                    continue;
+                }
+                let expected = photon_rate(star.mag, s.zero_point_mag) * t_exp;
+                traced.push(TracedStar {
+                    ra_deg: star.ra_deg,
+                    dec_deg: star.dec_deg,
+                    mag: star.mag,
+                    x: x0 + jitter_mean.0,
+                    y: y0 + jitter_mean.1,
+                    expected_electrons: expected,
+                });
+                let count = poisson(photons_rng, expected);
+                trace(
+                    &mut canvas,
+                    photons_rng,
+                    count,
+                    merge,
+                    &jitter,
+                    psf_px,
+                    false,
+                    |r| (r.random_range(0.0..t_exp), x0, y0),
+                );
+            }
         }
-        let expected = photon_rate(star.mag, s.zero_point_mag) * t_exp;
-        traced.push(TracedStar {
-            ra_deg: star.ra_deg,
-            dec_deg: star.dec_deg,
-            mag: star.mag,
-            x: x0 + jitter_mean.0,
-            y: y0 + jitter_mean.1,
-            expected_electrons: expected,
-        });
-        let count = poisson(photons_rng, expected);
-        trace(
-            &mut canvas,
-            photons_rng,
-            count,
-            merge,
-            &jitter,
-            psf_px,
-            false,
-            |r| (r.random_range(0.0..t_exp), x0, y0),
-        );
+        Pointing::Survey(track) => {
+            // Each star's trail is sampled on a time grid fine enough that linear interpolation
+            // between nodes is exact to well under 0.01 px (the trail is straight to second
+            // order in the drift), and every photon takes the position of its arrival time.
+            let drift_px = track.drift_deg / scale;
+            let nodes = ((drift_px / SURVEY_NODE_SPACING_PX).ceil() as usize + 1).max(2);
+            let step = t_exp / (nodes - 1) as f64;
+            let mut trail = vec![(f64::NAN, f64::NAN); nodes];
+            for star in &scene.stars {
+                let (mut first, mut last) = (None, None);
+                for (i, node) in trail.iter_mut().enumerate() {
+                    *node = scene
+                        .pixel_at(&tan, i as f64 * step, star.ra_deg, star.dec_deg)
+                        .unwrap_or((f64::NAN, f64::NAN));
+                    if near(node.0, node.1) {
+                        first.get_or_insert(i);
+                        last = Some(i);
+                    }
+                }
+                let (Some(a), Some(b)) = (first, last) else {
+                    continue;
+                };
+                // One node of slack on each side covers a trail entering between nodes.
+                let t_a = a.saturating_sub(1) as f64 * step;
+                let t_b = ((b + 1).min(nodes - 1)) as f64 * step;
+                let expected = photon_rate(star.mag, s.zero_point_mag) * (t_b - t_a);
+                let (xm, ym) = tan
+                    .pixel(star.ra_deg, star.dec_deg)
+                    .unwrap_or((f64::NAN, f64::NAN));
+                traced.push(TracedStar {
+                    ra_deg: star.ra_deg,
+                    dec_deg: star.dec_deg,
+                    mag: star.mag,
+                    x: xm + jitter_mean.0,
+                    y: ym + jitter_mean.1,
+                    expected_electrons: expected,
+                });
+                let count = poisson(photons_rng, expected);
+                let trail = &trail;
+                trace(
+                    &mut canvas,
+                    photons_rng,
+                    count,
+                    merge,
+                    &jitter,
+                    psf_px,
+                    false,
+                    |r| {
+                        let t = if t_b > t_a {
+                            r.random_range(t_a..t_b)
+                        } else {
+                            t_a
+                        };
+                        let u = t / step;
+                        let i = (u as usize).min(nodes - 2);
+                        let f = u - i as f64;
+                        let (p, q) = (trail[i], trail[i + 1]);
+                        (t, p.0 + f * (q.0 - p.0), p.1 + f * (q.1 - p.1))
+                    },
+                );
+            }
+        }
     }
 
     // Debris: each trajectory sample is a source whose photons arrive at its time.
@@ -342,9 +353,7 @@ pub fn render(
         expected_debris += p.expected_electrons;
         mag_min = mag_min.min(p.mag);
         mag_max = mag_max.max(p.mag);
-        let Some((x0, y0)) = tan.pixel(p.ra_deg, p.dec_deg) else {
-            continue;
-        };
+        let (x0, y0) = (p.x_px, p.y_px);
         if !near(x0, y0) {
             continue;
         }
@@ -399,7 +408,14 @@ pub fn render(
         jitter_mean_px: [jitter_mean.0, jitter_mean.1],
         streak_start_px: first.unwrap_or([f64::NAN; 2]),
         streak_end_px: last.unwrap_or([f64::NAN; 2]),
-        label_box_px: canvas.debris_box(0.0025),
+        label_box_px: flux_box(
+            &canvas.debris.iter().map(|&v| v as f32).collect::<Vec<_>>(),
+            width,
+            height,
+            LABEL_SHARE,
+        ),
+        frame: None,
+        label_box_final_px: None,
         magnitude: g.magnitude,
         magnitude_min: mag_min,
         magnitude_max: mag_max,
@@ -423,6 +439,7 @@ pub fn render(
         width,
         height,
         electrons: canvas.electrons,
+        debris_electrons: canvas.debris,
         adu,
         truth,
         stars: traced,
@@ -473,6 +490,8 @@ mod tests {
                     t_s,
                     ra_deg,
                     dec_deg,
+                    x_px: 30.0 + 60.0 * k as f64 / n as f64,
+                    y_px: 40.0,
                     mag: debris_mag,
                     expected_electrons: photon_rate(debris_mag, c.resolved.sensor.zero_point_mag)
                         * exposure_s
@@ -592,20 +611,6 @@ mod tests {
         assert!(
             (mean_adu - expected_bg).abs() < 0.1,
             "{mean_adu} vs {expected_bg}"
-        );
-    }
-
-    #[test]
-    fn yolo_line_uses_the_pixel_convention() {
-        let b = BoxPx {
-            x_min: -0.5,
-            y_min: -0.5,
-            x_max: 127.5,
-            y_max: 63.5,
-        };
-        assert_eq!(
-            b.yolo_line(128, 128),
-            "0 0.500000 0.250000 1.000000 0.500000\n"
         );
     }
 

@@ -11,13 +11,15 @@ use rand_chacha::ChaCha12Rng;
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
-use crate::campaign::{Campaign, LightCurve, Stars};
+use crate::campaign::{Campaign, LightCurve, PointingMode, Stars};
 use crate::sky::ephemeris::{moon_position_km, sun_position_km};
 use crate::sky::orbit::{Mat3, mat_vec, teme_to_gcrs_matrix};
 use crate::sky::photometry::{debris_magnitude, photon_rate};
 use crate::sky::projection::Tan;
 use crate::sky::stars::{ProceduralSky, Star, StarCatalog};
-use crate::sky::{Vec3, angle_deg, norm, radec_deg, segment_hits_sphere, sub};
+use crate::sky::{
+    Vec3, angle_deg, dot, norm, radec_deg, radec_unit, scale, segment_hits_sphere, sub, unit,
+};
 
 /// WGS84 equatorial radius, km.
 pub const EARTH_RADIUS_KM: f64 = 6378.137;
@@ -56,12 +58,72 @@ pub fn julian_year(t: Epoch) -> f64 {
     2000.0 + (t.to_jde_tt_days() - 2_451_545.0) / 365.25
 }
 
-/// Where the sensor points. Fixed pointing carries only its direction; the survey variant
-/// (issue #3) will carry its attitude track.
+/// Where the sensor points. Fixed pointing carries only its direction; survey pointing carries
+/// the attitude track, so fixed scenes never build one.
 #[derive(Clone, Debug, Serialize)]
 #[serde(tag = "mode", rename_all = "lowercase")]
 pub enum Pointing {
     Fixed { ra_deg: f64, dec_deg: f64 },
+    Survey(SurveyTrack),
+}
+
+/// Survey pointing (paper 3.2.1): the sensor is fixed on the observer, whose attitude is nadir
+/// pointing, so the camera is fixed in the observer's local-vertical frame and turns with it,
+/// as a rigid body, about the orbit normal at the orbital rate. At mid-exposure the image axes
+/// are along RA and Dec (the FITS WCS); at other times they turn with the camera (the paper
+/// keeps them along the local RA/Dec, which bends trails near the poles). The motion is
+/// analytic, so every photon gets the exact pointing of its arrival time (the paper
+/// interpolates a spline through sampled pointings).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct SurveyTrack {
+    /// Boresight at mid-exposure.
+    pub mid_ra_deg: f64,
+    pub mid_dec_deg: f64,
+    /// Orbit normal of the observer (GCRS unit vector) and the turn rate about it.
+    pub axis: Vec3,
+    pub rate_deg_s: f64,
+    /// Seconds from the start of the exposure to mid-exposure.
+    pub t_mid_s: f64,
+    /// Total boresight drift over the exposure, degrees.
+    pub drift_deg: f64,
+    /// Direction in which stars move in the image, degrees from +x towards +y: the paper's
+    /// Eq. 13 with atan2 (opposite to the boresight drift). Every star trail is parallel to it.
+    pub trail_angle_deg: f64,
+}
+
+impl SurveyTrack {
+    fn angle_rad(&self, t_s: f64) -> f64 {
+        (self.rate_deg_s * (t_s - self.t_mid_s)).to_radians()
+    }
+
+    /// Boresight (RA, Dec) at `t_s` seconds after the start of the exposure.
+    pub fn radec_at(&self, t_s: f64) -> (f64, f64) {
+        let b = radec_unit(self.mid_ra_deg, self.mid_dec_deg);
+        radec_deg(rotate(b, self.axis, self.angle_rad(t_s)))
+    }
+
+    /// The sky direction that the camera at `t_s` sees where the mid-exposure camera sees
+    /// (ra, dec): the camera turned by R(t), so a star s appears at R(t)^-1 s of the mid frame.
+    pub fn to_mid_frame(&self, t_s: f64, ra_deg: f64, dec_deg: f64) -> (f64, f64) {
+        radec_deg(rotate(
+            radec_unit(ra_deg, dec_deg),
+            self.axis,
+            -self.angle_rad(t_s),
+        ))
+    }
+}
+
+/// Rodrigues' rotation of `v` about the unit `axis` by `angle` radians.
+fn rotate(v: Vec3, axis: Vec3, angle: f64) -> Vec3 {
+    let (s, c) = angle.sin_cos();
+    let k = axis;
+    let kxv = [
+        k[1] * v[2] - k[2] * v[1],
+        k[2] * v[0] - k[0] * v[2],
+        k[0] * v[1] - k[1] * v[0],
+    ];
+    let kv = dot(k, v) * (1.0 - c);
+    [0, 1, 2].map(|i| v[i] * c + kxv[i] * s + k[i] * kv)
 }
 
 /// One point of the debris trajectory: a source with its share of the exposure.
@@ -75,6 +137,9 @@ pub struct TrajectorySample {
     pub mag: f64,
     /// Expected photo-electrons of this sample (Eq. 3 over its share of the exposure).
     pub expected_electrons: f64,
+    /// Pixel position with the pointing of its own time, before jitter and PSF.
+    pub x_px: f64,
+    pub y_px: f64,
 }
 
 /// Tumbling modulation drawn for this image.
@@ -120,19 +185,35 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// The projection of this scene's pointing.
+    /// The projection at mid-exposure: the one the FITS WCS describes.
     pub fn projection(&self, campaign: &Campaign) -> Tan {
-        let s = &campaign.resolved.sensor;
         match self.pointing {
-            Pointing::Fixed { ra_deg, dec_deg } => Tan::new(
-                ra_deg,
-                dec_deg,
-                pixel_scale_deg(campaign),
-                s.width_px,
-                s.height_px,
-            ),
+            Pointing::Fixed { ra_deg, dec_deg } => tan_at(campaign, ra_deg, dec_deg),
+            Pointing::Survey(track) => tan_at(campaign, track.mid_ra_deg, track.mid_dec_deg),
         }
     }
+
+    /// Pixel coordinates of a sky position with the pointing of `t_s` seconds after the start.
+    pub fn pixel_at(&self, tan: &Tan, t_s: f64, ra_deg: f64, dec_deg: f64) -> Option<(f64, f64)> {
+        match self.pointing {
+            Pointing::Fixed { .. } => tan.pixel(ra_deg, dec_deg),
+            Pointing::Survey(track) => {
+                let (ra, dec) = track.to_mid_frame(t_s, ra_deg, dec_deg);
+                tan.pixel(ra, dec)
+            }
+        }
+    }
+}
+
+fn tan_at(campaign: &Campaign, ra_deg: f64, dec_deg: f64) -> Tan {
+    let s = &campaign.resolved.sensor;
+    Tan::new(
+        ra_deg,
+        dec_deg,
+        pixel_scale_deg(campaign),
+        s.width_px,
+        s.height_px,
+    )
 }
 
 /// Degrees per pixel: the field radius spans half the image width.
@@ -301,19 +382,42 @@ fn try_draw(
         around_debris.cx - placement.0 * half_w,
         around_debris.cy - placement.1 * half_h,
     );
-    let pointing = Pointing::Fixed {
-        ra_deg: ra_p,
-        dec_deg: dec_p,
+    let (pointing, cone) = match c.pointing.mode {
+        PointingMode::Fixed => (
+            Pointing::Fixed {
+                ra_deg: ra_p,
+                dec_deg: dec_p,
+            },
+            c.stars.cone_radius_deg(),
+        ),
+        PointingMode::Survey => {
+            let track = survey_track(
+                campaign,
+                debris_index,
+                mid,
+                exposure_s,
+                (ra_p, dec_p),
+                &frame,
+            )
+            .ok_or("propagation failed")?;
+            // The star cone covers the field along the whole drift and nothing more.
+            let s = &c.sensor;
+            let half_diag_deg = scale * (s.width_px as f64).hypot(s.height_px as f64) / 2.0;
+            (
+                Pointing::Survey(track),
+                track.drift_deg / 2.0 + half_diag_deg + STAR_CONE_MARGIN_DEG,
+            )
+        }
     };
 
     // Field stars in the cone; a star brighter than the limit spoils the image (paper 3.2.3).
-    let cone = c.stars.cone_radius_deg();
     let field = stars.stars_in_cone(ra_p, dec_p, cone, c.sensor.mag_limit, mid);
     if field.iter().any(|s| s.mag < v.brightest_star_mag) {
         return Err("star brighter than the limit in the field");
     }
 
     // The trajectory, cut in samples at the centres of equal time slices.
+    let mid_tan = tan_at(campaign, ra_p, dec_p);
     let n = c.render.trajectory_samples as usize;
     let dt = exposure_s / n as f64;
     let mut trajectory = Vec::with_capacity(n);
@@ -335,17 +439,29 @@ fn try_draw(
         } else {
             0.0
         };
+        let (ra_cam, dec_cam) = match pointing {
+            Pointing::Fixed { .. } => (ra_deg, dec_deg),
+            Pointing::Survey(track) => track.to_mid_frame(t_s, ra_deg, dec_deg),
+        };
+        let (x_px, y_px) = mid_tan
+            .pixel(ra_cam, dec_cam)
+            .unwrap_or((f64::NAN, f64::NAN));
         trajectory.push(TrajectorySample {
             t_s,
             ra_deg,
             dec_deg,
             mag,
             expected_electrons,
+            x_px,
+            y_px,
         });
     }
 
-    let tan = Tan::new(ra_p, dec_p, scale, c.sensor.width_px, c.sensor.height_px);
-    let snr = expected_snr(campaign, &tan, &trajectory, exposure_s);
+    let snr = expected_snr(
+        campaign,
+        &trajectory,
+        background_sigma_adu(campaign, exposure_s),
+    );
     if snr < campaign.snr_min() {
         return Err("signal to noise below the gate");
     }
@@ -383,9 +499,8 @@ fn try_draw(
 /// `(L + w) w`. Computed from expected values, before any photon is traced.
 pub fn expected_snr(
     campaign: &Campaign,
-    tan: &Tan,
     trajectory: &[TrajectorySample],
-    exposure_s: f64,
+    noise_sigma_adu: f64,
 ) -> f64 {
     let s = &campaign.resolved.sensor;
     let (w, h) = (s.width_px as f64, s.height_px as f64);
@@ -394,10 +509,7 @@ pub fn expected_snr(
     let mut length_px = 0.0;
     let mut last: Option<(f64, f64)> = None;
     for p in trajectory {
-        let Some((x, y)) = tan.pixel(p.ra_deg, p.dec_deg) else {
-            last = None;
-            continue;
-        };
+        let (x, y) = (p.x_px, p.y_px);
         if inside(x, y) {
             electrons += p.expected_electrons;
             if let Some((lx, ly)) = last {
@@ -408,15 +520,62 @@ pub fn expected_snr(
             last = None;
         }
     }
-    let fwhm_px = 2.3548 * s.psf_sigma_arcsec / 3600.0 / tan.scale_deg;
+    let fwhm_px = 2.3548 * s.psf_sigma_arcsec / 3600.0 / pixel_scale_deg(campaign);
     let footprint = (length_px + fwhm_px) * fwhm_px;
     let signal_adu = electrons / s.gain_e_per_adu / footprint.max(1.0);
-    let noise = background_sigma_adu(campaign, exposure_s);
-    if noise > 0.0 {
-        signal_adu / noise
+    if noise_sigma_adu > 0.0 {
+        signal_adu / noise_sigma_adu
     } else if signal_adu > 0.0 {
         f64::INFINITY
     } else {
         0.0
     }
+}
+
+/// Extra radius of the survey star cone beyond the field along the drift.
+const STAR_CONE_MARGIN_DEG: f64 = 0.01;
+
+/// The survey track of the observer at mid-exposure, with the boresight `(ra, dec)` then.
+fn survey_track(
+    campaign: &Campaign,
+    debris: usize,
+    mid: Epoch,
+    exposure_s: f64,
+    boresight: (f64, f64),
+    frame: &Mat3,
+) -> Option<SurveyTrack> {
+    // Orbit normal and rate from the observer's velocity by a central difference.
+    let h = 0.5;
+    let (r0, _) = positions(campaign, debris, mid - Duration::from_seconds(h), frame)?;
+    let (r1, _) = positions(campaign, debris, mid + Duration::from_seconds(h), frame)?;
+    let (r, _) = positions(campaign, debris, mid, frame)?;
+    let v = scale(sub(r1, r0), 1.0 / (2.0 * h));
+    let n = [
+        r[1] * v[2] - r[2] * v[1],
+        r[2] * v[0] - r[0] * v[2],
+        r[0] * v[1] - r[1] * v[0],
+    ];
+    let rate_deg_s = (norm(n) / dot(r, r)).to_degrees();
+    let axis = unit(n);
+    // The boresight moves on a small circle about the orbit normal.
+    let sin_from_axis = angle_deg(radec_unit(boresight.0, boresight.1), axis)
+        .to_radians()
+        .sin();
+    let mut track = SurveyTrack {
+        mid_ra_deg: boresight.0,
+        mid_dec_deg: boresight.1,
+        axis,
+        rate_deg_s,
+        t_mid_s: exposure_s / 2.0,
+        drift_deg: rate_deg_s * exposure_s * sin_from_axis,
+        trail_angle_deg: 0.0,
+    };
+    // Eq. 13 with atan2: how a star at the centre moves across the image.
+    let tan = tan_at(campaign, boresight.0, boresight.1);
+    let (ra0, dec0) = track.to_mid_frame(0.0, boresight.0, boresight.1);
+    let (ra1, dec1) = track.to_mid_frame(exposure_s, boresight.0, boresight.1);
+    let (x0, y0) = tan.standard(ra0, dec0)?;
+    let (x1, y1) = tan.standard(ra1, dec1)?;
+    track.trail_angle_deg = (y1 - y0).atan2(x1 - x0).to_degrees();
+    Some(track)
 }

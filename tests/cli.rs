@@ -201,3 +201,47 @@ fn verify_rejects_a_directory_without_manifest() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("manifest.json"));
 }
+
+#[test]
+fn survey_rotated_campaign_is_deterministic_and_verifiable() {
+    let tmp = tempfile::tempdir().unwrap();
+    let campaign = small_campaign(
+        tmp.path(),
+        "[pointing]\nmode = \"survey\"\n[enhance]\ngeometry = \"rotated\"\n",
+    );
+    let c = campaign.to_str().unwrap();
+    let mut digests = Vec::new();
+    for threads in [1, 2] {
+        let out = tmp.path().join(format!("survey{threads}"));
+        let o = soig(
+            &["run", c, "--quiet", "--out", out.to_str().unwrap()],
+            Some(threads),
+        );
+        assert!(
+            o.status.success(),
+            "run failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        digests.push(digest_of(&o));
+        let v = soig(&["verify", out.to_str().unwrap()], None);
+        assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+    }
+    assert_eq!(digests[0], digests[1]);
+    // The PNGs are the rotated, expanded frame: 256 px -> 384 px (diagonal, multiple of 32).
+    let out = tmp.path().join("survey1");
+    let png = std::fs::read_dir(out.join("images/train"))
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (384, 384));
+}
+
+#[test]
+fn rotated_geometry_needs_survey_pointing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let c = small_campaign(tmp.path(), "[enhance]\ngeometry = \"rotated\"\n");
+    assert_clean_failure(&c, &tmp.path().join("out"), &["enhance.geometry", "survey"]);
+}

@@ -1,0 +1,169 @@
+//! Survey pointing, rotation and padding: star trails, label boxes and frames (issue #3).
+
+use std::path::Path;
+
+use rand_chacha::ChaCha12Rng;
+use soig::campaign::Campaign;
+use soig::geometry::{self, Fill, Frame, LABEL_SHARE};
+use soig::rng::{Purpose, stream};
+use soig::scene::{self, Pointing, StarField};
+
+fn campaign(mode: &str) -> Campaign {
+    let tle =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/tle/catalog-2022-01-22.tle");
+    let text = format!(
+        r#"
+name = "geom"
+seed = 11
+images = 4
+[observer]
+tle_file = "{tle}"
+norad = 41335
+[[debris]]
+tle_file = "{tle}"
+norad = 37476
+[[debris]]
+tle_file = "{tle}"
+norad = 40989
+[pointing]
+mode = "{mode}"
+[sensor]
+width_px = 512
+height_px = 512
+fov_radius_deg = 0.05
+[render]
+trajectory_samples = 800
+"#,
+        tle = tle.display()
+    );
+    Campaign::from_toml(&text, Path::new("geom.toml")).unwrap()
+}
+
+#[test]
+fn survey_star_trails_are_parallel_and_horizontal_after_rotation() {
+    let c = campaign("survey");
+    let stars = StarField::load(&c).unwrap();
+    for i in 0..4 {
+        let s = scene::draw(&c, &stars, i, &mut stream(11, i, Purpose::Scene)).unwrap();
+        let Pointing::Survey(track) = s.pointing else {
+            panic!("survey scene expected")
+        };
+        let frame = Frame::rotated(512, 512, track.trail_angle_deg);
+        let tan = s.projection(&c);
+        let at = |t: f64, ra: f64, dec: f64| s.pixel_at(&tan, t, ra, dec);
+        let mut n = 0;
+        for star in s.stars.iter().take(200) {
+            let (Some(p), Some(q)) = (
+                at(0.0, star.ra_deg, star.dec_deg),
+                at(s.exposure_s, star.ra_deg, star.dec_deg),
+            ) else {
+                continue;
+            };
+            // In the original image every trail runs along the trail angle: they are parallel...
+            let ang = (q.1 - p.1).atan2(q.0 - p.0).to_degrees();
+            let d = (ang - track.trail_angle_deg + 540.0).rem_euclid(360.0) - 180.0;
+            assert!(d.abs() < 1.0, "trail at {ang} vs {}", track.trail_angle_deg);
+            // ...and after rotation it is horizontal within 1 degree.
+            let (p2, q2) = (frame.map(p.0, p.1), frame.map(q.0, q.1));
+            let tilt = (q2.1 - p2.1).atan2(q2.0 - p2.0).to_degrees();
+            assert!(tilt.abs() < 1.0, "tilt {tilt}");
+            n += 1;
+        }
+        assert!(n > 10);
+        // The trail is as long as the drift says.
+        let drift_px = track.drift_deg / scene::pixel_scale_deg(&c);
+        let (ra, dec) = (s.stars[0].ra_deg, s.stars[0].dec_deg);
+        let (p, q) = (
+            at(0.0, ra, dec).unwrap(),
+            at(s.exposure_s, ra, dec).unwrap(),
+        );
+        let len = (q.0 - p.0).hypot(q.1 - p.1);
+        assert!(
+            (len - drift_px).abs() < 0.01 * drift_px,
+            "{len} vs {drift_px}"
+        );
+    }
+}
+
+/// The smallest box holding at least `share` of an image's flux, by brute force over the
+/// tightest quantile boxes: the reference "needed" box.
+fn needed_extent(img: &[f32], w: usize, h: usize, share: f64) -> (f64, f64) {
+    let mut col = vec![0.0f64; w];
+    let mut row = vec![0.0f64; h];
+    for j in 0..h {
+        for i in 0..w {
+            col[i] += img[j * w + i] as f64;
+            row[j] += img[j * w + i] as f64;
+        }
+    }
+    let narrowest = |hist: &[f64]| {
+        let total: f64 = hist.iter().sum();
+        let mut best = hist.len() as f64;
+        for lo in 0..hist.len() {
+            let mut acc = 0.0;
+            for hi in lo..hist.len() {
+                acc += hist[hi];
+                if acc >= share * total {
+                    best = best.min((hi - lo + 1) as f64);
+                    break;
+                }
+            }
+        }
+        best
+    };
+    (narrowest(&col), narrowest(&row))
+}
+
+#[test]
+fn label_box_is_the_tight_box_of_the_streak_in_every_frame() {
+    for mode in ["fixed", "survey"] {
+        let c = campaign(mode);
+        let stars = StarField::load(&c).unwrap();
+        for i in 0..3 {
+            let s = scene::draw(&c, &stars, i, &mut stream(11, i, Purpose::Scene)).unwrap();
+            let e = soig::render::render(
+                &c,
+                &s,
+                &mut stream(11, i, Purpose::Photons),
+                &mut stream(11, i, Purpose::Noise),
+            );
+            let debris: Vec<f32> = e.debris_electrons.iter().map(|&v| v as f32).collect();
+            let mut frames = vec![Frame::original(512, 512), Frame::padded(512, 512, 32)];
+            if let Pointing::Survey(t) = s.pointing {
+                frames.push(Frame::rotated(512, 512, t.trail_angle_deg));
+            }
+            for f in frames {
+                let img = geometry::warp::<ChaCha12Rng>(&debris, 512, 512, &f, Fill::Zero);
+                let total: f64 = img.iter().map(|&v| v as f64).sum();
+                let b = geometry::flux_box(&img, f.width, f.height, LABEL_SHARE).unwrap();
+                let mut inside = 0.0;
+                for j in 0..f.height {
+                    for i in 0..f.width {
+                        if (i as f64) > b.x_min
+                            && (i as f64) < b.x_max
+                            && (j as f64) > b.y_min
+                            && (j as f64) < b.y_max
+                        {
+                            inside += img[j * f.width + i] as f64;
+                        }
+                    }
+                }
+                assert!(
+                    inside >= 0.99 * total,
+                    "{mode} {}: box holds {:.4} of the flux",
+                    f.kind,
+                    inside / total
+                );
+                // Needed: on each axis, the narrowest range holding 99.5% of the flux (a box that
+                // narrow on both axes is sure to hold 99% in 2-D).
+                let (nw, nh) = needed_extent(&img, f.width, f.height, 0.995);
+                assert!(
+                    b.x_max - b.x_min <= nw + 2.0 && b.y_max - b.y_min <= nh + 2.0,
+                    "{mode} {}: box {:?} vs needed {nw} x {nh}",
+                    f.kind,
+                    b
+                );
+            }
+        }
+    }
+}
