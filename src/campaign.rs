@@ -1214,8 +1214,14 @@ mod tests {
         let e = load(&minimal("[window]\nstart = \"2022-13-01T00:00:00 UTC\"\n")).unwrap_err();
         assert_eq!(e.field.as_deref(), Some("window.start"));
 
-        let e = load(&minimal("[pointing]\nmode = \"survey\"\n")).unwrap_err();
-        assert!(e.to_string().contains("not implemented"), "{e}");
+        let e = load(&minimal("[enhance]\ngeometry = \"rotated\"\n")).unwrap_err();
+        assert!(e.to_string().contains("needs survey pointing"), "{e}");
+        assert!(
+            load(&minimal(
+                "[pointing]\nmode = \"survey\"\n[enhance]\ngeometry = \"rotated\"\n"
+            ))
+            .is_ok()
+        );
 
         let e = load("name = \"t\"\n[observer]\nnorad = 1\n[[debris]]\nnorad = 2\n").unwrap_err();
         assert_eq!(e.field.as_deref(), Some("observer"));

@@ -101,10 +101,10 @@ fn needed_extent(img: &[f32], w: usize, h: usize, share: f64) -> (f64, f64) {
         let mut best = hist.len() as f64;
         for lo in 0..hist.len() {
             let mut acc = 0.0;
-            for hi in lo..hist.len() {
-                acc += hist[hi];
+            for (k, v) in hist[lo..].iter().enumerate() {
+                acc += v;
                 if acc >= share * total {
-                    best = best.min((hi - lo + 1) as f64);
+                    best = best.min((k + 1) as f64);
                     break;
                 }
             }
