@@ -44,6 +44,8 @@ pub struct CampaignFile {
     #[serde(default)]
     pub stars: Stars,
     #[serde(default)]
+    pub background: Background,
+    #[serde(default)]
     pub photometry: Photometry,
     #[serde(default)]
     pub visibility: Visibility,
@@ -221,6 +223,18 @@ impl Stars {
             } => *cone_radius_deg,
         }
     }
+}
+
+/// The sky background: the paper's uniform synthetic background (parameters in `sensor`), or
+/// real frames whose noise replaces it (semisynthetic images, paper 3.4).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Default)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Background {
+    #[default]
+    Uniform,
+    /// FITS frames (with EXPTIME or EXPOSURE), relative to the campaign file; each image takes one at
+    /// random, normalised by its exposure, scaled to the image's and tiled (see `background`).
+    Frames { paths: Vec<String> },
 }
 
 /// Debris photometry (Eq. 6-7) and light-curve modulation.
@@ -643,6 +657,20 @@ impl Campaign {
                 resolve_object(spec, &base_dir, window_start)
                     .map_err(|(f, m)| err(&format!("debris[{i}]{f}"), m))?,
             );
+        }
+        if let Background::Frames { paths } = &resolved.background {
+            if paths.is_empty() {
+                return Err(err("background.paths", "name at least one frame".into()));
+            }
+            for (i, p) in paths.iter().enumerate() {
+                let full = base_dir.join(p);
+                if !full.is_file() {
+                    return Err(err(
+                        &format!("background.paths[{i}]"),
+                        format!("background frame {} does not exist", full.display()),
+                    ));
+                }
+            }
         }
         if let Stars::Catalog { path: p, .. } = &resolved.stars {
             let full = base_dir.join(p);

@@ -5,6 +5,7 @@
 //! Data flows one way: `campaign` -> `scene` -> `render` -> `fits` / `enhance` -> `dataset`,
 //! driven by `pipeline`, recorded by `manifest`.
 
+pub mod background;
 pub mod campaign;
 pub mod dataset;
 pub mod enhance;

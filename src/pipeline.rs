@@ -20,7 +20,7 @@ use crate::manifest::{MANIFEST, Manifest};
 use crate::render::{self, Exposure};
 use crate::rng::{Purpose, stream};
 use crate::scene::Pointing;
-use crate::scene::{self, StarField};
+use crate::scene::{self, Inputs};
 
 /// What a finished run reports.
 #[derive(Debug)]
@@ -120,7 +120,7 @@ fn write_all(
         std::fs::create_dir_all(d).with_context(|| format!("cannot create {}", d.display()))?;
     }
 
-    let stars = StarField::load(campaign).map_err(anyhow::Error::msg)?;
+    let inputs = Inputs::load(campaign).map_err(anyhow::Error::msg)?;
     let bar = if progress {
         ProgressBar::new(n as u64)
     } else {
@@ -137,7 +137,7 @@ fn write_all(
         .into_par_iter()
         .try_for_each(|i| -> anyhow::Result<()> {
             let subset = dataset_stage.then(|| subsets[i as usize]);
-            image(campaign, &stars, i, dir, enhance_stage, subset)?;
+            image(campaign, &inputs, i, dir, enhance_stage, subset)?;
             bar.inc(1);
             Ok(())
         })?;
@@ -158,7 +158,7 @@ fn write_all(
 /// Draw, render and write one image.
 fn image(
     campaign: &Campaign,
-    stars: &StarField,
+    inputs: &Inputs,
     i: u64,
     dir: &Path,
     enhance_stage: bool,
@@ -167,10 +167,11 @@ fn image(
     use anyhow::Context;
     let c = &campaign.resolved;
     let seed = c.seed;
-    let scene = scene::draw(campaign, stars, i, &mut stream(seed, i, Purpose::Scene))?;
+    let scene = scene::draw(campaign, inputs, i, &mut stream(seed, i, Purpose::Scene))?;
     let mut exposure = render::render(
         campaign,
         &scene,
+        inputs.frame(scene.background),
         &mut stream(seed, i, Purpose::Photons),
         &mut stream(seed, i, Purpose::Noise),
     );

@@ -8,6 +8,7 @@ use rand_chacha::ChaCha12Rng;
 use rand_distr::StandardNormal;
 use serde::Serialize;
 
+use crate::background::RealFrame;
 use crate::campaign::Campaign;
 use crate::geometry::{BoxPx, Frame, LABEL_SHARE, flux_box};
 use crate::rng::poisson;
@@ -60,6 +61,8 @@ pub struct Truth {
     pub stars_in_cone: usize,
     pub stars_traced: usize,
     pub background_sigma_adu: f64,
+    /// The real frame of a semisynthetic image.
+    pub background_frame: Option<String>,
     pub attempts: u32,
     pub rejections: std::collections::BTreeMap<&'static str, u32>,
 }
@@ -211,6 +214,7 @@ fn trace(
 pub fn render(
     campaign: &Campaign,
     scene: &Scene,
+    frame: Option<&RealFrame>,
     photons_rng: &mut ChaCha12Rng,
     noise_rng: &mut ChaCha12Rng,
 ) -> Exposure {
@@ -370,29 +374,46 @@ pub fn render(
         );
     }
 
-    // Detector, Eq. 11: ADU = electrons / gain + background + bias, background uniform in its
-    // range scaled linearly with exposure.
-    let k = t_exp / s.background_exposure_s;
-    let (bg_lo, bg_hi) = (s.background_min_adu * k, s.background_max_adu * k);
+    // Detector, Eq. 11: ADU = electrons / gain + background + bias. The background is the
+    // paper's uniform one (its range scaled linearly with exposure) or a real frame's.
     let (b_lo, b_hi) = (s.bias_min_adu, s.bias_max_adu);
     let uniform = |r: &mut ChaCha12Rng, lo: f64, hi: f64| {
         if hi > lo { r.random_range(lo..hi) } else { lo }
     };
-    let adu: Vec<f32> = canvas
-        .electrons
-        .iter()
-        .map(|&e| {
-            let bg = uniform(noise_rng, bg_lo, bg_hi);
-            let bias = uniform(noise_rng, b_lo, b_hi);
-            (e as f64 / s.gain_e_per_adu + bg + bias) as f32
-        })
-        .collect();
+    let adu: Vec<f32> = match (frame, scene.background) {
+        (Some(f), Some(choice)) => {
+            let level = (s.background_min_adu + s.background_max_adu) / 2.0 * t_exp
+                / s.background_exposure_s;
+            let bg = f.background(width, height, t_exp, choice.offset, level);
+            canvas
+                .electrons
+                .iter()
+                .zip(bg)
+                .map(|(&e, bg)| {
+                    let bias = uniform(noise_rng, b_lo, b_hi);
+                    (e as f64 / s.gain_e_per_adu + bg as f64 + bias) as f32
+                })
+                .collect()
+        }
+        _ => {
+            let k = t_exp / s.background_exposure_s;
+            let (bg_lo, bg_hi) = (s.background_min_adu * k, s.background_max_adu * k);
+            canvas
+                .electrons
+                .iter()
+                .map(|&e| {
+                    let bg = uniform(noise_rng, bg_lo, bg_hi);
+                    let bias = uniform(noise_rng, b_lo, b_hi);
+                    (e as f64 / s.gain_e_per_adu + bg + bias) as f32
+                })
+                .collect()
+        }
+    };
 
     let at = |p: Option<&crate::scene::TrajectorySample>| {
-        p.and_then(|p| {
+        p.map(|p| {
             let (jx, jy) = jitter.at(p.t_s);
-            tan.pixel(p.ra_deg, p.dec_deg)
-                .map(|(x, y)| [x + jx, y + jy])
+            [p.x_px + jx, p.y_px + jy]
         })
     };
     let first = at(scene.trajectory.first());
@@ -431,7 +452,8 @@ pub fn render(
         snr: scene.snr,
         stars_in_cone: scene.stars.len(),
         stars_traced: traced.len(),
-        background_sigma_adu: crate::scene::background_sigma_adu(campaign, t_exp),
+        background_sigma_adu: crate::scene::background_sigma_adu(campaign, t_exp, frame),
+        background_frame: frame.map(|f| f.path.display().to_string()),
         attempts: scene.attempts,
         rejections: scene.rejections.clone(),
     };
@@ -522,6 +544,7 @@ mod tests {
             },
             trajectory,
             stars,
+            background: None,
             snr: 1.0,
             attempts: 1,
             rejections: Default::default(),
@@ -563,6 +586,7 @@ mod tests {
             let e = render(
                 &c,
                 &s,
+                None,
                 &mut stream(1, i, Purpose::Photons),
                 &mut stream(1, i, Purpose::Noise),
             );
@@ -592,6 +616,7 @@ mod tests {
         let e = render(
             &c,
             &s,
+            None,
             &mut stream(2, 0, Purpose::Photons),
             &mut stream(2, 0, Purpose::Noise),
         );
@@ -641,6 +666,7 @@ mod tests {
             let e = render(
                 &c,
                 &s,
+                None,
                 &mut stream(3, i, Purpose::Photons),
                 &mut stream(3, i, Purpose::Noise),
             );

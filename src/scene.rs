@@ -11,6 +11,7 @@ use rand_chacha::ChaCha12Rng;
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
+use crate::background::{BackgroundModel, FrameChoice, RealFrame};
 use crate::campaign::{Campaign, LightCurve, PointingMode, Stars};
 use crate::sky::ephemeris::{moon_position_km, sun_position_km};
 use crate::sky::orbit::{Mat3, mat_vec, teme_to_gcrs_matrix};
@@ -23,6 +24,29 @@ use crate::sky::{
 
 /// WGS84 equatorial radius, km.
 pub const EARTH_RADIUS_KM: f64 = 6378.137;
+
+/// What a campaign reads before its first image: the star source and background frames.
+pub struct Inputs {
+    pub stars: StarField,
+    pub background: BackgroundModel,
+}
+
+impl Inputs {
+    /// The frame of a background choice.
+    pub fn frame(&self, choice: Option<FrameChoice>) -> Option<&RealFrame> {
+        match (&self.background, choice) {
+            (BackgroundModel::Frames(frames), Some(c)) => frames.get(c.frame),
+            _ => None,
+        }
+    }
+
+    pub fn load(campaign: &Campaign) -> Result<Inputs, String> {
+        Ok(Inputs {
+            stars: StarField::load(campaign)?,
+            background: BackgroundModel::load(campaign)?,
+        })
+    }
+}
 
 /// The source of field stars of a campaign, loaded once.
 pub enum StarField {
@@ -177,6 +201,8 @@ pub struct Scene {
     pub geometry: Geometry,
     pub trajectory: Vec<TrajectorySample>,
     pub stars: Vec<Star>,
+    /// The real background frame of a semisynthetic image.
+    pub background: Option<FrameChoice>,
     /// Expected debris signal per footprint pixel over background noise, the acceptance gate.
     pub snr: f64,
     /// Draws tried, and why the rejected ones were rejected.
@@ -231,26 +257,40 @@ pub struct NoScene {
     pub reasons: String,
 }
 
-/// Background plus bias noise standard deviation per pixel, ADU, for an exposure.
-pub fn background_sigma_adu(campaign: &Campaign, exposure_s: f64) -> f64 {
+/// Background plus bias noise standard deviation per pixel, ADU, for an exposure: the uniform
+/// model's, or the chosen real frame's robust sigma scaled by exposure.
+pub fn background_sigma_adu(
+    campaign: &Campaign,
+    exposure_s: f64,
+    frame: Option<&RealFrame>,
+) -> f64 {
     let s = &campaign.resolved.sensor;
-    let k = exposure_s / s.background_exposure_s;
-    let bg = (s.background_max_adu - s.background_min_adu) * k;
     let bias = s.bias_max_adu - s.bias_min_adu;
-    ((bg * bg + bias * bias) / 12.0).sqrt()
+    let bias_var = bias * bias / 12.0;
+    match frame {
+        Some(f) => {
+            let bg = f.sigma * exposure_s / f.exposure_s;
+            (bg * bg + bias_var).sqrt()
+        }
+        None => {
+            let k = exposure_s / s.background_exposure_s;
+            let bg = (s.background_max_adu - s.background_min_adu) * k;
+            (bg * bg / 12.0 + bias_var).sqrt()
+        }
+    }
 }
 
 /// Draw the scene of one image, retrying rejected draws on the same stream.
 pub fn draw(
     campaign: &Campaign,
-    stars: &StarField,
+    inputs: &Inputs,
     image: u64,
     rng: &mut ChaCha12Rng,
 ) -> Result<Scene, NoScene> {
     let mut rejections: BTreeMap<&'static str, u32> = BTreeMap::new();
     let max = campaign.resolved.visibility.max_attempts;
     for attempt in 1..=max {
-        match try_draw(campaign, stars, image, rng) {
+        match try_draw(campaign, inputs, image, rng) {
             Ok(mut scene) => {
                 scene.attempts = attempt;
                 scene.rejections = rejections;
@@ -290,7 +330,7 @@ fn positions(
 
 fn try_draw(
     campaign: &Campaign,
-    stars: &StarField,
+    inputs: &Inputs,
     image: u64,
     rng: &mut ChaCha12Rng,
 ) -> Result<Scene, &'static str> {
@@ -312,6 +352,17 @@ fn try_draw(
         rng.random_range(-1.0..1.0) * c.pointing.placement_fraction,
         rng.random_range(-1.0..1.0) * c.pointing.placement_fraction,
     );
+    let background = match &inputs.background {
+        BackgroundModel::Uniform => None,
+        BackgroundModel::Frames(frames) => {
+            let frame = rng.random_range(0..frames.len());
+            let f = &frames[frame];
+            Some(FrameChoice {
+                frame,
+                offset: (rng.random_range(0..f.width), rng.random_range(0..f.height)),
+            })
+        }
+    };
     let tumble = match c.photometry.light_curve {
         LightCurve::None => None,
         LightCurve::Tumbling {
@@ -411,7 +462,9 @@ fn try_draw(
     };
 
     // Field stars in the cone; a star brighter than the limit spoils the image (paper 3.2.3).
-    let field = stars.stars_in_cone(ra_p, dec_p, cone, c.sensor.mag_limit, mid);
+    let field = inputs
+        .stars
+        .stars_in_cone(ra_p, dec_p, cone, c.sensor.mag_limit, mid);
     if field.iter().any(|s| s.mag < v.brightest_star_mag) {
         return Err("star brighter than the limit in the field");
     }
@@ -460,7 +513,7 @@ fn try_draw(
     let snr = expected_snr(
         campaign,
         &trajectory,
-        background_sigma_adu(campaign, exposure_s),
+        background_sigma_adu(campaign, exposure_s, inputs.frame(background)),
     );
     if snr < campaign.snr_min() {
         return Err("signal to noise below the gate");
@@ -487,6 +540,7 @@ fn try_draw(
         },
         trajectory,
         stars: field,
+        background,
         snr,
         attempts: 0,
         rejections: BTreeMap::new(),

@@ -6,7 +6,7 @@ use rand_chacha::ChaCha12Rng;
 use soig::campaign::Campaign;
 use soig::geometry::{self, Fill, Frame, LABEL_SHARE};
 use soig::rng::{Purpose, stream};
-use soig::scene::{self, Pointing, StarField};
+use soig::scene::{self, Inputs, Pointing};
 
 fn campaign(mode: &str) -> Campaign {
     let tle =
@@ -42,7 +42,7 @@ trajectory_samples = 800
 #[test]
 fn survey_star_trails_are_parallel_and_horizontal_after_rotation() {
     let c = campaign("survey");
-    let stars = StarField::load(&c).unwrap();
+    let stars = Inputs::load(&c).unwrap();
     for i in 0..4 {
         let s = scene::draw(&c, &stars, i, &mut stream(11, i, Purpose::Scene)).unwrap();
         let Pointing::Survey(track) = s.pointing else {
@@ -118,12 +118,13 @@ fn needed_extent(img: &[f32], w: usize, h: usize, share: f64) -> (f64, f64) {
 fn label_box_is_the_tight_box_of_the_streak_in_every_frame() {
     for mode in ["fixed", "survey"] {
         let c = campaign(mode);
-        let stars = StarField::load(&c).unwrap();
+        let stars = Inputs::load(&c).unwrap();
         for i in 0..3 {
             let s = scene::draw(&c, &stars, i, &mut stream(11, i, Purpose::Scene)).unwrap();
             let e = soig::render::render(
                 &c,
                 &s,
+                None,
                 &mut stream(11, i, Purpose::Photons),
                 &mut stream(11, i, Purpose::Noise),
             );
@@ -165,5 +166,53 @@ fn label_box_is_the_tight_box_of_the_streak_in_every_frame() {
                 );
             }
         }
+    }
+}
+
+#[test]
+fn semisynthetic_background_has_the_real_frames_noise_scaled_by_exposure() {
+    let frame = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/neossat/NEOS_SCI_2024239174545_cord.fits");
+    let tle =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/tle/catalog-2022-01-22.tle");
+    let text = format!(
+        "name = \"semi\"\nseed = 3\nimages = 3\n[observer]\ntle_file = \"{t}\"\nnorad = 37216\n[[debris]]\ntle_file = \"{t}\"\nnorad = 40989\n[background]\nkind = \"frames\"\npaths = [\"{f}\"]\n",
+        t = tle.display(),
+        f = frame.display()
+    );
+    let c = Campaign::from_toml(&text, Path::new("semi.toml")).unwrap();
+    let inputs = Inputs::load(&c).unwrap();
+    let real = soig::background::RealFrame::load(&frame).unwrap();
+    for i in 0..3 {
+        let s = scene::draw(&c, &inputs, i, &mut stream(3, i, Purpose::Scene)).unwrap();
+        assert!(s.background.is_some());
+        let e = soig::render::render(
+            &c,
+            &s,
+            inputs.frame(s.background),
+            &mut stream(3, i, Purpose::Photons),
+            &mut stream(3, i, Purpose::Noise),
+        );
+        // Background = ADU - electrons / gain - bias (uniform 2..3, mean 2.5).
+        let bg: Vec<f32> = e
+            .adu
+            .iter()
+            .zip(&e.electrons)
+            .map(|(&a, &el)| a - el as f32 / 1.6 - 2.5)
+            .collect();
+        let (median, sigma) = geometry::robust_stats(&bg);
+        let k = s.exposure_s / real.exposure_s;
+        let expected_sigma = ((real.sigma * k).powi(2) + 1.0 / 12.0).sqrt();
+        assert!(
+            (sigma - expected_sigma).abs() < 0.03 * expected_sigma,
+            "sigma {sigma} vs {expected_sigma}"
+        );
+        // On the sensor's sky level (the uniform model's mean, 200 ADU per 5 s).
+        let level = 200.0 * s.exposure_s / 5.0;
+        assert!(
+            (median - level).abs() < 0.05 * expected_sigma,
+            "median {median} vs {level}"
+        );
+        assert!((e.truth.background_sigma_adu - expected_sigma).abs() < 0.03 * expected_sigma);
     }
 }
