@@ -8,10 +8,12 @@
 pub mod background;
 pub mod campaign;
 pub mod dataset;
+pub mod detect;
 pub mod enhance;
 pub mod fits;
 pub mod geometry;
 pub mod manifest;
+pub mod metrics;
 pub mod pipeline;
 pub mod render;
 pub mod rng;

@@ -38,6 +38,39 @@ enum Command {
     },
     /// Print the JSON Schema of the campaign format.
     Schema,
+    /// Score YOLO-format predictions (`cls xc yc w h score`) against YOLO labels, exactly as
+    /// Ultralytics and pycocotools compute their metrics.
+    Eval {
+        /// Directory of label files (`cls xc yc w h`, normalised), one per image.
+        #[arg(long)]
+        labels: PathBuf,
+        /// Directory of prediction files, paired with labels by file stem.
+        #[arg(long)]
+        predictions: PathBuf,
+        /// Which convention to report: Ultralytics' `ap_per_class` or pycocotools' COCOeval.
+        #[arg(long, value_enum, default_value = "ultralytics")]
+        mode: EvalMode,
+        /// Images, to scale boxes to their pixel size (Ultralytics' IoU has a 1e-7 term, so
+        /// units matter at the last digit); default: every image `--image-size` square.
+        #[arg(long)]
+        images: Option<PathBuf>,
+        #[arg(long, default_value_t = 1024)]
+        image_size: u32,
+        /// Confidence and IoU threshold of the fixed-threshold precision and recall.
+        #[arg(long, default_value_t = 0.5)]
+        conf: f64,
+        #[arg(long, default_value_t = 0.5)]
+        iou: f64,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum EvalMode {
+    Ultralytics,
+    Coco,
 }
 
 fn main() -> ExitCode {
@@ -95,9 +128,126 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Command::Eval {
+            labels,
+            predictions,
+            mode,
+            images,
+            image_size,
+            conf,
+            iou,
+            json,
+        } => match eval(
+            &labels,
+            &predictions,
+            mode,
+            images.as_deref(),
+            image_size,
+            conf,
+            iou,
+            json,
+        ) {
+            Ok(text) => {
+                println!("{text}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::from(2)
+            }
+        },
         Command::Schema => {
             println!("{}", soig::campaign::schema_json());
             ExitCode::SUCCESS
         }
     }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn eval(
+    labels: &std::path::Path,
+    predictions: &std::path::Path,
+    mode: EvalMode,
+    images: Option<&std::path::Path>,
+    image_size: u32,
+    conf: f64,
+    iou: f64,
+    json: bool,
+) -> anyhow::Result<String> {
+    use soig::metrics;
+    let pairs = metrics::read_yolo_dirs(labels, predictions)?;
+    let mut scaled = Vec::with_capacity(pairs.len());
+    for (stem, e) in &pairs {
+        let (w, h) = match images {
+            Some(dir) => {
+                let path = ["png", "jpg", "jpeg"]
+                    .iter()
+                    .map(|ext| dir.join(format!("{stem}.{ext}")))
+                    .find(|p| p.is_file())
+                    .ok_or_else(|| anyhow::anyhow!("no image for {stem} in {}", dir.display()))?;
+                image::image_dimensions(&path)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?
+            }
+            None => (image_size, image_size),
+        };
+        scaled.push(e.scaled(w as f64, h as f64));
+    }
+    let fixed = metrics::at_threshold(&scaled, conf, iou);
+    let fixed_json = serde_json::json!({
+        "conf": conf, "iou": iou, "precision": fixed.precision, "recall": fixed.recall,
+        "tp": fixed.tp, "fp": fixed.fp, "fn": fixed.fn_,
+    });
+    Ok(match mode {
+        EvalMode::Ultralytics => {
+            let m = metrics::ultralytics(&scaled);
+            if json {
+                serde_json::to_string_pretty(&serde_json::json!({
+                    "mode": "ultralytics", "images": scaled.len(), "objects": m.n_truth,
+                    "detections": m.n_detections, "precision": m.precision, "recall": m.recall,
+                    "map50": m.map50, "map50_95": m.map50_95, "f1_conf": m.f1_conf,
+                    "at_threshold": fixed_json,
+                }))?
+            } else {
+                format!(
+                    "ultralytics: {} images, {} objects, {} detections\nP {:.4}  R {:.4}  mAP50 {:.4}  mAP50-95 {:.4}  (P, R at max-F1 confidence {:.3})\nat conf {conf}, IoU {iou}: P {:.4}  R {:.4}  (TP {}, FP {}, FN {})",
+                    scaled.len(),
+                    m.n_truth,
+                    m.n_detections,
+                    m.precision,
+                    m.recall,
+                    m.map50,
+                    m.map50_95,
+                    m.f1_conf,
+                    fixed.precision,
+                    fixed.recall,
+                    fixed.tp,
+                    fixed.fp,
+                    fixed.fn_
+                )
+            }
+        }
+        EvalMode::Coco => {
+            let m = metrics::coco(&scaled);
+            if json {
+                serde_json::to_string_pretty(&serde_json::json!({
+                    "mode": "coco", "images": scaled.len(), "ap": m.ap, "ap50": m.ap50,
+                    "ap75": m.ap75, "ar100": m.ar100, "at_threshold": fixed_json,
+                }))?
+            } else {
+                format!(
+                    "coco: {} images\nAP {:.4}  AP50 {:.4}  AP75 {:.4}  AR100 {:.4}\nat conf {conf}, IoU {iou}: P {:.4}  R {:.4}  (TP {}, FP {}, FN {})",
+                    scaled.len(),
+                    m.ap,
+                    m.ap50,
+                    m.ap75,
+                    m.ar100,
+                    fixed.precision,
+                    fixed.recall,
+                    fixed.tp,
+                    fixed.fp,
+                    fixed.fn_
+                )
+            }
+        }
+    })
 }

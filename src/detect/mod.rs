@@ -1,0 +1,16 @@
+//! Detectors: YOLOv8 through ONNX Runtime, and a classical streak detector that needs no
+//! model. Both return `Detection`s in the same frame.
+
+/// An axis-aligned box in pixel-edge coordinates (the image spans [0, width] x [0, height],
+/// Ultralytics' xyxy convention) with a confidence score and class.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Detection {
+    pub x1: f64,
+    pub y1: f64,
+    pub x2: f64,
+    pub y2: f64,
+    pub score: f64,
+    pub class: u32,
+}
+
+pub mod yolo;

@@ -1,0 +1,446 @@
+#!/usr/bin/env python3
+"""Reference figures for soig's `metrics` module, computed with the real libraries.
+
+* COCO: pycocotools (COCO / COCOeval, iouType 'bbox'), installed with `pip install pycocotools`.
+* Ultralytics, current: the installed `ultralytics` package (`pip install ultralytics`, 8.4.190 when this was
+  written): `box_iou`, `DetectionValidator._process_batch` -> `BaseValidator.match_predictions`, and
+  `DetMetrics.update_stats` / `DetMetrics.process` -> `ap_per_class`, fed exactly as
+  `DetectionValidator.update_metrics` feeds them.
+* Ultralytics, legacy (<= 8.3.x, the np.unique matching): the functions `box_iou`, `smooth`, `compute_ap`,
+  `ap_per_class` (ultralytics/utils/metrics.py) and `match_predictions` (ultralytics/engine/validator.py) are
+  taken verbatim from the 8.3.0 wheel (`pip download --no-deps ultralytics==8.3.0`, unzipped; pass its folder
+  with --legacy DIR) and exec'd; `np.trapz` (removed in numpy 2.4) is bound to `np.trapezoid`, the plot
+  functions are no-ops; the loop of 8.3.0's `DetectionValidator.update_metrics` / `get_stats` is restated below.
+
+Usage: python metrics_reference.py [--legacy /path/to/unzipped/ultralytics-8.3.0] [--rust OUT.rs]
+As run for the pinned figures (numpy 2.4.6, torch 2.15.0, ultralytics 8.4.190, pycocotools 2.0.11):
+    python -m venv /tmp/mvenv && /tmp/mvenv/bin/pip install pycocotools ultralytics
+    /tmp/mvenv/bin/pip download --no-deps ultralytics==8.3.0 -d /tmp/uold
+    (cd /tmp/uold && mkdir v830 && cd v830 && unzip -q ../ultralytics-8.3.0-py3-none-any.whl)
+    /tmp/mvenv/bin/python reference/metrics_reference.py --legacy /tmp/uold/v830 --rust /tmp/expected.rs
+and the `EXPECTED` table in src/metrics.rs replaced by /tmp/expected.rs.
+
+The test cases are defined twice, here and in the Rust tests of src/metrics.rs (`cases` module); the random
+ones come from the same splitmix64 generator, so both sides build bit-identical inputs (each case's input
+checksum is printed and pinned too).
+"""
+import argparse
+import ast
+import importlib.metadata
+import contextlib
+import io
+import sys
+from pathlib import Path
+
+import numpy as np
+import torch
+
+M64 = (1 << 64) - 1
+
+
+class SplitMix64:
+    def __init__(self, seed):
+        self.state = seed & M64
+
+    def next_u64(self):
+        self.state = (self.state + 0x9E3779B97F4A7C15) & M64
+        z = self.state
+        z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & M64
+        z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & M64
+        return z ^ (z >> 31)
+
+    def uniform(self):
+        return (self.next_u64() >> 11) * (2.0 ** -53)
+
+    def below(self, n):
+        return self.next_u64() % n
+
+
+# An image: (truth boxes [[x1,y1,x2,y2]], truth classes, detections [[x1,y1,x2,y2,score,class]])
+
+def stress(seed, n_images, n_classes):
+    rng = SplitMix64(seed)
+    images = []
+    for _ in range(n_images):
+        truth, tcls, dets = [], [], []
+        for _ in range(rng.below(6)):
+            w = 4.0 + 60.0 * rng.uniform()
+            h = 4.0 + 60.0 * rng.uniform()
+            x1 = 1000.0 * rng.uniform()
+            y1 = 1000.0 * rng.uniform()
+            c = rng.below(n_classes)
+            truth.append([x1, y1, x1 + w, y1 + h])
+            tcls.append(c)
+            for _ in range(rng.below(3)):
+                j = 0.3 * rng.uniform()
+                dx1 = (2.0 * rng.uniform() - 1.0) * j * w
+                dy1 = (2.0 * rng.uniform() - 1.0) * j * h
+                dx2 = (2.0 * rng.uniform() - 1.0) * j * w
+                dy2 = (2.0 * rng.uniform() - 1.0) * j * h
+                dc = c if rng.uniform() < 0.9 else rng.below(n_classes)
+                score = rng.uniform()
+                dets.append([x1 + dx1, y1 + dy1, x1 + w + dx2, y1 + h + dy2, score, dc])
+        for _ in range(rng.below(3)):
+            w = 4.0 + 60.0 * rng.uniform()
+            h = 4.0 + 60.0 * rng.uniform()
+            x1 = 1000.0 * rng.uniform()
+            y1 = 1000.0 * rng.uniform()
+            dc = rng.below(n_classes)
+            score = 0.6 * rng.uniform()
+            dets.append([x1, y1, x1 + w, y1 + h, score, dc])
+        images.append((truth, tcls, dets))
+    return images
+
+
+def box(x, y, w, h):
+    return [x, y, x + w, y + h]
+
+
+CASES = {
+    # two images with objects, no detections anywhere
+    "no_predictions": [
+        ([box(10, 10, 20, 20), box(100, 100, 30, 10)], [0, 0], []),
+        ([box(50, 60, 12, 12)], [0], []),
+    ],
+    # detections but no objects anywhere
+    "no_labels": [
+        ([], [], [box(10, 10, 20, 20) + [0.9, 0], box(200, 10, 20, 20) + [0.4, 0]]),
+        ([], [], [box(5, 5, 8, 8) + [0.7, 0]]),
+    ],
+    # three detections on one object (IoUs about 0.93, 0.90, 0.83), one good detection on a second object
+    "duplicates": [
+        ([[10, 10, 50, 40], [200, 200, 230, 220]], [0, 0],
+         [[11, 10, 50, 41, 0.9, 0], [10, 11, 49, 40, 0.8, 0], [12, 12, 52, 42, 0.7, 0],
+          [201, 200, 230, 221, 0.6, 0]]),
+    ],
+    # every object found exactly, nothing else
+    "perfect": [
+        ([box(10, 10, 20, 20), box(300, 40, 8, 30)], [0, 0],
+         [box(10, 10, 20, 20) + [0.9, 0], box(300, 40, 8, 30) + [0.8, 0]]),
+        ([box(500, 500, 16, 16)], [0], [box(500, 500, 16, 16) + [0.75, 0]]),
+    ],
+    # tied scores: ties only within groups whose members are all TP (IoU 1) or all FP at every IoU threshold,
+    # so that the result does not depend on the order of tied detections (see the module docs)
+    "ties": [
+        ([box(10, 10, 20, 20), box(100, 10, 20, 20), box(200, 10, 20, 20)], [0, 0, 0],
+         [box(10, 10, 20, 20) + [0.8, 0], box(100, 10, 20, 20) + [0.6, 0],
+          box(600, 600, 20, 20) + [0.7, 0], box(200, 10, 20, 20) + [0.6, 0]]),
+        ([box(10, 10, 20, 20), box(300, 300, 10, 10)], [0, 0],
+         [box(10, 10, 20, 20) + [0.8, 0], box(700, 600, 20, 20) + [0.7, 0],
+          box(300, 300, 10, 10) + [0.6, 0]]),
+        ([box(40, 40, 20, 20)], [0], [box(800, 800, 20, 20) + [0.7, 0]]),
+    ],
+    # precision 1 up to recall 0.5 (the example of design/physics.md)
+    "half_recall": [
+        ([box(10, 10, 20, 20), box(100, 100, 20, 20)], [0, 0], [box(10, 10, 20, 20) + [0.9, 0]]),
+    ],
+    # several images of different kinds, two classes
+    "mixed": [
+        ([box(10, 10, 20, 20)], [0], []),
+        ([], [], [box(30, 30, 10, 10) + [0.35, 0], box(60, 30, 10, 10) + [0.55, 1]]),
+        ([box(10, 10, 20, 20), box(50, 50, 30, 30), box(120, 40, 10, 25)], [0, 1, 0],
+         [[11, 11, 31, 29, 0.95, 0], [52, 49, 80, 82, 0.85, 1], [50, 50, 80, 80, 0.5, 0],
+          [121, 44, 131, 63, 0.45, 0], [400, 400, 410, 410, 0.65, 1]]),
+        ([box(70, 70, 14, 14), box(90, 70, 14, 14)], [1, 1],
+         [[72, 70, 86, 84, 0.75, 1], [91, 71, 105, 85, 0.75, 0], [88, 70, 103, 85, 0.25, 1]]),
+    ],
+    # one image, six objects, detections with IoU about 0.52 .. 0.97, scores not in IoU order
+    "multi_box": [
+        ([box(0, 0, 20, 20), box(100, 0, 20, 20), box(200, 0, 20, 20), box(300, 0, 20, 20),
+          box(400, 0, 20, 20), box(500, 0, 20, 20)], [0] * 6,
+         [box(0, 0, 20, 10.4) + [0.3, 0], box(100, 0, 20, 11.6) + [0.9, 0], box(200, 0, 20, 13.2) + [0.5, 0],
+          box(300, 0, 20, 14.8) + [0.7, 0], box(400, 0, 20, 16.6) + [0.2, 0], box(500, 0, 20, 19.4) + [0.6, 0],
+          box(250, 250, 20, 20) + [0.8, 0]]),
+    ],
+    # IoU exactly at thresholds: 0.5 in normalised units (Ultralytics' eps = 1e-7 pushes it below 0.5 in float32),
+    # 0.5, 0.75 and 0.55 in pixels
+    "iou_boundaries": [
+        ([[0, 0, 0.1, 0.1]], [0], [[0, 0, 0.1, 0.05, 0.9, 0]]),
+        ([[0, 0, 10, 10], [20, 0, 40, 20], [60, 0, 80, 20]], [0, 0, 0],
+         [[0, 0, 10, 5, 0.8, 0], [20, 0, 40, 15, 0.7, 0], [60, 0, 80, 11, 0.6, 0]]),
+    ],
+    "stress_single": stress(42, 50, 1),
+    "stress_multi": stress(7, 40, 3),
+}
+
+
+def checksum(images):
+    s = 0.0
+    for k, (truth, tcls, dets) in enumerate(images):
+        for b, c in zip(truth, tcls):
+            s += (k + 1) * (b[0] + 2 * b[1] + 3 * b[2] + 4 * b[3] + 5 * c)
+        for d in dets:
+            s += (k + 1) * (d[0] - 2 * d[1] + 3 * d[2] - 4 * d[3] + 1000 * d[4] + 7 * d[5])
+    return s
+
+
+def as_tensors(truth, tcls, dets):
+    """Boxes, classes and scores as the Ultralytics validator holds them (float32), detections in NMS order
+    (descending confidence; tied confidences in input order)."""
+    tb = torch.tensor(np.array(truth, dtype=np.float64).reshape(-1, 4))  # float64 here; box_iou does .float()
+    tc = torch.tensor(np.array(tcls, dtype=np.float32).reshape(-1))
+    d = np.array(dets, dtype=np.float64).reshape(-1, 6)
+    conf = d[:, 4].astype(np.float32)
+    order = np.argsort(-conf, kind="stable")
+    d, conf = d[order], conf[order]
+    pb = torch.tensor(d[:, :4])
+    pc = torch.tensor(d[:, 5].astype(np.float32))
+    pconf = torch.tensor(conf)
+    return tb, tc, pb, pc, pconf
+
+
+def ultralytics_current(images):
+    from ultralytics.models.yolo.detect.val import DetectionValidator
+    from ultralytics.utils.metrics import DetMetrics
+
+    v = DetectionValidator.__new__(DetectionValidator)  # only iouv / niou are used by _process_batch
+    v.iouv = torch.linspace(0.5, 0.95, 10)
+    v.niou = v.iouv.numel()
+    classes = sorted({int(c) for _, tc, _ in images for c in tc} | {int(d[5]) for _, _, ds in images for d in ds})
+    metrics = DetMetrics(names={c: f"c{c}" for c in classes})
+    for k, (truth, tcls, dets) in enumerate(images):
+        tb, tc, pb, pc, pconf = as_tensors(truth, tcls, dets)
+        pbatch = {"bboxes": tb, "cls": tc}
+        predn = {"bboxes": pb, "cls": pc, "conf": pconf}
+        cls = pbatch["cls"].cpu().numpy()
+        no_pred = predn["cls"].shape[0] == 0
+        metrics.update_stats(  # as DetectionValidator.update_metrics
+            {
+                **v._process_batch(predn, pbatch),
+                "target_cls": cls,
+                "target_img": np.unique(cls),
+                "conf": np.zeros(0) if no_pred else predn["conf"].cpu().numpy(),
+                "pred_cls": np.zeros(0) if no_pred else predn["cls"].cpu().numpy(),
+                "im_name": f"{k}.png",
+            }
+        )
+    metrics.process(plot=False)
+    b = metrics.box
+    return summarise_ultra(b.mp, b.mr, b.map50, b.map, b.all_ap, b.p_curve, b.r_curve, b.f1_curve, b.px,
+                           b.prec_values, images)
+
+
+def load_legacy(root):
+    """exec the 8.3.0 sources of the functions we need."""
+    ns = {"np": np, "torch": torch, "Path": Path, "math": __import__("math")}
+    np_shim = type(sys)("np_shim")
+    np_shim.__dict__.update(np.__dict__)
+    np_shim.trapz = np.trapezoid
+    ns["np"] = np_shim
+    ns["plot_pr_curve"] = lambda *a, **k: None
+    ns["plot_mc_curve"] = lambda *a, **k: None
+    wanted = {"utils/metrics.py": ["box_iou", "smooth", "compute_ap", "ap_per_class"],
+              "engine/validator.py": ["match_predictions"]}
+    for rel, names in wanted.items():
+        src = (Path(root) / "ultralytics" / rel).read_text()
+        tree = ast.parse(src)
+        found = {}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef) and node.name in names and node.name not in found:
+                node.decorator_list = []
+                found[node.name] = ast.unparse(node)
+        for n in names:
+            exec(found[n], ns)
+    return ns
+
+
+def ultralytics_legacy(images, ns):
+    class V:
+        pass
+
+    v = V()
+    v.iouv = torch.linspace(0.5, 0.95, 10)
+    v.niou = v.iouv.numel()
+    stats = dict(tp=[], conf=[], pred_cls=[], target_cls=[], target_img=[])
+    classes = sorted({int(c) for _, tc, _ in images for c in tc} | {int(d[5]) for _, _, ds in images for d in ds})
+    names = {c: f"c{c}" for c in classes}
+    for truth, tcls, dets in images:  # 8.3.0 DetectionValidator.update_metrics
+        tb, tc, pb, pc, pconf = as_tensors(truth, tcls, dets)
+        npr = len(dets)
+        stat = dict(conf=torch.zeros(0), pred_cls=torch.zeros(0), tp=torch.zeros(npr, v.niou, dtype=torch.bool))
+        cls, bbox = tc, tb
+        nl = len(cls)
+        stat["target_cls"] = cls
+        stat["target_img"] = cls.unique()
+        if npr == 0:
+            if nl:
+                for k in stats.keys():
+                    stats[k].append(stat[k])
+            continue
+        stat["conf"] = pconf
+        stat["pred_cls"] = pc
+        if nl:
+            # 8.3.0 _process_batch: iou = box_iou(gt_bboxes, detections[:, :4]); match_predictions(...)
+            stat["tp"] = ns["match_predictions"](v, pc, cls, ns["box_iou"](bbox, pb))
+        for k in stats.keys():
+            stats[k].append(stat[k])
+    # 8.3.0 get_stats
+    stats = {k: torch.cat(x, 0).cpu().numpy() for k, x in stats.items()}
+    stats.pop("target_img", None)
+    if len(stats) and stats["tp"].any():
+        (p, r, f1, all_ap, _, p_curve, r_curve, f1_curve, px, prec_values) = ns["ap_per_class"](
+            stats["tp"], stats["conf"], stats["pred_cls"], stats["target_cls"], plot=True,
+            save_dir=Path("/nonexistent"), names=names)[2:]
+        mp = p.mean() if len(p) else 0.0
+        mr = r.mean() if len(r) else 0.0
+        map50 = all_ap[:, 0].mean() if len(all_ap) else 0.0
+        mapall = all_ap.mean() if len(all_ap) else 0.0
+        return summarise_ultra(mp, mr, map50, mapall, all_ap, p_curve, r_curve, f1_curve, px, prec_values, images)
+    return summarise_ultra(0.0, 0.0, 0.0, 0.0, np.zeros((0, 10)), np.zeros((0, 1000)), np.zeros((0, 1000)),
+                           np.zeros((0, 1000)), np.linspace(0, 1, 1000), np.zeros((0, 1000)), images,
+                           f1_index=0)
+
+
+def smooth(y, f):
+    nf = round(len(y) * f * 2) // 2 + 1
+    p = np.ones(nf // 2)
+    yp = np.concatenate((p * y[0], y, p * y[-1]), 0)
+    return np.convolve(yp, np.ones(nf) / nf, mode="valid")
+
+
+def summarise_ultra(mp, mr, map50, mapall, all_ap, p_curve, r_curve, f1_curve, px, prec_values, images,
+                    f1_index=None):
+    all_ap = np.asarray(all_ap).reshape(-1, 10)
+    p_curve, r_curve, f1_curve = (np.asarray(c).reshape(-1, 1000) for c in (p_curve, r_curve, f1_curve))
+    prec_values = np.asarray(prec_values).reshape(-1, 1000)
+    nc = len(all_ap)
+    if f1_index is None:  # the index ap_per_class used (recomputed the same way: smooth(f1.mean(0), 0.1).argmax())
+        f1_index = int(smooth(f1_curve.mean(0), 0.1).argmax()) if nc else 0
+    def mean(a):
+        return a.mean(0)
+
+    return {
+        "precision": float(mp),
+        "recall": float(mr),
+        "map50": float(map50),
+        "map50_95": float(mapall),
+        "ap_per_iou": [float(x) for x in (all_ap.mean(0) if nc else np.zeros(10))],
+        "f1_conf": float(px[f1_index]),
+        "precision_curve": mean(p_curve) if len(p_curve) else np.zeros(0),
+        "recall_curve": mean(r_curve) if len(r_curve) else np.zeros(0),
+        "f1_curve": mean(f1_curve) if len(f1_curve) else np.zeros(0),
+        "pr_curve_map50": mean(prec_values) if len(prec_values) else np.zeros(0),
+        "px": np.asarray(px),
+        "n_truth": sum(len(t) for t, _, _ in images),
+        "n_detections": sum(len(d) for _, _, d in images),
+    }
+
+
+def coco_reference(images):
+    from pycocotools.coco import COCO
+    from pycocotools.cocoeval import COCOeval
+
+    classes = sorted({int(c) for _, tc, _ in images for c in tc} | {int(d[5]) for _, _, ds in images for d in ds})
+    gt = {"images": [{"id": k + 1} for k in range(len(images))], "categories": [{"id": c} for c in classes],
+          "annotations": []}
+    res = []
+    for k, (truth, tcls, dets) in enumerate(images):
+        for b, c in zip(truth, tcls):
+            w, h = b[2] - b[0], b[3] - b[1]
+            gt["annotations"].append({"id": len(gt["annotations"]) + 1, "image_id": k + 1, "category_id": int(c),
+                                      "bbox": [b[0], b[1], w, h], "area": w * h, "iscrowd": 0})
+        for d in dets:
+            res.append({"image_id": k + 1, "category_id": int(d[5]), "bbox": [d[0], d[1], d[2] - d[0], d[3] - d[1]],
+                        "score": d[4]})
+    with contextlib.redirect_stdout(io.StringIO()):
+        cgt = COCO()
+        cgt.dataset = gt
+        cgt.createIndex()
+        if res:
+            cdt = cgt.loadRes(res)
+        else:  # COCO.loadRes([]) raises IndexError (anns[0]); an empty result set built directly instead
+            cdt = COCO()
+            cdt.dataset = {"images": gt["images"], "categories": gt["categories"], "annotations": []}
+            cdt.createIndex()
+        e = COCOeval(cgt, cdt, "bbox")
+        e.evaluate()
+        e.accumulate()
+        e.summarize()
+    prec = e.eval["precision"][0, :, :, 0, 2]  # IoU 0.5, all recall thresholds, all classes, area all, 100 dets
+    p50 = []
+    for row in prec:
+        ok = row[row > -1]
+        p50.append(float(ok.mean()) if len(ok) else -1.0)
+    return {"ap": float(e.stats[0]), "ap50": float(e.stats[1]), "ap75": float(e.stats[2]), "ar100": float(e.stats[8]),
+            "precision_at_50": p50}
+
+
+CURVE_SAMPLES = [0, 1, 100, 250, 400, 500, 600, 750, 900, 998, 999]
+
+
+def fmt(x):
+    return repr(float(x)) if x == x else "f64::NAN"
+
+
+def runs(values):
+    """Run-length encoding: [(value, count)]."""
+    out = []
+    for v in values:
+        if out and out[-1][0] == v:
+            out[-1][1] += 1
+        else:
+            out.append([v, 1])
+    return out
+
+
+def rust_ultra(name, r):
+    out = [f"                precision: {fmt(r['precision'])}, recall: {fmt(r['recall'])}, map50: {fmt(r['map50'])},",
+           f"                map50_95: {fmt(r['map50_95'])}, f1_conf: {fmt(r['f1_conf'])},",
+           f"                ap_per_iou: [{', '.join(fmt(x) for x in r['ap_per_iou'])}],"]
+    for c in ("precision_curve", "recall_curve", "f1_curve", "pr_curve_map50"):
+        a = r[c]
+        samples = ", ".join(f"({i}, {fmt(a[i])})" for i in CURVE_SAMPLES) if len(a) else ""
+        mean = fmt(a.mean()) if len(a) else "0.0"
+        out.append(f"                {c}: Curve {{ len: {len(a)}, mean: {mean}, samples: &[{samples}] }},")
+    return "\n".join(out)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--legacy", help="folder of the unzipped ultralytics 8.3.0 wheel")
+    ap.add_argument("--rust", help="write the pinned-figure table (Rust source) here")
+    args = ap.parse_args()
+    import ultralytics
+    import pycocotools
+    print(f"numpy {np.__version__}, torch {torch.__version__}, ultralytics {ultralytics.__version__}, "
+          f"pycocotools {importlib.metadata.version('pycocotools')}")
+    legacy = load_legacy(args.legacy) if args.legacy else None
+    rust = ["    // Generated by reference/metrics_reference.py --rust; do not edit by hand.",
+            "    #[rustfmt::skip]",
+            "    const EXPECTED: &[Expected] = &["]
+    for name, images in CASES.items():
+        cur = ultralytics_current(images)
+        coco = coco_reference(images)
+        print(f"== {name}: {cur['n_truth']} objects, {cur['n_detections']} detections, "
+              f"input checksum {checksum(images)!r}")
+        print(f"  COCO AP {coco['ap']:.6f} AP50 {coco['ap50']:.6f} AP75 {coco['ap75']:.6f} AR100 {coco['ar100']:.6f}")
+        print(f"  Ultralytics {ultralytics.__version__}: P {cur['precision']:.6f} R {cur['recall']:.6f} "
+              f"mAP50 {cur['map50']:.6f} mAP50-95 {cur['map50_95']:.6f} F1 conf {cur['f1_conf']:.6f}")
+        leg = None
+        if legacy is not None:
+            leg = ultralytics_legacy(images, legacy)
+            print(f"  Ultralytics 8.3.0: P {leg['precision']:.6f} R {leg['recall']:.6f} "
+                  f"mAP50 {leg['map50']:.6f} mAP50-95 {leg['map50_95']:.6f} F1 conf {leg['f1_conf']:.6f}")
+        rust.append("        Expected {")
+        rust.append(f"            name: {name!r},".replace("'", '"'))
+        rust.append(f"            n_truth: {cur['n_truth']}, n_detections: {cur['n_detections']}, "
+                    f"checksum: {fmt(checksum(images))},")
+        rust.append(f"            coco: CocoExpected {{ ap: {fmt(coco['ap'])}, ap50: {fmt(coco['ap50'])}, "
+                    f"ap75: {fmt(coco['ap75'])}, ar100: {fmt(coco['ar100'])},")
+        rust.append(f"                precision_at_50: &[{', '.join(f'({fmt(v)}, {n})' for v, n in runs(coco['precision_at_50']))}] }},")
+        rust.append("            current: UltraExpected {")
+        rust.append(rust_ultra(name, cur))
+        rust.append("            },")
+        if leg is not None:
+            rust.append("            legacy: UltraExpected {")
+            rust.append(rust_ultra(name, leg))
+            rust.append("            },")
+        rust.append("        },")
+    rust.append("    ];")
+    if args.rust:
+        Path(args.rust).write_text("\n".join(rust) + "\n")
+        print(f"wrote {args.rust}")
+
+
+if __name__ == "__main__":
+    main()
