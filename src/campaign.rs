@@ -57,6 +57,8 @@ pub struct CampaignFile {
     pub split: Split,
     #[serde(default)]
     pub artifacts: Artifacts,
+    #[serde(default)]
+    pub detect: Detect,
     /// Pipeline stages to run, in order; each needs the ones before it.
     #[serde(default = "defaults::stages")]
     pub stages: Vec<Stage>,
@@ -384,6 +386,30 @@ pub struct Artifacts {
     pub star_list: bool,
 }
 
+/// Detection and evaluation on the test split (stage `detect`).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Detect {
+    /// A YOLOv8 ONNX model (Ultralytics export), relative to the campaign file. Without one,
+    /// only the classical streak detector runs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// sha256 of the model, filled in when the campaign is resolved (so the campaign hash
+    /// pins the model); if given, it must match.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_sha256: Option<String>,
+    /// Confidence and NMS IoU thresholds (the paper: 0.5 and 0.5).
+    #[serde(default = "defaults::detect_conf")]
+    pub conf: f64,
+    #[serde(default = "defaults::detect_iou")]
+    pub iou: f64,
+    #[serde(default = "defaults::max_det")]
+    pub max_det: u32,
+    /// Also run the classical streak detector, the model-free baseline.
+    #[serde(default = "defaults::yes")]
+    pub classical: bool,
+}
+
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum Stage {
@@ -393,6 +419,8 @@ pub enum Stage {
     Enhance,
     /// Split into the Ultralytics layout with data.yaml.
     Dataset,
+    /// Run the detectors on the test split, evaluate, write the report.
+    Detect,
 }
 
 /// The paper's values; one place lists every knob.
@@ -539,6 +567,15 @@ pub mod defaults {
     pub fn split_test() -> f64 {
         0.1
     }
+    pub fn detect_conf() -> f64 {
+        0.5
+    }
+    pub fn detect_iou() -> f64 {
+        0.5
+    }
+    pub fn max_det() -> u32 {
+        300
+    }
 }
 
 macro_rules! default_from_serde {
@@ -552,7 +589,8 @@ macro_rules! default_from_serde {
     )*};
 }
 default_from_serde!(
-    Window, Exposure, Pointing, Sensor, Photometry, Visibility, Render, Enhance, Split, Artifacts
+    Window, Exposure, Pointing, Sensor, Photometry, Visibility, Render, Enhance, Split, Artifacts,
+    Detect
 );
 
 impl Default for Stars {
@@ -671,6 +709,26 @@ impl Campaign {
                     ));
                 }
             }
+        }
+        if let Some(model) = &resolved.detect.model {
+            let full = base_dir.join(model);
+            let sha = crate::manifest::sha256_file(&full)
+                .map_err(|e| {
+                    err(
+                        "detect.model",
+                        format!("cannot read model {}: {e}", full.display()),
+                    )
+                })?
+                .0;
+            if let Some(given) = &resolved.detect.model_sha256
+                && *given != sha
+            {
+                return Err(err(
+                    "detect.model_sha256",
+                    format!("is {given} but {} has sha256 {sha}", full.display()),
+                ));
+            }
+            resolved.detect.model_sha256 = Some(sha);
         }
         if let Stars::Catalog { path: p, .. } = &resolved.stars {
             let full = base_dir.join(p);
@@ -980,6 +1038,23 @@ fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "enhance.geometry",
         "`rotated` needs survey pointing (fixed images have no star trails to align)",
     )?;
+    let d = &c.detect;
+    check(
+        d.conf > 0.0 && d.conf <= 1.0,
+        "detect.conf",
+        "must be in (0, 1]",
+    )?;
+    check(
+        d.iou > 0.0 && d.iou <= 1.0,
+        "detect.iou",
+        "must be in (0, 1]",
+    )?;
+    check(d.max_det >= 1, "detect.max_det", "must be >= 1")?;
+    check(
+        d.model.is_some() || d.classical || !c.stages.contains(&Stage::Detect),
+        "detect",
+        "the detect stage needs a `model` or `classical = true`",
+    )?;
     let sp = &c.split;
     for (f, x) in [
         ("split.train", sp.train),
@@ -994,11 +1069,11 @@ fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "split",
         &format!("train + val + test must sum to 1 (they sum to {sum})"),
     )?;
-    let order = [Stage::Render, Stage::Enhance, Stage::Dataset];
+    let order = [Stage::Render, Stage::Enhance, Stage::Dataset, Stage::Detect];
     check(
         !c.stages.is_empty() && c.stages.iter().zip(order).all(|(a, b)| *a == b),
         "stages",
-        "must be a prefix of [\"render\", \"enhance\", \"dataset\"] (each stage needs the ones before it)",
+        "must be a prefix of [\"render\", \"enhance\", \"dataset\", \"detect\"] (each stage needs the ones before it)",
     )?;
     check(
         c.stages.len() <= order.len(),

@@ -16,6 +16,7 @@ pub mod manifest;
 pub mod metrics;
 pub mod pipeline;
 pub mod render;
+pub mod report;
 pub mod rng;
 pub mod scene;
 pub mod sky;

@@ -26,6 +26,9 @@ pub struct Manifest {
     pub campaign: serde_json::Value,
     /// Every artifact, by path relative to the output directory ('/' separated), sorted.
     pub files: BTreeMap<String, FileEntry>,
+    /// Files that hold run-dependent figures (timing): they must exist, but are not hashed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub volatile: Vec<String>,
     /// sha256 of the canonical JSON of everything above.
     pub digest: String,
 }
@@ -74,14 +77,18 @@ fn digest_of(m: &Manifest) -> String {
 }
 
 impl Manifest {
-    /// Hash every file in `dir` and build the manifest.
+    /// Hash every file in `dir` (but the `volatile` ones) and build the manifest.
     pub fn build(
         dir: &Path,
         campaign_hash: &str,
         campaign: serde_json::Value,
+        volatile: &[String],
     ) -> std::io::Result<Manifest> {
         let mut files = BTreeMap::new();
         for rel in list_files(dir)? {
+            if volatile.contains(&rel) {
+                continue;
+            }
             let (sha256, bytes) = sha256_file(&dir.join(&rel))?;
             files.insert(rel, FileEntry { sha256, bytes });
         }
@@ -91,6 +98,7 @@ impl Manifest {
             campaign_hash: campaign_hash.into(),
             campaign,
             files,
+            volatile: volatile.to_vec(),
             digest: String::new(),
         };
         m.digest = digest_of(&m);
@@ -142,7 +150,12 @@ pub fn verify(dir: &Path) -> Result<(Manifest, Vec<Problem>), String> {
         problems.push(Problem::Digest);
     }
     let present = list_files(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    for rel in &present {
+    for rel in &m.volatile {
+        if !present.contains(rel) {
+            problems.push(Problem::Missing(rel.clone()));
+        }
+    }
+    for rel in present.iter().filter(|r| !m.volatile.contains(r)) {
         match m.files.get(rel) {
             None => problems.push(Problem::Extra(rel.clone())),
             Some(entry) => {
@@ -173,12 +186,12 @@ mod tests {
         std::fs::create_dir_all(d.join("a")).unwrap();
         std::fs::write(d.join("a/x.txt"), b"x").unwrap();
         std::fs::write(d.join("y.txt"), b"y").unwrap();
-        let m = Manifest::build(d, "h", serde_json::json!({"k": 1})).unwrap();
+        let m = Manifest::build(d, "h", serde_json::json!({"k": 1}), &[]).unwrap();
         m.write(d).unwrap();
         assert_eq!(verify(d).unwrap().1, vec![]);
         assert_eq!(
             m.digest,
-            Manifest::build(d, "h", serde_json::json!({"k": 1}))
+            Manifest::build(d, "h", serde_json::json!({"k": 1}), &[])
                 .unwrap()
                 .digest
         );

@@ -13,11 +13,15 @@ use rand_chacha::ChaCha12Rng;
 
 use crate::campaign::{Campaign, GeometryKind, PointingMode, Stage};
 use crate::dataset::{self, Subset};
+use crate::detect::Detection;
+use crate::detect::streak::{StreakParams, detect_streaks};
+use crate::detect::yolo::{YoloDetector, YoloParams};
 use crate::enhance;
 use crate::fits::{self, Card, Cards, Pixels};
 use crate::geometry::{self, Fill, Frame, LABEL_SHARE};
 use crate::manifest::{MANIFEST, Manifest};
 use crate::render::{self, Exposure};
+use crate::report::{self, DetectorRun, TestImage};
 use crate::rng::{Purpose, stream};
 use crate::scene::Pointing;
 use crate::scene::{self, Inputs};
@@ -133,14 +137,15 @@ fn write_all(
     );
     bar.set_message(format!("soig {}", c.name));
     let started = Instant::now();
-    (0..n as u64)
+    let written: Vec<Written> = (0..n as u64)
         .into_par_iter()
-        .try_for_each(|i| -> anyhow::Result<()> {
+        .map(|i| -> anyhow::Result<Written> {
             let subset = dataset_stage.then(|| subsets[i as usize]);
-            image(campaign, &inputs, i, dir, enhance_stage, subset)?;
+            let w = image(campaign, &inputs, i, dir, enhance_stage, subset)?;
             bar.inc(1);
-            Ok(())
-        })?;
+            Ok(w)
+        })
+        .collect::<anyhow::Result<_>>()?;
     bar.finish_and_clear();
     let seconds = started.elapsed().as_secs_f64();
 
@@ -150,9 +155,160 @@ fn write_all(
             dataset::data_yaml(&c.name, &campaign.hash),
         )?;
     }
-    let manifest = Manifest::build(dir, &campaign.hash, serde_json::to_value(c)?)?;
+    if stages.contains(&Stage::Detect) {
+        // The dataset's own digest goes into the report, then the report into the manifest.
+        let dataset = Manifest::build(dir, &campaign.hash, serde_json::to_value(c)?, &[])?;
+        detect_and_report(campaign, dir, &written, &dataset.digest, progress)?;
+    }
+    let volatile: Vec<String> = report::VOLATILE
+        .iter()
+        .filter(|v| dir.join(v).is_file())
+        .map(|v| v.to_string())
+        .collect();
+    let manifest = Manifest::build(dir, &campaign.hash, serde_json::to_value(c)?, &volatile)?;
     manifest.write(dir)?;
     Ok((manifest.digest, n, seconds))
+}
+
+/// What an image left for the detect stage.
+struct Written {
+    subset: Option<Subset>,
+    /// The PNG, its size, and the label box in pixel-edge coordinates.
+    png: Option<(PathBuf, usize, usize, Option<[f64; 4]>)>,
+    /// FITS -> PNG conversion time (frame, enhancement, encoding), seconds.
+    conversion_s: f64,
+    /// Direction of star trails in the PNG (survey), degrees.
+    trail_angle_deg: Option<f64>,
+}
+
+/// Run the detectors on the test split (every image when there is no split) and write the
+/// report. YOLO runs outside the rayon pool: ONNX Runtime slows ~3x beside a busy pool.
+fn detect_and_report(
+    campaign: &Campaign,
+    dir: &Path,
+    written: &[Written],
+    dataset_digest: &str,
+    progress: bool,
+) -> anyhow::Result<()> {
+    use anyhow::Context;
+    let c = &campaign.resolved;
+    let chosen: Vec<&Written> = written
+        .iter()
+        .filter(|w| w.png.is_some() && matches!(w.subset, None | Some(Subset::Test)))
+        .collect();
+    let images: Vec<TestImage> = chosen
+        .iter()
+        .map(|w| {
+            let (png, width, height, label) = w.png.clone().expect("filtered");
+            TestImage {
+                stem: png
+                    .file_stem()
+                    .unwrap_or_default()
+                    .to_string_lossy()
+                    .into_owned(),
+                png,
+                width,
+                height,
+                truth: label.into_iter().collect(),
+            }
+        })
+        .collect();
+    let load = |img: &TestImage| -> anyhow::Result<Vec<u8>> {
+        Ok(image::open(&img.png)
+            .with_context(|| format!("reading {}", img.png.display()))?
+            .to_luma8()
+            .into_raw())
+    };
+    let mut runs = Vec::new();
+    if c.detect.classical {
+        let params = StreakParams::default();
+        let results: Vec<(Vec<Detection>, f64)> = images
+            .par_iter()
+            .zip(chosen.par_iter())
+            .map(|(img, w)| -> anyhow::Result<(Vec<Detection>, f64)> {
+                let pixels = load(img)?;
+                let t = Instant::now();
+                let found =
+                    detect_streaks(&pixels, img.width, img.height, &params, w.trail_angle_deg);
+                Ok((
+                    found.into_iter().map(|c| c.detection).collect(),
+                    t.elapsed().as_secs_f64(),
+                ))
+            })
+            .collect::<anyhow::Result<_>>()?;
+        let (detections, seconds) = results.into_iter().unzip();
+        runs.push(DetectorRun {
+            name: "streak".into(),
+            description: "classical streak detector (background mesh, oriented line filters, components, moments; no model)".into(),
+            model_sha256: None,
+            detections,
+            seconds,
+        });
+    }
+    if let Some(model) = &c.detect.model {
+        let path = campaign.base_dir.join(model);
+        let params = YoloParams {
+            conf: c.detect.conf,
+            iou: c.detect.iou,
+            max_det: c.detect.max_det as usize,
+            ..YoloParams::default()
+        };
+        let mut yolo = YoloDetector::load(&path, params)
+            .with_context(|| format!("loading model {}", path.display()))?;
+        let bar = if progress {
+            ProgressBar::new(images.len() as u64)
+        } else {
+            ProgressBar::hidden()
+        };
+        bar.set_style(
+            ProgressStyle::with_template("yolo [{bar:30}] {pos}/{len} images, {per_sec}")
+                .expect("valid template"),
+        );
+        let (mut detections, mut seconds) = (Vec::new(), Vec::new());
+        for img in &images {
+            let pixels = load(img)?;
+            let t = Instant::now();
+            detections.push(yolo.detect(&pixels, img.width, img.height)?);
+            seconds.push(t.elapsed().as_secs_f64());
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        runs.push(DetectorRun {
+            name: "yolo".into(),
+            description: format!(
+                "YOLOv8 {} through ONNX Runtime, conf {}, NMS IoU {}",
+                model, c.detect.conf, c.detect.iou
+            ),
+            model_sha256: c.detect.model_sha256.clone(),
+            detections,
+            seconds,
+        });
+    }
+    let geometry = match c.enhance.geometry {
+        GeometryKind::Original => "original frame",
+        GeometryKind::Padded => "padded frame",
+        GeometryKind::Rotated => "rotated and expanded frame",
+    };
+    let kind = match c.background {
+        crate::campaign::Background::Uniform => "synthetic",
+        crate::campaign::Background::Frames { .. } => "semisynthetic",
+    };
+    let mode = match c.pointing.mode {
+        PointingMode::Fixed => "fixed",
+        PointingMode::Survey => "survey",
+    };
+    let conversion: Vec<f64> = written.iter().map(|w| w.conversion_s).collect();
+    report::write(
+        dir,
+        &c.name,
+        &campaign.hash,
+        dataset_digest,
+        &format!("{mode}, {geometry}, {kind}"),
+        &images,
+        &runs,
+        c.detect.conf,
+        &conversion,
+    )
 }
 
 /// Draw, render and write one image.
@@ -163,7 +319,7 @@ fn image(
     dir: &Path,
     enhance_stage: bool,
     subset: Option<Subset>,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<Written> {
     use anyhow::Context;
     let c = &campaign.resolved;
     let seed = c.seed;
@@ -180,6 +336,7 @@ fn image(
 
     // The final frame of the PNG and its label: the debris alone is warped like the image, so
     // the box is the tight box of the rendered streak in that frame.
+    let conversion_started = Instant::now();
     let final_image = enhance_stage.then(|| {
         let frame = match c.enhance.geometry {
             GeometryKind::Original => Frame::original(w, h),
@@ -202,6 +359,7 @@ fn image(
         exposure.truth.label_box_final_px = label;
         (frame, adu, label)
     });
+    let mut conversion_s = conversion_started.elapsed().as_secs_f64();
     let cards = provenance_cards(campaign, &scene, &exposure);
     if c.artifacts.fits {
         let mut cards = cards.clone();
@@ -245,10 +403,12 @@ fn image(
         serde_json::to_string_pretty(&exposure.truth)? + "\n",
     )?;
 
+    let mut png_written = None;
     if let Some((frame, adu, label)) = final_image {
+        let started = Instant::now();
         let sqrt = c.enhance.sqrt && c.pointing.mode == PointingMode::Fixed;
         let png = enhance::enhance(&adu, frame.width, frame.height, &c.enhance, sqrt);
-        let label = label
+        let label_line = label
             .map(|b| b.yolo_line(frame.width, frame.height))
             .unwrap_or_default();
         let (img_dir, lbl_dir) = match subset {
@@ -258,10 +418,25 @@ fn image(
             ),
             None => (dir.join("images"), dir.join("labels")),
         };
-        enhance::write_png(&img_dir.join(format!("{stem}.png")), &png)?;
-        std::fs::write(lbl_dir.join(format!("{stem}.txt")), label)?;
+        let png_path = img_dir.join(format!("{stem}.png"));
+        enhance::write_png(&png_path, &png)?;
+        std::fs::write(lbl_dir.join(format!("{stem}.txt")), label_line)?;
+        conversion_s += started.elapsed().as_secs_f64();
+        // Pixel-edge coordinates: pixel i spans [i, i + 1).
+        let edges = label.map(|b| [b.x_min + 0.5, b.y_min + 0.5, b.x_max + 0.5, b.y_max + 0.5]);
+        png_written = Some((png_path, frame.width, frame.height, edges));
     }
-    Ok(())
+    let trail_angle_deg = match (scene.pointing, c.enhance.geometry) {
+        (Pointing::Survey(_), GeometryKind::Rotated) => Some(0.0),
+        (Pointing::Survey(t), _) => Some(t.trail_angle_deg),
+        (Pointing::Fixed { .. }, _) => None,
+    };
+    Ok(Written {
+        subset,
+        png: png_written,
+        conversion_s,
+        trail_angle_deg,
+    })
 }
 
 /// WCS and provenance keywords of an image.

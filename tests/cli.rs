@@ -245,3 +245,94 @@ fn rotated_geometry_needs_survey_pointing() {
     let c = small_campaign(tmp.path(), "[enhance]\ngeometry = \"rotated\"\n");
     assert_clean_failure(&c, &tmp.path().join("out"), &["enhance.geometry", "survey"]);
 }
+
+fn fixture(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/yolo")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+#[test]
+fn detect_stage_writes_a_reproducible_report_with_both_detectors() {
+    if std::env::var_os("SOIG_REQUIRE_ONNXRUNTIME").is_none()
+        && soig::detect::yolo::find_onnxruntime().is_err()
+    {
+        eprintln!(
+            "ONNX Runtime not installed: run scripts/setup.sh (scripts/test.sh makes this a failure)"
+        );
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let extra = format!(
+        "stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n[detect]\nmodel = \"{}\"\n",
+        fixture("tiny.onnx")
+    );
+    // `stages` is a top-level key: put it before the first table.
+    let c = small_campaign(tmp.path(), "");
+    let text = std::fs::read_to_string(&c).unwrap();
+    let (top, rest) = extra.split_once("[split]").unwrap();
+    std::fs::write(&c, format!("{top}{text}[split]{rest}")).unwrap();
+    let mut digests = Vec::new();
+    for threads in [1, 2] {
+        let out = tmp.path().join(format!("det{threads}"));
+        let o = soig(
+            &[
+                "run",
+                c.to_str().unwrap(),
+                "--quiet",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            Some(threads),
+        );
+        assert!(
+            o.status.success(),
+            "run failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        digests.push(digest_of(&o));
+        let v = soig(&["verify", out.to_str().unwrap()], None);
+        assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report/report.json")).unwrap())
+                .unwrap();
+        let names: Vec<&str> = report["detectors"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|d| d["detector"].as_str().unwrap())
+            .collect();
+        assert_eq!(names, ["streak", "yolo"]);
+        assert_eq!(report["images"], 3);
+        for f in [
+            "metrics.csv",
+            "detections.csv",
+            "pr_curve.png",
+            "timing.json",
+            "report.md",
+        ] {
+            assert!(out.join("report").join(f).is_file(), "{f}");
+        }
+        let png = image::open(out.join("report/pr_curve.png")).unwrap();
+        assert_eq!((png.width(), png.height()), (640, 480));
+    }
+    // Timing is volatile: the digest is the same anyway.
+    assert_eq!(digests[0], digests[1]);
+}
+
+#[test]
+fn bad_models_fail_cleanly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    for (model, expect) in [
+        ("/nonexistent/model.onnx", "/nonexistent/model.onnx"),
+        (fixture("not_onnx.onnx").as_str(), "not_onnx.onnx"),
+    ] {
+        let c = small_campaign(tmp.path(), "");
+        let text = std::fs::read_to_string(&c).unwrap();
+        std::fs::write(&c, format!("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n{text}[detect]\nmodel = \"{model}\"\n")).unwrap();
+        assert_clean_failure(&c, &out, &["error", expect]);
+    }
+}

@@ -13,4 +13,5 @@ pub struct Detection {
     pub class: u32,
 }
 
+pub mod streak;
 pub mod yolo;

@@ -1,0 +1,561 @@
+//! The report of a campaign's detect stage: predictions in YOLO format, metrics in the shape of
+//! the paper's Tables 3 and 5 (Ultralytics and COCO conventions side by side), per-image
+//! detections, timing in the shape of Table 6, a precision-recall plot and previews of true
+//! positives, false positives and misses (ground truth green, predictions red, as the paper's
+//! Figs. 11 and 13).
+//!
+//! Everything here is a pure function of the images and detections, except the timing, which is
+//! written to `report/timing.json` and `report/report.md` only: the manifest lists those two as
+//! volatile (present, not hashed), so the digest stays reproducible.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use image::{Rgb, RgbImage};
+use serde::Serialize;
+
+use crate::detect::Detection;
+use crate::metrics::{self, AtThreshold, CocoMetrics, ImageEval, UltralyticsMetrics};
+
+/// Files of the report that hold run-dependent timing: present, but not hashed.
+pub const VOLATILE: [&str; 2] = ["report/report.md", "report/timing.json"];
+
+/// One test image: its PNG and ground truth in pixel-edge coordinates.
+pub struct TestImage {
+    pub stem: String,
+    pub png: std::path::PathBuf,
+    pub width: usize,
+    pub height: usize,
+    pub truth: Vec<[f64; 4]>,
+}
+
+/// The detections of one detector on every test image, and its time per image.
+pub struct DetectorRun {
+    pub name: String,
+    pub description: String,
+    pub model_sha256: Option<String>,
+    /// Per test image, in the order of the test images.
+    pub detections: Vec<Vec<Detection>>,
+    pub seconds: Vec<f64>,
+}
+
+#[derive(Serialize)]
+pub struct DetectorMetrics {
+    pub detector: String,
+    pub description: String,
+    pub model_sha256: Option<String>,
+    pub ultralytics: UltralyticsSummary,
+    pub coco: CocoSummary,
+    pub at_threshold: AtThresholdSummary,
+}
+
+#[derive(Serialize)]
+pub struct UltralyticsSummary {
+    pub precision: f64,
+    pub recall: f64,
+    pub map50: f64,
+    pub map50_95: f64,
+    pub f1_conf: f64,
+}
+
+#[derive(Serialize)]
+pub struct CocoSummary {
+    pub ap: f64,
+    pub ap50: f64,
+    pub ap75: f64,
+    pub ar100: f64,
+}
+
+#[derive(Serialize)]
+pub struct AtThresholdSummary {
+    pub conf: f64,
+    pub iou: f64,
+    pub precision: f64,
+    pub recall: f64,
+    pub tp: usize,
+    pub fp: usize,
+    #[serde(rename = "fn")]
+    pub fn_: usize,
+}
+
+/// The deterministic part of the report.
+#[derive(Serialize)]
+pub struct Report {
+    pub campaign: String,
+    pub campaign_hash: String,
+    /// Digest of the dataset (the manifest of everything but the report).
+    pub dataset_digest: String,
+    /// e.g. "fixed, original frame, synthetic".
+    pub test_set: String,
+    pub images: usize,
+    pub objects: usize,
+    pub detectors: Vec<DetectorMetrics>,
+}
+
+/// Median and spread (min, max) of timings.
+#[derive(Serialize)]
+pub struct Timing {
+    pub median_s: f64,
+    pub min_s: f64,
+    pub max_s: f64,
+    pub n: usize,
+}
+
+impl Timing {
+    pub fn of(samples: &[f64]) -> Timing {
+        let mut v: Vec<f64> = samples.to_vec();
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        let median = match n {
+            0 => f64::NAN,
+            _ if n % 2 == 1 => v[n / 2],
+            _ => (v[n / 2 - 1] + v[n / 2]) / 2.0,
+        };
+        Timing {
+            median_s: median,
+            min_s: v.first().copied().unwrap_or(f64::NAN),
+            max_s: v.last().copied().unwrap_or(f64::NAN),
+            n,
+        }
+    }
+}
+
+fn evals(images: &[TestImage], run: &DetectorRun) -> Vec<ImageEval> {
+    images
+        .iter()
+        .zip(&run.detections)
+        .map(|(img, dets)| ImageEval {
+            truth: img.truth.clone(),
+            truth_class: vec![0; img.truth.len()],
+            detections: dets.clone(),
+        })
+        .collect()
+}
+
+/// Metrics of one detector in both conventions and at the fixed threshold.
+pub fn detector_metrics(
+    images: &[TestImage],
+    run: &DetectorRun,
+    conf: f64,
+) -> (
+    DetectorMetrics,
+    UltralyticsMetrics,
+    CocoMetrics,
+    AtThreshold,
+) {
+    let e = evals(images, run);
+    let u = metrics::ultralytics(&e);
+    let c = metrics::coco(&e);
+    let t = metrics::at_threshold(&e, conf, 0.5);
+    let m = DetectorMetrics {
+        detector: run.name.clone(),
+        description: run.description.clone(),
+        model_sha256: run.model_sha256.clone(),
+        ultralytics: UltralyticsSummary {
+            precision: u.precision,
+            recall: u.recall,
+            map50: u.map50,
+            map50_95: u.map50_95,
+            f1_conf: u.f1_conf,
+        },
+        coco: CocoSummary {
+            ap: c.ap,
+            ap50: c.ap50,
+            ap75: c.ap75,
+            ar100: c.ar100,
+        },
+        at_threshold: AtThresholdSummary {
+            conf,
+            iou: 0.5,
+            precision: t.precision,
+            recall: t.recall,
+            tp: t.tp,
+            fp: t.fp,
+            fn_: t.fn_,
+        },
+    };
+    (m, u, c, t)
+}
+
+/// The YOLO prediction line of a detection: `cls xc yc w h score`, normalised.
+pub fn yolo_prediction_line(d: &Detection, width: usize, height: usize) -> String {
+    let (w, h) = (width as f64, height as f64);
+    format!(
+        "{} {:.6} {:.6} {:.6} {:.6} {:.6}\n",
+        d.class,
+        (d.x1 + d.x2) / 2.0 / w,
+        (d.y1 + d.y2) / 2.0 / h,
+        (d.x2 - d.x1) / w,
+        (d.y2 - d.y1) / h,
+        d.score
+    )
+}
+
+/// Write the report under `dir/report/`.
+#[allow(clippy::too_many_arguments)]
+pub fn write(
+    dir: &Path,
+    campaign: &str,
+    campaign_hash: &str,
+    dataset_digest: &str,
+    test_set: &str,
+    images: &[TestImage],
+    runs: &[DetectorRun],
+    conf: f64,
+    conversion_s: &[f64],
+) -> anyhow::Result<()> {
+    let rdir = dir.join("report");
+    std::fs::create_dir_all(rdir.join("previews"))?;
+    let mut detectors = Vec::new();
+    let mut curves = Vec::new();
+    let mut csv_rows = csv::Writer::from_path(rdir.join("detections.csv"))?;
+    csv_rows.write_record([
+        "image", "detector", "x1", "y1", "x2", "y2", "score", "class",
+    ])?;
+    for run in runs {
+        let pdir = rdir.join("predictions").join(&run.name);
+        std::fs::create_dir_all(&pdir)?;
+        for (img, dets) in images.iter().zip(&run.detections) {
+            let mut text = String::new();
+            for d in dets {
+                text.push_str(&yolo_prediction_line(d, img.width, img.height));
+                csv_rows.write_record([
+                    img.stem.clone(),
+                    run.name.clone(),
+                    format!("{:.3}", d.x1),
+                    format!("{:.3}", d.y1),
+                    format!("{:.3}", d.x2),
+                    format!("{:.3}", d.y2),
+                    format!("{:.6}", d.score),
+                    d.class.to_string(),
+                ])?;
+            }
+            std::fs::write(pdir.join(format!("{}.txt", img.stem)), text)?;
+        }
+        let (m, u, _, _) = detector_metrics(images, run, conf);
+        curves.push((
+            run.name.clone(),
+            u.px.clone(),
+            u.pr_curve_map50.clone(),
+            u.map50,
+        ));
+        previews(&rdir.join("previews"), images, run, conf)?;
+        detectors.push(m);
+    }
+    csv_rows.flush()?;
+
+    let report = Report {
+        campaign: campaign.to_string(),
+        campaign_hash: campaign_hash.to_string(),
+        dataset_digest: dataset_digest.to_string(),
+        test_set: test_set.to_string(),
+        images: images.len(),
+        objects: images.iter().map(|i| i.truth.len()).sum(),
+        detectors,
+    };
+    std::fs::write(
+        rdir.join("report.json"),
+        serde_json::to_string_pretty(&report)? + "\n",
+    )?;
+
+    // Tables 3 and 5: one row per test set (and geometry) and detector.
+    let mut table = csv::Writer::from_path(rdir.join("metrics.csv"))?;
+    table.write_record([
+        "test_set",
+        "detector",
+        "precision",
+        "recall",
+        "map50",
+        "map50_95",
+        "coco_ap",
+        "coco_ap50",
+        "precision_at_conf",
+        "recall_at_conf",
+    ])?;
+    for d in &report.detectors {
+        table.write_record([
+            test_set.to_string(),
+            d.detector.clone(),
+            format!("{:.4}", d.ultralytics.precision),
+            format!("{:.4}", d.ultralytics.recall),
+            format!("{:.4}", d.ultralytics.map50),
+            format!("{:.4}", d.ultralytics.map50_95),
+            format!("{:.4}", d.coco.ap),
+            format!("{:.4}", d.coco.ap50),
+            format!("{:.4}", d.at_threshold.precision),
+            format!("{:.4}", d.at_threshold.recall),
+        ])?;
+    }
+    table.flush()?;
+    pr_plot(&rdir.join("pr_curve.png"), &curves)?;
+
+    // Table 6: conversion and detection time per image (volatile).
+    let conversion = Timing::of(conversion_s);
+    let detection: Vec<(String, Timing)> = runs
+        .iter()
+        .map(|r| (r.name.clone(), Timing::of(&r.seconds)))
+        .collect();
+    std::fs::write(
+        rdir.join("timing.json"),
+        serde_json::to_string_pretty(&serde_json::json!({
+            "conversion_per_image": conversion,
+            "detection_per_image": detection.iter().map(|(n, t)| (n.clone(), t)).collect::<std::collections::BTreeMap<_, _>>(),
+        }))? + "\n",
+    )?;
+    std::fs::write(
+        rdir.join("report.md"),
+        markdown(&report, &conversion, &detection, conf),
+    )?;
+    Ok(())
+}
+
+fn markdown(r: &Report, conversion: &Timing, detection: &[(String, Timing)], conf: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# soig report: {}\n", r.campaign);
+    let _ = writeln!(
+        s,
+        "Test set: {}, {} images, {} objects.",
+        r.test_set, r.images, r.objects
+    );
+    let _ = writeln!(
+        s,
+        "Campaign hash `{}`, dataset digest `{}`.\n",
+        r.campaign_hash, r.dataset_digest
+    );
+    let _ = writeln!(s, "## Metrics (the shape of the paper's Tables 3 and 5)\n");
+    let _ = writeln!(
+        s,
+        "P and R are Ultralytics' (at its max-F1 confidence); mAP as Ultralytics (`ap_per_class`) and as pycocotools; P/R@{conf} at the campaign's confidence, IoU 0.5.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| detector | P | R | mAP50 | mAP50-95 | COCO AP50 | COCO AP | P@{conf} | R@{conf} |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+    for d in &r.detectors {
+        let _ = writeln!(
+            s,
+            "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            d.detector,
+            d.ultralytics.precision,
+            d.ultralytics.recall,
+            d.ultralytics.map50,
+            d.ultralytics.map50_95,
+            d.coco.ap50,
+            d.coco.ap,
+            d.at_threshold.precision,
+            d.at_threshold.recall
+        );
+    }
+    let _ = writeln!(s);
+    for d in &r.detectors {
+        let model = d
+            .model_sha256
+            .as_deref()
+            .map(|h| format!(", model sha256 `{h}`"))
+            .unwrap_or_default();
+        let _ = writeln!(s, "- `{}`: {}{model}", d.detector, d.description);
+    }
+    let _ = writeln!(
+        s,
+        "\n## Time per image (the shape of Table 6; this machine, this run)\n"
+    );
+    let _ = writeln!(s, "| step | median | min | max | n |");
+    let _ = writeln!(s, "|---|---|---|---|---|");
+    let row = |s: &mut String, name: &str, t: &Timing| {
+        let _ = writeln!(
+            s,
+            "| {name} | {:.1} ms | {:.1} ms | {:.1} ms | {} |",
+            t.median_s * 1e3,
+            t.min_s * 1e3,
+            t.max_s * 1e3,
+            t.n
+        );
+    };
+    row(&mut s, "conversion (FITS to PNG)", conversion);
+    for (name, t) in detection {
+        row(&mut s, &format!("detection: {name}"), t);
+    }
+    let _ = writeln!(
+        s,
+        "\n![precision-recall](pr_curve.png)\n\nPreviews of true positives, false positives and misses are in `previews/` (ground truth green, predictions red)."
+    );
+    s
+}
+
+/// Precision against recall at IoU 0.5 for each detector.
+fn pr_plot(path: &Path, curves: &[(String, Vec<f64>, Vec<f64>, f64)]) -> anyhow::Result<()> {
+    use plotters::prelude::*;
+    static FONT: std::sync::Once = std::sync::Once::new();
+    FONT.call_once(|| {
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            plotters::style::FontStyle::Normal,
+            include_bytes!("../assets/DejaVuSans.ttf"),
+        );
+    });
+    let (w, h) = (640u32, 480u32);
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption("Precision-recall at IoU 0.5", ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(0.0..1.0, 0.0..1.05)?;
+        chart
+            .configure_mesh()
+            .x_desc("recall")
+            .y_desc("precision")
+            .draw()?;
+        let colors = [
+            RGBColor(200, 30, 30),
+            RGBColor(30, 90, 200),
+            RGBColor(30, 150, 60),
+        ];
+        for (k, (name, px, py, map50)) in curves.iter().enumerate() {
+            let c = colors[k % colors.len()];
+            chart
+                .draw_series(LineSeries::new(
+                    px.iter().copied().zip(py.iter().copied()),
+                    c.stroke_width(2),
+                ))?
+                .label(format!("{name} (mAP50 {map50:.3})"))
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::LowerLeft)
+            .draw()?;
+        root.present()?;
+    }
+    let img = RgbImage::from_raw(w, h, buf).expect("buffer size");
+    img.save(path)?;
+    Ok(())
+}
+
+/// Up to three previews each of true positives, false positives and misses of one detector at
+/// the campaign's confidence: a crop around the boxes, ground truth green, predictions red.
+fn previews(dir: &Path, images: &[TestImage], run: &DetectorRun, conf: f64) -> anyhow::Result<()> {
+    let (mut tp, mut fp, mut miss) = (0, 0, 0);
+    for (img, dets) in images.iter().zip(&run.detections) {
+        let kept: Vec<&Detection> = dets.iter().filter(|d| d.score >= conf).collect();
+        let matched = |t: &[f64; 4]| {
+            kept.iter()
+                .any(|d| metrics::iou(t, &[d.x1, d.y1, d.x2, d.y2]) >= 0.5)
+        };
+        let true_pos = |d: &Detection| {
+            img.truth
+                .iter()
+                .any(|t| metrics::iou(t, &[d.x1, d.y1, d.x2, d.y2]) >= 0.5)
+        };
+        let kind = if img.truth.iter().any(|t| !matched(t)) && miss < 3 {
+            miss += 1;
+            "miss"
+        } else if kept.iter().any(|d| !true_pos(d)) && fp < 3 {
+            fp += 1;
+            "false-positive"
+        } else if !kept.is_empty() && img.truth.iter().all(matched) && tp < 3 {
+            tp += 1;
+            "true-positive"
+        } else {
+            continue;
+        };
+        let gray = image::open(&img.png)?.to_luma8();
+        let mut rgb = RgbImage::from_fn(gray.width(), gray.height(), |x, y| {
+            let v = gray.get_pixel(x, y)[0];
+            Rgb([v, v, v])
+        });
+        let boxes: Vec<([f64; 4], Rgb<u8>)> = img
+            .truth
+            .iter()
+            .map(|t| (*t, Rgb([0, 220, 0])))
+            .chain(
+                kept.iter()
+                    .map(|d| ([d.x1, d.y1, d.x2, d.y2], Rgb([230, 0, 0]))),
+            )
+            .collect();
+        for (b, c) in &boxes {
+            draw_rect(&mut rgb, b, *c);
+        }
+        // Crop to the boxes with a margin, at least 256 px.
+        let (mut x0, mut y0, mut x1, mut y1) = (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for (b, _) in &boxes {
+            x0 = x0.min(b[0]);
+            y0 = y0.min(b[1]);
+            x1 = x1.max(b[2]);
+            y1 = y1.max(b[3]);
+        }
+        let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+        let side = ((x1 - x0).max(y1 - y0) + 64.0).max(256.0);
+        let (w, h) = (rgb.width() as f64, rgb.height() as f64);
+        let left = (cx - side / 2.0).clamp(0.0, (w - side).max(0.0)) as u32;
+        let top = (cy - side / 2.0).clamp(0.0, (h - side).max(0.0)) as u32;
+        let s = side.min(w).min(h) as u32;
+        let crop = image::imageops::crop_imm(&rgb, left, top, s, s).to_image();
+        crop.save(dir.join(format!("{}_{kind}_{}.png", run.name, img.stem)))?;
+    }
+    Ok(())
+}
+
+fn draw_rect(img: &mut RgbImage, b: &[f64; 4], c: Rgb<u8>) {
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    let clamp = |v: f64, n: i64| (v.round() as i64).clamp(0, n - 1);
+    let (x0, y0, x1, y1) = (
+        clamp(b[0], w),
+        clamp(b[1], h),
+        clamp(b[2] - 1.0, w),
+        clamp(b[3] - 1.0, h),
+    );
+    for t in 0..2 {
+        for x in x0..=x1 {
+            for y in [(y0 + t).min(h - 1), (y1 - t).max(0)] {
+                img.put_pixel(x as u32, y as u32, c);
+            }
+        }
+        for y in y0..=y1 {
+            for x in [(x0 + t).min(w - 1), (x1 - t).max(0)] {
+                img.put_pixel(x as u32, y as u32, c);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timing_median_and_spread() {
+        let t = Timing::of(&[3.0, 1.0, 2.0, 10.0]);
+        assert_eq!((t.median_s, t.min_s, t.max_s, t.n), (2.5, 1.0, 10.0, 4));
+        assert!(Timing::of(&[]).median_s.is_nan());
+    }
+
+    #[test]
+    fn prediction_line_round_trips_a_box() {
+        let d = Detection {
+            x1: 100.0,
+            y1: 200.0,
+            x2: 300.0,
+            y2: 260.0,
+            score: 0.75,
+            class: 0,
+        };
+        assert_eq!(
+            yolo_prediction_line(&d, 1000, 500),
+            "0 0.200000 0.460000 0.200000 0.120000 0.750000\n"
+        );
+    }
+}
