@@ -59,6 +59,8 @@ pub struct CampaignFile {
     pub artifacts: Artifacts,
     #[serde(default)]
     pub detect: Detect,
+    #[serde(default)]
+    pub train: Train,
     /// Pipeline stages to run, in order; each needs the ones before it.
     #[serde(default = "defaults::stages")]
     pub stages: Vec<Stage>,
@@ -386,6 +388,37 @@ pub struct Artifacts {
     pub star_list: bool,
 }
 
+/// Training through Ultralytics (`soig train`); the paper's hyperparameters by default.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Train {
+    /// Ultralytics model: a YAML trains from scratch (no download needed), a .pt fine-tunes.
+    #[serde(default = "defaults::train_model")]
+    pub model: String,
+    #[serde(default = "defaults::train_epochs")]
+    pub epochs: u32,
+    /// Batch size (the paper: 16, and 10 for the 1472 px rotated images); default by frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub batch: Option<u32>,
+    /// Training image size; default: the PNG frame's width (1024, 1088 or 1472).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub imgsz: Option<u32>,
+    #[serde(default = "defaults::train_optimizer")]
+    pub optimizer: String,
+    /// `auto` (a CUDA GPU when present), `cpu`, or a GPU index such as `0`.
+    #[serde(default = "defaults::train_device")]
+    pub device: String,
+    #[serde(default)]
+    pub seed: u64,
+    #[serde(default = "defaults::train_workers")]
+    pub workers: u32,
+    #[serde(default = "defaults::train_patience")]
+    pub patience: u32,
+    /// Stop after this many hours (Ultralytics' `time`), keeping the best weights so far.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_hours: Option<f64>,
+}
+
 /// Detection and evaluation on the test split (stage `detect`).
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -567,6 +600,24 @@ pub mod defaults {
     pub fn split_test() -> f64 {
         0.1
     }
+    pub fn train_model() -> String {
+        "yolov8n.yaml".into()
+    }
+    pub fn train_epochs() -> u32 {
+        200
+    }
+    pub fn train_optimizer() -> String {
+        "auto".into()
+    }
+    pub fn train_device() -> String {
+        "auto".into()
+    }
+    pub fn train_workers() -> u32 {
+        2
+    }
+    pub fn train_patience() -> u32 {
+        100
+    }
     pub fn detect_conf() -> f64 {
         0.5
     }
@@ -590,7 +641,7 @@ macro_rules! default_from_serde {
 }
 default_from_serde!(
     Window, Exposure, Pointing, Sensor, Photometry, Visibility, Render, Enhance, Split, Artifacts,
-    Detect
+    Detect, Train
 );
 
 impl Default for Stars {
@@ -1037,6 +1088,28 @@ fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         en.geometry != GeometryKind::Rotated || c.pointing.mode == PointingMode::Survey,
         "enhance.geometry",
         "`rotated` needs survey pointing (fixed images have no star trails to align)",
+    )?;
+    let t = &c.train;
+    check(
+        (1..=100_000).contains(&t.epochs),
+        "train.epochs",
+        "must be between 1 and 100000",
+    )?;
+    check(
+        t.batch.is_none_or(|b| b >= 1),
+        "train.batch",
+        "must be >= 1",
+    )?;
+    check(
+        t.imgsz
+            .is_none_or(|s| (32..=8192).contains(&s) && s % 32 == 0),
+        "train.imgsz",
+        "must be a multiple of 32 between 32 and 8192",
+    )?;
+    check(
+        t.time_hours.is_none_or(|h| h > 0.0),
+        "train.time_hours",
+        "must be positive",
     )?;
     let d = &c.detect;
     check(

@@ -31,6 +31,18 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Train a YOLOv8 model on the campaign's dataset through Ultralytics, export ONNX, and
+    /// record the run in the manifest (needs `scripts/setup-train.sh`).
+    Train {
+        campaign: PathBuf,
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Python interpreter with Ultralytics (default: .venv-train/bin/python3).
+        #[arg(long)]
+        python: Option<PathBuf>,
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Recompute every hash of an output directory against its manifest.
     Verify {
         /// An output directory of `soig run`.
@@ -99,6 +111,31 @@ fn main() -> ExitCode {
                         s.output.display(),
                         s.digest
                     );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(2)
+                }
+            }
+        }
+        Command::Train {
+            campaign,
+            out,
+            python,
+            quiet,
+        } => {
+            let campaign = match Campaign::load(&campaign) {
+                Ok(c) => c,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let output = out.unwrap_or_else(|| campaign.output_dir.clone());
+            match soig::train::train(&campaign, &output, python.as_deref(), !quiet) {
+                Ok(model) => {
+                    println!("model {}", model.display());
                     ExitCode::SUCCESS
                 }
                 Err(e) => {

@@ -26,9 +26,13 @@ pub struct Manifest {
     pub campaign: serde_json::Value,
     /// Every artifact, by path relative to the output directory ('/' separated), sorted.
     pub files: BTreeMap<String, FileEntry>,
-    /// Files that hold run-dependent figures (timing): they must exist, but are not hashed.
+    /// Files that hold run-dependent figures (timing, training logs): they must exist, but
+    /// are not hashed.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub volatile: Vec<String>,
+    /// The training run (`soig train`): model sha256, Ultralytics and torch versions, log.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub training: Option<serde_json::Value>,
     /// sha256 of the canonical JSON of everything above.
     pub digest: String,
 }
@@ -99,10 +103,16 @@ impl Manifest {
             campaign,
             files,
             volatile: volatile.to_vec(),
+            training: None,
             digest: String::new(),
         };
         m.digest = digest_of(&m);
         Ok(m)
+    }
+
+    /// Recompute the digest after a change.
+    pub fn seal(&mut self) {
+        self.digest = digest_of(self);
     }
 
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {

@@ -1,0 +1,141 @@
+#!/usr/bin/env python3
+"""Train a YOLOv8 debris detector on a soig dataset, export ONNX, write summary.json.
+
+Runs fully offline (no downloads): sets YOLO_OFFLINE, a private YOLO_CONFIG_DIR under --out
+with a bundled font as Arial.ttf, and trains with amp=False (the AMP check downloads weights).
+"""
+import argparse
+import csv
+import hashlib
+import importlib.util
+import json
+import os
+import shutil
+import sys
+import time
+from pathlib import Path
+
+
+def parse_args():
+    p = argparse.ArgumentParser(description=__doc__)
+    p.add_argument("--data", required=True, help="Ultralytics data.yaml written by soig")
+    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--model", default="yolov8n.yaml", help="model yaml (from scratch) or .pt")
+    p.add_argument("--epochs", type=int, default=200)
+    p.add_argument("--batch", type=int, default=16)
+    p.add_argument("--imgsz", type=int, default=640)
+    p.add_argument("--optimizer", default="auto")
+    p.add_argument("--device", default="auto", help="cpu, 0 (first GPU) or auto")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--workers", type=int, default=8)
+    p.add_argument("--patience", type=int, default=100)
+    p.add_argument("--time-hours", type=float, default=None, help="Ultralytics `time` limit in hours")
+    return p.parse_args()
+
+
+def setup_offline(out: Path):
+    """Offline Ultralytics: private config dir with a local TTF as Arial.ttf. Must run before import."""
+    cfg = out / "yolo-config"
+    font = cfg / "Ultralytics" / "Arial.ttf"
+    font.parent.mkdir(parents=True, exist_ok=True)
+    if not font.exists():
+        import matplotlib
+
+        src = Path(matplotlib.get_data_path()) / "fonts" / "ttf" / "DejaVuSans.ttf"
+        shutil.copyfile(src, font)
+    os.environ["YOLO_OFFLINE"] = "1"
+    os.environ["YOLO_CONFIG_DIR"] = str(cfg)
+
+
+def sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def box_metrics(m) -> dict:
+    b = m.box
+    return {"precision": float(b.mp), "recall": float(b.mr), "mAP50": float(b.map50), "mAP50-95": float(b.map)}
+
+
+def main():
+    a = parse_args()
+    out = Path(a.out).resolve()
+    data = Path(a.data).resolve()
+    if not data.is_file():
+        sys.exit(f"train.py: data yaml not found: {data}")
+    out.mkdir(parents=True, exist_ok=True)
+    setup_offline(out)
+
+    import torch
+    import ultralytics
+    from ultralytics import YOLO
+
+    device = None if a.device == "auto" else a.device
+    model = YOLO(a.model)
+    t0 = time.time()
+    model.train(
+        data=str(data), epochs=a.epochs, batch=a.batch, imgsz=a.imgsz, optimizer=a.optimizer,
+        device=device, seed=a.seed, workers=a.workers, patience=a.patience, time=a.time_hours,
+        project=str(out), name="train", exist_ok=True,
+        amp=False, deterministic=True, plots=True, val=True,
+    )
+    train_wall_s = time.time() - t0
+    trainer = model.trainer
+    save_dir = Path(trainer.save_dir)
+    best = save_dir / "weights" / "best.pt"
+    results_csv = save_dir / "results.csv"
+    if not best.is_file():
+        sys.exit(f"train.py: training produced no best.pt in {best.parent}")
+    with open(results_csv) as f:
+        epochs_completed = sum(1 for _ in csv.DictReader(f))
+
+    # Validation of best.pt: val split, test split (Ultralytics defaults), test split at the paper's conf/iou.
+    def val(split, name, **kw):
+        return box_metrics(YOLO(str(best)).val(
+            data=str(data), split=split, imgsz=a.imgsz, batch=a.batch, device=device, plots=True,
+            project=str(out), name=name, exist_ok=True, **kw))
+
+    metrics = {
+        "val": val("val", "val"),
+        "test": val("test", "test"),
+        "test_conf0.5_iou0.5": val("test", "test-conf0.5", conf=0.5, iou=0.5),
+    }
+
+    simplify = all(importlib.util.find_spec(m) is not None for m in ("onnxslim", "onnxruntime"))
+    onnx = YOLO(str(best)).export(format="onnx", opset=17, imgsz=a.imgsz, simplify=simplify,
+                                  dynamic=False, nms=False)
+    if not onnx or not Path(onnx).is_file():
+        sys.exit("train.py: ONNX export failed")
+    onnx = Path(onnx).resolve()
+
+    summary = {
+        "ultralytics": ultralytics.__version__,
+        "torch": torch.__version__,
+        "args": vars(a),
+        "epochs_completed": epochs_completed,
+        "epochs_planned_final": int(trainer.epochs),
+        "best_epoch": int(trainer.stopper.best_epoch),  # 1-based, by fitness = mAP50-95 on val
+        "train_wall_s": round(train_wall_s, 1),
+        "metrics": metrics,
+        "onnx": {"path": str(onnx), "sha256": sha256(onnx), "bytes": onnx.stat().st_size,
+                 "opset": 17, "imgsz": a.imgsz, "simplify": simplify},
+        "best_pt": str(best),
+        "results_csv": str(results_csv),
+    }
+    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    print(json.dumps(summary, indent=2))
+
+
+if __name__ == "__main__":
+    try:
+        main()
+    except SystemExit:
+        raise
+    except Exception as e:  # clear message, non-zero exit
+        import traceback
+
+        traceback.print_exc()
+        sys.exit(f"train.py: failed: {type(e).__name__}: {e}")

@@ -1,0 +1,193 @@
+//! Training through Ultralytics (the tool the field uses), driven by soig: the campaign's
+//! dataset is written (or reused when it verifies), `python/train.py` (embedded in the binary)
+//! trains offline with the campaign's hyperparameters and exports ONNX, and the run is recorded
+//! in the manifest: the model's sha256, the Ultralytics and torch versions, the log.
+//!
+//! The Python side is installed by `scripts/setup-train.sh` into `.venv-train/`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use anyhow::{Context, bail};
+
+use crate::campaign::{Campaign, GeometryKind};
+use crate::manifest::{self, MANIFEST, Manifest};
+
+/// The training driver, shipped inside the binary so a run records exactly what trained it.
+pub const TRAIN_PY: &str = include_str!("../python/train.py");
+
+/// Where a run's training outputs go, inside the output directory.
+pub const TRAIN_DIR: &str = "train";
+
+/// The Python interpreter with Ultralytics: `--python`, `$SOIG_TRAIN_PYTHON`, `.venv-train`
+/// in the current directory or beside the executable's repository.
+pub fn find_python(explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
+    let mut candidates: Vec<PathBuf> = Vec::new();
+    if let Some(p) = explicit {
+        candidates.push(p.to_path_buf());
+    }
+    if let Some(p) = std::env::var_os("SOIG_TRAIN_PYTHON") {
+        candidates.push(PathBuf::from(p));
+    }
+    candidates.push(PathBuf::from(".venv-train/bin/python3"));
+    candidates.push(Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv-train/bin/python3"));
+    for c in &candidates {
+        let ok = Command::new(c)
+            .args(["-c", "import ultralytics"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+        if ok {
+            return Ok(c.clone());
+        }
+    }
+    bail!(
+        "no Python with Ultralytics found (tried {}): run `bash scripts/setup-train.sh`, or pass --python",
+        candidates
+            .iter()
+            .map(|c| c.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+}
+
+/// Image size and batch of a campaign's training: the paper's (frame width; batch 16, 10 for
+/// the 1472 px rotated frame) unless the campaign sets them.
+pub fn size_and_batch(campaign: &Campaign) -> (u32, u32) {
+    let c = &campaign.resolved;
+    let width = c.sensor.width_px.max(c.sensor.height_px);
+    let frame = match c.enhance.geometry {
+        GeometryKind::Original => width,
+        GeometryKind::Padded => width + 2 * c.enhance.pad_px,
+        GeometryKind::Rotated => {
+            let diag = (c.sensor.width_px as f64).hypot(c.sensor.height_px as f64);
+            ((diag / 32.0).ceil() * 32.0) as u32
+        }
+    };
+    let imgsz = c.train.imgsz.unwrap_or(frame.div_ceil(32) * 32);
+    let batch = c.train.batch.unwrap_or(if imgsz > 1024 { 10 } else { 16 });
+    (imgsz, batch)
+}
+
+/// Train on the dataset in `out` (written first if it is missing or does not verify).
+pub fn train(
+    campaign: &Campaign,
+    out: &Path,
+    python: Option<&Path>,
+    progress: bool,
+) -> anyhow::Result<PathBuf> {
+    let python = find_python(python)?;
+    let reusable = out.join(MANIFEST).is_file()
+        && manifest::verify(out)
+            .is_ok_and(|(m, problems)| problems.is_empty() && m.campaign_hash == campaign.hash);
+    if !reusable {
+        eprintln!("soig train: writing the dataset into {}", out.display());
+        crate::pipeline::run(campaign, out, progress)?;
+    }
+    let data = out.join("data.yaml");
+    if !data.is_file() {
+        bail!(
+            "{} has no data.yaml: the campaign's stages must include `dataset`",
+            out.display()
+        );
+    }
+    let tdir = out.join(TRAIN_DIR);
+    if tdir.exists() {
+        std::fs::remove_dir_all(&tdir)?;
+    }
+    std::fs::create_dir_all(&tdir)?;
+    let script = tdir.join("train.py");
+    std::fs::write(&script, TRAIN_PY)?;
+    let t = &campaign.resolved.train;
+    let (imgsz, batch) = size_and_batch(campaign);
+    let mut args: Vec<String> = vec![
+        script.display().to_string(),
+        "--data".into(),
+        data.display().to_string(),
+        "--out".into(),
+        tdir.join("run").display().to_string(),
+        "--model".into(),
+        t.model.clone(),
+        "--epochs".into(),
+        t.epochs.to_string(),
+        "--batch".into(),
+        batch.to_string(),
+        "--imgsz".into(),
+        imgsz.to_string(),
+        "--optimizer".into(),
+        t.optimizer.clone(),
+        "--device".into(),
+        t.device.clone(),
+        "--seed".into(),
+        t.seed.to_string(),
+        "--workers".into(),
+        t.workers.to_string(),
+        "--patience".into(),
+        t.patience.to_string(),
+    ];
+    if let Some(h) = t.time_hours {
+        args.extend(["--time-hours".into(), h.to_string()]);
+    }
+    let log_path = tdir.join("train.log");
+    let log = std::fs::File::create(&log_path)?;
+    eprintln!(
+        "soig train: {} {} (log: {})",
+        python.display(),
+        args.join(" "),
+        log_path.display()
+    );
+    let status = Command::new(&python)
+        .args(&args)
+        .stdout(log.try_clone()?)
+        .stderr(log)
+        .status()
+        .with_context(|| format!("running {}", python.display()))?;
+    if !status.success() {
+        let text = std::fs::read_to_string(&log_path).unwrap_or_default();
+        let tail: Vec<&str> = text.lines().rev().take(15).collect();
+        bail!(
+            "training failed ({status}); last lines of {}:\n{}",
+            log_path.display(),
+            tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+        );
+    }
+    let summary_path = tdir.join("run/summary.json");
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(&summary_path)
+            .with_context(|| format!("reading {}", summary_path.display()))?,
+    )?;
+    let onnx = summary["onnx"]["path"]
+        .as_str()
+        .map(PathBuf::from)
+        .ok_or_else(|| anyhow::anyhow!("{} names no ONNX model", summary_path.display()))?;
+    let model = tdir.join("model.onnx");
+    std::fs::copy(&onnx, &model).with_context(|| format!("copying {}", onnx.display()))?;
+    // The model is checked by loading it the way the detect stage will.
+    crate::detect::yolo::YoloDetector::load(&model, Default::default())
+        .with_context(|| format!("the exported model {} does not load", model.display()))?;
+
+    // Record the run: the model and script are hashed, the rest of train/ (weights, plots,
+    // logs: not bit-reproducible across machines) is volatile.
+    let mut volatile: Vec<String> = manifest::list_files(out)?
+        .into_iter()
+        .filter(|f| f.starts_with("train/") && f != "train/model.onnx" && f != "train/train.py")
+        .collect();
+    let old = Manifest::read(out).map_err(anyhow::Error::msg)?;
+    volatile.extend(old.volatile.iter().cloned());
+    volatile.sort();
+    volatile.dedup();
+    let mut m = Manifest::build(out, &campaign.hash, old.campaign.clone(), &volatile)?;
+    m.training = Some(serde_json::json!({
+        "model": "train/model.onnx",
+        "model_sha256": manifest::sha256_file(&model)?.0,
+        "ultralytics": summary["ultralytics"],
+        "torch": summary["torch"],
+        "metrics": summary["metrics"],
+        "log": "train/train.log",
+        "summary": "train/run/summary.json",
+    }));
+    m.seal();
+    m.write(out)?;
+    Ok(model)
+}
