@@ -10,15 +10,20 @@
 //!    grey level). The mesh is 3x3 median filtered and interpolated bilinearly between cell
 //!    centres. The noise is floored at `min_noise_sigma`. Residual `q = (I - bg) / sigma`.
 //! 2. **Cross-section matched filter.** `q` is smoothed by a Gaussian of `psf_sigma_px` (the
-//!    streak's cross-section profile) and divided by its robust (MAD) standard deviation, giving
-//!    `z` with unit noise. A copy clipped to `[-clip_sigma, clip_sigma]` limits the weight of
-//!    bright stars in the next step.
+//!    streak's cross-section profile; mirrored edges, with the edge rows and columns rescaled to
+//!    the interior noise) and divided by its robust (MAD) standard deviation, giving `z` with
+//!    unit noise. Survey images (trail direction given): structures along the trail direction
+//!    are subtracted (one-sided means over `trail_filter_px` pixels along it, see
+//!    `remove_trails`). Stars are masked: round local maxima of `z` above `star_mask_sigma`
+//!    (ring test, `star_ring_ratio`) are zeroed out to where they fade into the noise. A copy
+//!    clipped to `[-clip_sigma, clip_sigma]` limits the weight of what remains bright.
 //! 3. **Oriented line filter.** For `n_angles` orientations in [0, 180) and each length in
 //!    `line_lengths_px`, the clipped `z` is summed along a digital straight line of that length
-//!    centred on every pixel (running sums along sheared rows, O(1) per pixel and filter). Each
-//!    sum is divided by its noise standard deviation (computed for white pixel noise smoothed
-//!    by the Gaussian, for the exact number of terms inside the image), so every filter output
-//!    is in sigma. Per pixel the maximum over filters and its orientation are kept.
+//!    centred on every pixel (running sums over rows of the image or of its transpose, O(1) per
+//!    pixel and filter, contiguous memory). Each sum is divided by its noise standard deviation
+//!    (white pixel noise smoothed by the Gaussian, exact for the digital line), so every filter
+//!    output is in sigma; beyond the image counts as zero (conservative near the edges). Per
+//!    pixel the maximum over filters and its orientation are kept.
 //! 4. **Components.** Pixels with response >= `threshold_sigma` are joined by 8-connectivity,
 //!    but only between pixels whose best orientations differ by at most `angle_link_bins`
 //!    steps, so that a streak crossing a star trail splits instead of merging with it.
@@ -26,27 +31,26 @@
 //!    centroid and second moments give an axis and extent.
 //! 5. **Refinement.** Around each component axis the orientation and lateral offset are refined
 //!    by a coarse-to-fine grid search (+-2 filter steps, then finer) maximising `z` clipped at
-//!    4 `clip_sigma` summed along the axis. Then the
-//!    profile `p(t)` along the axis (mean of `z` at lateral offsets -1, 0, 1 px) is read, the
-//!    streak level is the median of `p` in the component's inner part, and each end is the
-//!    change point maximising the cumulative sum of `min(p, 1.5 level) - level / 2` outwards
-//!    (the half-level crossing, robust to noise dips). Measured on the refined segment:
-//!    length between the ends; SNR = median of `p` over the segment times its sample count,
-//!    divided by the noise standard deviation of that sum (white-noise model; the median keeps
-//!    a bright star on the axis from making a streak); flux = sum of background-subtracted grey levels within
-//!    `3 psf_sigma_px` of the segment; elongation = sqrt(l1 / l2) of the second moments of the
-//!    pixels within `3 psf_sigma_px` of the segment weighted by `z` clipped to
-//!    `[0, clip_sigma]` (a streak of length L: about L / (sqrt(12) 2.5); a star: about 1).
+//!    4 `clip_sigma` summed along the axis. Then the profile `p(t)` along the axis (mean of `z`
+//!    at lateral offsets -1, 0, 1 px) is read, the streak level is the median of `p` in the
+//!    component's inner part, and each end is the change point maximising the cumulative sum
+//!    of `min(p, 1.5 level) - level / 2` outwards (the half-level crossing, robust to noise
+//!    dips). Measured on the refined segment: length between the ends; SNR = median of `p`
+//!    over the segment times its sample count, divided by the noise standard deviation of that
+//!    sum (white-noise model; the median keeps a bright star on the axis from making a
+//!    streak); flux = sum of background-subtracted grey levels within `3 psf_sigma_px` of the
+//!    segment; elongation = sqrt(l1 / l2) of the second moments of the pixels within
+//!    `3 psf_sigma_px` of the segment weighted by `z` clipped to `[0, clip_sigma]` (a streak of
+//!    length L: about L / (sqrt(12) 2.5); a star: about 1).
 //! 6. **Rejection and merging.** Fragments aligned with the star-trail direction (when given,
 //!    within `star_trail_tolerance_deg` + atan(4 psf_sigma / length)) or shorter than
-//!    `min_fragment_px` are dropped; collinear
-//!    fragments (angle within `merge_angle_deg`, lateral offsets within `merge_offset_px`, gap
-//!    along the axis within `merge_gap_px`) are merged and re-refined until none merge.
-//!    Candidates need length >= `min_length_px`, elongation >= `min_elongation` and SNR >=
-//!    `min_snr`; the trail test is applied again. Explaining away, best score first: the
-//!    profile samples of a candidate within `duplicate_distance_px` of a better candidate are
-//!    ignored and the rest must still pass the length and SNR tests (drops duplicates and the
-//!    off-axis echoes of bright streaks).
+//!    `min_fragment_px` are dropped; collinear fragments (angle within `merge_angle_deg`,
+//!    lateral offsets within `merge_offset_px`, gap along the axis within `merge_gap_px`) are
+//!    merged and re-refined until none merge. Candidates need length >= `min_length_px`,
+//!    elongation >= `min_elongation` and SNR >= `min_snr`; the trail test is applied again.
+//!    Explaining away, best score first: the profile samples of a candidate within
+//!    `duplicate_distance_px` of a better candidate are ignored and the rest must still pass
+//!    the length and SNR tests (drops duplicates and the off-axis echoes of bright streaks).
 //! 7. **Output.** Score (monotone increasing in SNR and in elongation, in [0, 1)):
 //!    `(1 - exp(-snr / score_snr_scale)) * (1 - exp(-(elongation - 1) / score_elongation_scale))`.
 //!    Box: the refined segment padded by `box_pad_along_sigma * psf_sigma_px` along the axis and
@@ -106,14 +110,15 @@ pub struct StreakParams {
     pub min_length_px: f64,
     /// Minimum elongation sqrt(l1 / l2) (default 2.5; a round star is about 1).
     pub min_elongation: f64,
-    /// Minimum SNR of the whole streak (default 6.0).
+    /// Minimum SNR of the whole streak (default 6.5).
     pub min_snr: f64,
     /// Candidates within this angle of the star-trail direction, plus atan(4 psf_sigma / length)
     /// for the orientation uncertainty of short ones, are stars (default 5.0 deg).
     pub star_trail_tolerance_deg: f64,
-    /// Survey images: each pixel loses the larger of its two one-sided means over this many
-    /// pixels along the star-trail direction (rounded up to odd), removing trails longer than
-    /// it before line filtering (default 31; 0 = off).
+    /// Survey images: before line filtering each pixel loses the mean along the star-trail
+    /// direction over this many pixels (rounded up to odd) just before or just after it (the
+    /// larger where significant, else their average), which removes trails longer than about
+    /// twice this (default 31; 0 = off).
     pub trail_filter_px: usize,
     /// Fragments merge if their orientations differ by at most this (default 5.0 deg) ...
     pub merge_angle_deg: f64,
@@ -158,7 +163,7 @@ impl Default for StreakParams {
             min_fragment_px: 8.0,
             min_length_px: 20.0,
             min_elongation: 2.5,
-            min_snr: 6.0,
+            min_snr: 6.5,
             star_trail_tolerance_deg: 5.0,
             trail_filter_px: 31,
             merge_angle_deg: 5.0,
@@ -227,6 +232,7 @@ pub fn detect_streaks(
     let kernel = gaussian_kernel(p.psf_sigma);
     let mut z = smooth(&q, w, h, &kernel);
     drop(q);
+    equalise_edge_noise(&mut z, w, h, &kernel);
     let kappa_white: f64 = kernel.iter().map(|&k| (k as f64) * (k as f64)).sum();
     let kappa = robust_sigma(&z, w, h).max(0.5 * kappa_white);
     let inv_kappa = (1.0 / kappa) as f32;
@@ -308,14 +314,14 @@ pub fn detect_streaks(
     // bright streaks).
     let mut kept: Vec<(Seg, f64)> = Vec::new();
     for (s, sc) in cands {
-        let others: Vec<((f64, f64), (f64, f64))> = kept.iter().map(|(k, _)| k.ends()).collect();
+        if kept.len() >= p.max_candidates {
+            break;
+        }
+        let others: Vec<(Point, Point)> = kept.iter().map(|(k, _)| k.ends()).collect();
         if !others.is_empty() && !ctx.survives(&s, &others) {
             continue;
         }
         kept.push((s, sc));
-        if kept.len() >= p.max_candidates {
-            break;
-        }
     }
     kept.into_iter()
         .map(|(s, sc)| ctx.candidate(&s, sc))
@@ -385,7 +391,7 @@ impl Sanitized {
             min_fragment: fin(p.min_fragment_px, 8.0),
             min_length: fin(p.min_length_px, 20.0),
             min_elongation: fin(p.min_elongation, 2.5),
-            min_snr: fin(p.min_snr, 6.0),
+            min_snr: fin(p.min_snr, 6.5),
             trail_tol: fin(p.star_trail_tolerance_deg, 5.0).abs(),
             trail_half: p.trail_filter_px.min(4001) / 2,
             merge_angle: fin(p.merge_angle_deg, 5.0).abs(),
@@ -645,24 +651,28 @@ fn reflect(i: isize, n: usize) -> usize {
 #[inline(never)]
 fn smooth(src: &[f32], w: usize, h: usize, k: &[f32]) -> Vec<f32> {
     let r = (k.len() / 2) as isize;
+    let ru = r as usize;
     let mut tmp = vec![0f32; w * h];
     for y in 0..h {
         let row = &src[y * w..(y + 1) * w];
         let out = &mut tmp[y * w..(y + 1) * w];
-        for (x, o) in out.iter_mut().enumerate() {
-            let xi = x as isize;
-            let mut acc = 0f32;
-            if xi >= r && xi + r < w as isize {
-                let base = (xi - r) as usize;
-                for (kk, &kv) in k.iter().enumerate() {
-                    acc += kv * row[base + kk];
-                }
-            } else {
-                for (kk, &kv) in k.iter().enumerate() {
-                    acc += kv * row[reflect(xi + kk as isize - r, w)];
+        // Interior: one shifted slice per tap (vectorised).
+        if w > 2 * ru {
+            let n = w - 2 * ru;
+            for (kk, &kv) in k.iter().enumerate() {
+                for (o, &v) in out[ru..ru + n].iter_mut().zip(&row[kk..kk + n]) {
+                    *o += kv * v;
                 }
             }
-            *o = acc;
+        }
+        // Edges: mirrored.
+        for x in (0..ru.min(w)).chain(w.saturating_sub(ru).max(ru.min(w))..w) {
+            let xi = x as isize;
+            out[x] = k
+                .iter()
+                .enumerate()
+                .map(|(kk, &kv)| kv * row[reflect(xi + kk as isize - r, w)])
+                .sum();
         }
     }
     let mut out = vec![0f32; w * h];
@@ -693,6 +703,33 @@ fn robust_median(v: &[f32], w: usize, h: usize) -> f64 {
     }
     let mid = s.len() / 2;
     *s.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1 as f64
+}
+
+/// Near the edges the mirrored smoothing counts some pixels twice, which raises the noise (up
+/// to about 1.4 times on the edge row for sigma 1.5) and would make lines along the edges.
+/// Divide by the exact noise ratio of the folded kernel, per row and per column.
+#[inline(never)]
+fn equalise_edge_noise(z: &mut [f32], w: usize, h: usize, k: &[f32]) {
+    let ratio = |n: usize| -> Vec<f32> {
+        let r = (k.len() / 2) as isize;
+        let base: f64 = k.iter().map(|&v| (v as f64).powi(2)).sum();
+        (0..n)
+            .map(|i| {
+                let mut folded = vec![0f64; n];
+                for (kk, &kv) in k.iter().enumerate() {
+                    folded[reflect(i as isize + kk as isize - r, n)] += kv as f64;
+                }
+                let var: f64 = folded.iter().map(|v| v * v).sum();
+                (base / var).sqrt() as f32
+            })
+            .collect()
+    };
+    let (fx, fy) = (ratio(w), ratio(h));
+    for (y, row) in z.chunks_mut(w).enumerate() {
+        for (v, &f) in row.iter_mut().zip(&fx) {
+            *v *= f * fy[y];
+        }
+    }
 }
 
 /// Robust (1.4826 MAD) standard deviation of a map, from a regular subsample.
@@ -726,9 +763,6 @@ fn corr(d2: f64, psf_sigma: f64) -> f64 {
 /// and is kept. The disk zeroed reaches z = 1 of the smoothed star profile, plus 1 px.
 #[inline(never)]
 fn mask_stars(z: &mut [f32], w: usize, h: usize, p: &Sanitized) -> usize {
-    if w < 3 || h < 3 {
-        return 0;
-    }
     let thr = p.star_z as f32;
     let se = std::f64::consts::SQRT_2 * p.psf_sigma;
     let ring_r = 2.0 * se;
@@ -740,25 +774,48 @@ fn mask_stars(z: &mut [f32], w: usize, h: usize, p: &Sanitized) -> usize {
         })
         .collect();
     let mut stars = Vec::new();
-    for y in 1..h - 1 {
-        for x in 1..w - 1 {
+    let (wi, hi) = (w as isize, h as isize);
+    for y in 0..h {
+        for x in 0..w {
             let i = y * w + x;
             let v = z[i];
-            if !(v >= thr) {
+            if v.is_nan() || v < thr {
                 continue;
             }
-            // Local maximum; ties go to the first pixel in raster order.
-            let earlier = [i - w - 1, i - w, i - w + 1, i - 1];
-            let later = [i + 1, i + w - 1, i + w, i + w + 1];
-            if earlier.iter().any(|&j| z[j] >= v) || later.iter().any(|&j| z[j] > v) {
+            // Local maximum (neighbours inside the image); ties go to the first pixel in raster
+            // order.
+            let mut is_max = true;
+            'nb: for dy in -1isize..=1 {
+                for dx in -1isize..=1 {
+                    let (xx, yy) = (x as isize + dx, y as isize + dy);
+                    if (dx == 0 && dy == 0) || xx < 0 || yy < 0 || xx >= wi || yy >= hi {
+                        continue;
+                    }
+                    let nv = z[yy as usize * w + xx as usize];
+                    let earlier = dy < 0 || (dy == 0 && dx < 0);
+                    if nv > v || (earlier && nv >= v) {
+                        is_max = false;
+                        break 'nb;
+                    }
+                }
+            }
+            if !is_max {
                 continue;
             }
+            // Ring points outside the image are left out (a star cut by the edge is still a
+            // star); at least half of the ring must be inside.
             let (xf, yf) = (x as f64, y as f64);
-            let ring_max = ring
-                .iter()
-                .map(|&(dx, dy)| bilinear(z, w, h, xf + dx, yf + dy))
-                .fold(f64::NEG_INFINITY, f64::max);
-            if ring_max < p.star_ring_ratio * v as f64 {
+            let mut ring_max = f64::NEG_INFINITY;
+            let mut inside = 0;
+            for &(dx, dy) in &ring {
+                let (px, py) = (xf + dx, yf + dy);
+                if px < 0.0 || py < 0.0 || px > (w - 1) as f64 || py > (h - 1) as f64 {
+                    continue;
+                }
+                inside += 1;
+                ring_max = ring_max.max(bilinear(z, w, h, px, py));
+            }
+            if inside * 2 >= NR && ring_max < p.star_ring_ratio * v as f64 {
                 stars.push((x, y, v as f64));
             }
         }
@@ -1229,6 +1286,9 @@ struct Seed {
     ext: f64,
 }
 
+/// A point (x, y) in pixel-centre coordinates.
+type Point = (f64, f64);
+
 /// A refined segment: centre, orientation (rad), length and measurements.
 #[derive(Clone, Copy, Debug)]
 struct Seg {
@@ -1413,7 +1473,7 @@ impl Ctx<'_> {
     /// Whether the profile samples of `s` farther than `duplicate_distance_px` from all `others`
     /// still make `min_length_px` samples and `min_snr` (median level times count over the
     /// noise sd of that many samples).
-    fn survives(&self, s: &Seg, others: &[((f64, f64), (f64, f64))]) -> bool {
+    fn survives(&self, s: &Seg, others: &[(Point, Point)]) -> bool {
         let (ux, uy) = s.dir();
         let (nx, ny) = (-uy, ux);
         let hl = 0.5 * s.length;
@@ -1748,7 +1808,6 @@ mod tests {
     struct Truth {
         boxx: [f64; 4],
         angle_deg: f64,
-        length: f64,
     }
 
     /// A 1024 x 1024 fixed-pointing image: stars, and one streak of `amp_sigma` noise sigmas
@@ -1789,7 +1848,6 @@ mod tests {
             truth = Some(Truth {
                 boxx: truth_box(&s, w, h),
                 angle_deg: th.to_degrees(),
-                length: len,
             });
             img.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
         }
@@ -1840,7 +1898,6 @@ mod tests {
             truth = Some(Truth {
                 boxx: truth_box(&s, w, h),
                 angle_deg: th.to_degrees().rem_euclid(180.0),
-                length: len,
             });
             img.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
         }
@@ -1859,14 +1916,20 @@ mod tests {
         fp_scores: Vec<f64>,
     }
 
+    impl BinStats {
+        fn rate(&self) -> f64 {
+            self.detected as f64 / self.images.max(1) as f64
+        }
+        fn fp_per_image(&self) -> f64 {
+            self.false_pos as f64 / self.images.max(1) as f64
+        }
+        fn iou_at_least(&self, v: f64) -> f64 {
+            self.ious.iter().filter(|&&x| x >= v).count() as f64 / self.ious.len().max(1) as f64
+        }
+    }
+
     fn test_params() -> StreakParams {
         let mut p = StreakParams::default();
-        if let Some(v) = std::env::var("STREAK_TRAIL_PX")
-            .ok()
-            .and_then(|v| v.parse().ok())
-        {
-            p.trail_filter_px = v;
-        }
         if let Some(v) = std::env::var("STREAK_MIN_SNR")
             .ok()
             .and_then(|v| v.parse().ok())
@@ -1876,10 +1939,11 @@ mod tests {
         p
     }
 
+    /// Runs the detector and scores it against the truth: a match is the first candidate with
+    /// IoU >= 0.5; a candidate with IoU < 0.1 is a false positive.
     fn evaluate(
         pix: &[u8],
-        w: usize,
-        h: usize,
+        (w, h): (usize, usize),
         truth: Option<&Truth>,
         trail: Option<f64>,
         st: &mut BinStats,
@@ -1905,28 +1969,11 @@ mod tests {
         c
     }
 
-    fn run_bin(amp: f64, n: usize, seed0: u64) -> BinStats {
-        run_bin_len(amp, n, seed0, 40.0..600.0)
-    }
-
-    fn run_bin_len(amp: f64, n: usize, seed0: u64, lens: std::ops::Range<f64>) -> BinStats {
+    fn run_bin(amp: f64, n: usize, seed0: u64, lens: std::ops::Range<f64>) -> BinStats {
         let mut st = BinStats::default();
         for k in 0..n {
             let (pix, truth) = fixed_image_len(seed0 + k as u64, amp, lens.clone());
-            let c = evaluate(&pix, 1024, 1024, truth.as_ref(), None, &mut st);
-            if std::env::var("STREAK_DEBUG").is_ok() {
-                let t = truth.as_ref().unwrap();
-                println!(
-                    "amp {amp} seed {} len {:.0} ang {:.1} truth {:?}",
-                    seed0 + k as u64,
-                    t.length,
-                    t.angle_deg,
-                    t.boxx
-                );
-                for cand in &c {
-                    println!("   {:?} iou {:.2}", cand, iou(&t.boxx, &cand.detection));
-                }
-            }
+            evaluate(&pix, (1024, 1024), truth.as_ref(), None, &mut st);
         }
         st
     }
@@ -1940,14 +1987,282 @@ mod tests {
         s[((s.len() - 1) as f64 * q).round() as usize]
     }
 
+    fn check_boxes(c: &[Candidate], w: usize, h: usize) {
+        for cand in c {
+            let d = &cand.detection;
+            assert!(0.0 <= d.x1 && d.x1 < d.x2 && d.x2 <= w as f64, "{d:?}");
+            assert!(0.0 <= d.y1 && d.y1 < d.y2 && d.y2 <= h as f64, "{d:?}");
+            assert!((0.0..1.0).contains(&d.score), "{d:?}");
+            assert!((0.0..180.0).contains(&cand.orientation_deg), "{cand:?}");
+            assert!(
+                cand.length_px >= StreakParams::default().min_length_px,
+                "{cand:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn detects_streaks_of_two_sigma_and_more() {
+        let mut all = BinStats::default();
+        for (i, amp) in [2.0, 3.0].into_iter().enumerate() {
+            let st = run_bin(amp, 12, 100 + 100 * i as u64, 40.0..600.0);
+            println!(
+                "amp {amp}: rate {:.2}, fp/img {:.2}, IoU p10 {:.2}, angle error p90 {:.2} deg",
+                st.rate(),
+                st.fp_per_image(),
+                quantile(&st.ious, 0.1),
+                quantile(&st.angle_err, 0.9)
+            );
+            all.images += st.images;
+            all.detected += st.detected;
+            all.false_pos += st.false_pos;
+            all.ious.extend(st.ious);
+            all.angle_err.extend(st.angle_err);
+        }
+        assert!(all.rate() >= 0.95, "{all:?}");
+        assert!(all.iou_at_least(0.7) >= 0.9, "{all:?}");
+        assert!(quantile(&all.angle_err, 0.5) < 1.0, "{all:?}");
+        assert!(all.fp_per_image() <= 0.25, "{all:?}");
+    }
+
+    #[test]
+    fn detects_most_one_sigma_streaks() {
+        let st = run_bin(1.0, 10, 300, 40.0..600.0);
+        println!("amp 1: {st:?}");
+        assert!(st.rate() >= 0.8, "{st:?}");
+    }
+
+    #[test]
+    fn few_false_positives_on_star_fields() {
+        let mut st = BinStats::default();
+        for k in 0..12 {
+            let (pix, _) = fixed_image(900 + k, 0.0);
+            let c = evaluate(&pix, (1024, 1024), None, None, &mut st);
+            check_boxes(&c, 1024, 1024);
+        }
+        println!("star fields: {st:?}");
+        assert!(st.false_pos <= 2, "{st:?}");
+        assert!(st.fp_scores.iter().all(|&s| s < 0.5), "{st:?}");
+    }
+
+    #[test]
+    fn streak_crossing_the_border() {
+        let (w, h) = (1024usize, 1024usize);
+        // Start inside, run 250 px out through each edge and a corner.
+        let cases = [
+            (100.0, 500.0, 200.0f64),
+            (900.0, 400.0, 20.0),
+            (500.0, 120.0, 250.0),
+            (300.0, 900.0, 80.0),
+            (880.0, 880.0, 45.0),
+        ];
+        for (k, &(x0, y0, deg)) in cases.iter().enumerate() {
+            let mut rng = ChaCha8Rng::seed_from_u64(50 + k as u64);
+            let mut img = vec![0.0; w * h];
+            add_stars(&mut img, w, h, 150, &mut rng);
+            let th = deg.to_radians();
+            let (x1, y1) = (x0 + 250.0 * th.cos(), y0 + 250.0 * th.sin());
+            let mut s = vec![0.0; w * h];
+            add_segment(&mut s, w, h, x0, y0, x1, y1, 2.0 * NOISE);
+            let truth = truth_box(&s, w, h);
+            img.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+            let pix = quantise(&img, &mut rng);
+            let c = detect_streaks(&pix, w, h, &StreakParams::default(), None);
+            check_boxes(&c, w, h);
+            let best = c
+                .iter()
+                .map(|c| (iou(&truth, &c.detection), c))
+                .max_by(|a, b| a.0.total_cmp(&b.0))
+                .unwrap_or_else(|| panic!("case {k}: nothing found"));
+            println!("case {k}: truth {truth:?} IoU {:.2} {:?}", best.0, best.1);
+            assert!(best.0 >= 0.7, "case {k}: {best:?}");
+            let d = &best.1.detection;
+            let touches =
+                d.x1 <= 1.0 || d.y1 <= 1.0 || d.x2 >= w as f64 - 1.0 || d.y2 >= h as f64 - 1.0;
+            assert!(touches, "case {k}: the box should reach the edge: {d:?}");
+        }
+    }
+
+    #[test]
+    fn survey_trails_rejected_and_debris_found() {
+        let mut st = BinStats::default();
+        for (k, trail) in [0.0, 30.0, 77.0, 135.0].into_iter().enumerate() {
+            let (pix, truth) = survey_image(700 + k as u64, 1472, 2.0, trail);
+            let c = evaluate(&pix, (1472, 1472), truth.as_ref(), Some(trail), &mut st);
+            check_boxes(&c, 1472, 1472);
+            let tol = StreakParams::default().star_trail_tolerance_deg;
+            for cand in &c {
+                assert!(
+                    angle_diff_deg(cand.orientation_deg, trail) > tol,
+                    "{cand:?}"
+                );
+            }
+        }
+        println!("survey: {st:?}");
+        assert_eq!(st.detected, 4, "{st:?}");
+        assert!(st.iou_at_least(0.7) >= 0.75, "{st:?}");
+        assert!(st.false_pos <= 1, "{st:?}");
+        // Without the trail direction the trails themselves come out as streaks.
+        let (pix, _) = survey_image(700, 1472, 2.0, 0.0);
+        let c = detect_streaks(&pix, 1472, 1472, &StreakParams::default(), None);
+        let trails = c
+            .iter()
+            .filter(|c| angle_diff_deg(c.orientation_deg, 0.0) < 3.0)
+            .count();
+        assert!(trails >= 3, "{c:?}");
+    }
+
+    #[test]
+    fn constant_and_empty_images() {
+        let p = StreakParams::default();
+        for v in [0u8, 100, 255] {
+            assert!(detect_streaks(&vec![v; 1024 * 1024], 1024, 1024, &p, None).is_empty());
+            assert!(detect_streaks(&vec![v; 300 * 200], 300, 200, &p, Some(10.0)).is_empty());
+        }
+        assert!(detect_streaks(&[], 0, 0, &p, None).is_empty());
+        assert!(detect_streaks(&[], 0, 7, &p, None).is_empty());
+        assert!(detect_streaks(&[9; 7], 7, 1, &p, None).is_empty());
+        // Noise-free: a lone streak on a flat background is still found.
+        let (w, h) = (400, 300);
+        let mut s = vec![0.0; w * h];
+        add_segment(&mut s, w, h, 50.0, 60.0, 300.0, 200.0, 40.0);
+        let pix: Vec<u8> = s.iter().map(|v| (BG + v).round() as u8).collect();
+        let c = detect_streaks(&pix, w, h, &p, None);
+        assert_eq!(c.len(), 1, "{c:?}");
+        assert!(iou(&truth_box(&s, w, h), &c[0].detection) >= 0.8, "{c:?}");
+    }
+
+    #[test]
+    #[should_panic(expected = "width * height")]
+    fn wrong_buffer_size_panics() {
+        detect_streaks(&[0; 10], 4, 4, &StreakParams::default(), None);
+    }
+
+    #[test]
+    fn tiny_images() {
+        let p = StreakParams::default();
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for (w, h) in [(1, 1), (2, 2), (3, 7), (16, 16), (40, 30), (63, 5)] {
+            let img = vec![0.0; w * h];
+            let pix = quantise(&img, &mut rng);
+            let c = detect_streaks(&pix, w, h, &p, None);
+            check_boxes(&c, w, h);
+            assert!(c.is_empty(), "{w}x{h}: {c:?}");
+        }
+        // Smaller than one mesh cell, with a bright streak.
+        let (w, h) = (60, 48);
+        let mut s = vec![0.0; w * h];
+        add_segment(&mut s, w, h, 8.0, 20.0, 50.0, 30.0, 4.0 * NOISE);
+        let pix = quantise(&s, &mut rng);
+        let c = detect_streaks(&pix, w, h, &p, None);
+        check_boxes(&c, w, h);
+        assert_eq!(c.len(), 1, "{c:?}");
+        assert!(iou(&truth_box(&s, w, h), &c[0].detection) >= 0.7, "{c:?}");
+    }
+
+    #[test]
+    fn non_square_image_and_odd_params() {
+        let (w, h) = (700usize, 400usize);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut img = vec![0.0; w * h];
+        add_stars(&mut img, w, h, 80, &mut rng);
+        let mut s = vec![0.0; w * h];
+        add_segment(&mut s, w, h, 100.0, 300.0, 500.0, 120.0, 2.0 * NOISE);
+        let truth = truth_box(&s, w, h);
+        img.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+        let pix = quantise(&img, &mut rng);
+        let c = detect_streaks(&pix, w, h, &StreakParams::default(), None);
+        check_boxes(&c, w, h);
+        assert_eq!(c.len(), 1, "{c:?}");
+        assert!(iou(&truth, &c[0].detection) >= 0.8, "{c:?}");
+        let deg = (-180.0f64).atan2(400.0).to_degrees().rem_euclid(180.0);
+        assert!(angle_diff_deg(c[0].orientation_deg, deg) < 1.0, "{c:?}");
+        // Degenerate knobs are tolerated.
+        let odd = StreakParams {
+            n_angles: 0,
+            line_lengths_px: vec![],
+            mesh_size: 0,
+            psf_sigma_px: f64::NAN,
+            max_candidates: 0,
+            ..StreakParams::default()
+        };
+        assert!(detect_streaks(&pix, w, h, &odd, Some(f64::NAN)).is_empty());
+        let one = StreakParams {
+            max_candidates: 1,
+            ..StreakParams::default()
+        };
+        assert_eq!(detect_streaks(&pix, w, h, &one, None).len(), 1);
+    }
+
+    #[test]
+    fn deterministic() {
+        let (pix, _) = fixed_image(4242, 1.5);
+        let p = StreakParams::default();
+        let a = detect_streaks(&pix, 1024, 1024, &p, None);
+        let b = detect_streaks(&pix, 1024, 1024, &p, None);
+        assert!(!a.is_empty());
+        assert_eq!(a, b);
+        let (pix, _) = survey_image(4243, 1024, 1.5, 30.0);
+        let a = detect_streaks(&pix, 1024, 1024, &p, Some(30.0));
+        let b = detect_streaks(&pix, 1024, 1024, &p, Some(30.0));
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn score_is_monotone_and_bounded() {
+        let p = Sanitized::new(&StreakParams::default());
+        let mut prev = -1.0;
+        for i in 0..200 {
+            let snr = i as f64 * 0.5;
+            let s = score(snr, 8.0, &p);
+            assert!((0.0..1.0).contains(&s) && s >= prev);
+            prev = s;
+        }
+        let mut prev = -1.0;
+        for i in 0..200 {
+            let s = score(12.0, 1.0 + i as f64 * 0.25, &p);
+            assert!((0.0..1.0).contains(&s) && s >= prev);
+            prev = s;
+        }
+        assert_eq!(score(0.0, 10.0, &p), 0.0);
+        assert_eq!(score(10.0, 1.0, &p), 0.0);
+    }
+
+    #[test]
+    fn side_means_remove_a_full_trail() {
+        let (rows, m, hk) = (200, 3, 20);
+        let mut src = vec![0f32; rows * m];
+        for i in 0..rows {
+            src[i * m + 1] = 50.0;
+        }
+        subtract_side_means(&mut src, rows, m, 0.0, hk, 1.5);
+        let col: Vec<f32> = (0..rows).map(|i| src[i * m + 1]).collect();
+        assert!(col.iter().all(|v| v.abs() < 1e-3), "{col:?}");
+        // A finite diagonal trail (slope -1) in a 120 x 120 map.
+        let (rows, m) = (120, 120);
+        let mut src = vec![0f32; rows * m];
+        for i in 20..100 {
+            src[i * m + (110 - i)] = 50.0;
+        }
+        subtract_side_means(&mut src, rows, m, -1.0, hk, 1.5);
+        let on: Vec<f32> = (20..100).map(|i| src[i * m + (110 - i)]).collect();
+        // Removed wherever a full window fits on one side (trail of 80 px, windows of 41).
+        assert!(on.iter().all(|v| v.abs() < 2.0), "{on:?}");
+        assert!(
+            on[..38].iter().chain(&on[42..]).all(|v| v.abs() < 1e-3),
+            "{on:?}"
+        );
+    }
+
+    /// The figures of the report: `cargo test --release --lib report -- --ignored --nocapture`
+    /// (`STREAK_N` images per bin, default 40; `STREAK_LEN=lo,hi` streak lengths).
     #[test]
     #[ignore]
     fn report_detection_rate() {
         let n: usize = std::env::var("STREAK_N")
             .ok()
             .and_then(|v| v.parse().ok())
-            .unwrap_or(20);
-        println!("amp_sigma  rate  fp/img  iou_p10  iou_med  ang_err_p90  rate@0.5");
+            .unwrap_or(40);
         let (lo, hi): (f64, f64) = match std::env::var("STREAK_LEN") {
             Ok(v) => {
                 let mut it = v.split(',').map(|x| x.parse().unwrap());
@@ -1955,27 +2270,29 @@ mod tests {
             }
             Err(_) => (40.0, 600.0),
         };
-        println!("streak lengths {lo}..{hi} px, {n} images per bin");
+        println!("fixed pointing 1024 px, streak lengths {lo}..{hi} px, {n} images per bin");
+        println!("amp/sigma  rate  rate@score0.5  fp/img  IoU>=0.7  IoU_p10  IoU_med  ang_err_p90");
         for (i, &amp) in [0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 5.0].iter().enumerate() {
-            let st = run_bin_len(amp, n, 1000 * (i as u64 + 1), lo..hi);
+            let st = run_bin(amp, n, 1000 * (i as u64 + 1), lo..hi);
             println!(
-                "{amp:9.2} {:5.2} {:7.2} {:8.2} {:8.2} {:10.2} {:9.2}",
-                st.detected as f64 / st.images as f64,
-                st.false_pos as f64 / st.images as f64,
+                "{amp:9.2} {:5.2} {:14.2} {:7.2} {:9.2} {:8.2} {:8.2} {:12.2}",
+                st.rate(),
+                st.tp_scores.iter().filter(|&&s| s >= 0.5).count() as f64 / st.images as f64,
+                st.fp_per_image(),
+                st.iou_at_least(0.7),
                 quantile(&st.ious, 0.1),
                 quantile(&st.ious, 0.5),
                 quantile(&st.angle_err, 0.9),
-                st.tp_scores.iter().filter(|&&s| s >= 0.5).count() as f64 / st.images as f64,
             );
         }
         let mut st = BinStats::default();
         for k in 0..n {
             let (pix, _) = fixed_image(90_000 + k as u64, 0.0);
-            evaluate(&pix, 1024, 1024, None, None, &mut st);
+            evaluate(&pix, (1024, 1024), None, None, &mut st);
         }
         println!(
-            "star-only: fp/img {:.2} (score>=0.5: {:.2})",
-            st.false_pos as f64 / st.images as f64,
+            "star-only: fp/img {:.3} (score >= 0.5: {:.3})",
+            st.fp_per_image(),
             st.fp_scores.iter().filter(|&&s| s >= 0.5).count() as f64 / st.images as f64
         );
         for &amp in &[1.0, 2.0, 3.0] {
@@ -1983,48 +2300,16 @@ mod tests {
             for k in 0..n {
                 let trail = [0.0, 30.0, 77.0, 135.0][k % 4];
                 let (pix, truth) = survey_image(70_000 + k as u64, 1472, amp, trail);
-                if std::env::var("STREAK_DUMP").is_ok() && k == 0 {
-                    let mut f = "P5\n1472 1472\n255\n".to_string().into_bytes();
-                    f.extend_from_slice(&pix);
-                    std::fs::write("/tmp/sk/survey0.pgm", f).unwrap();
-                }
-                let c = evaluate(&pix, 1472, 1472, truth.as_ref(), Some(trail), &mut st);
-                if std::env::var("STREAK_DEBUG").is_ok() {
-                    let t = truth.as_ref().unwrap();
-                    println!(
-                        "survey {k} trail {trail} len {:.0} ang {:.1} truth {:?}",
-                        t.length, t.angle_deg, t.boxx
-                    );
-                    for cand in &c {
-                        println!("   {:?} iou {:.2}", cand, iou(&t.boxx, &cand.detection));
-                    }
-                }
+                evaluate(&pix, (1472, 1472), truth.as_ref(), Some(trail), &mut st);
             }
             println!(
-                "survey amp {amp}: rate {:.2} fp/img {:.2} iou_p10 {:.2}; score>=0.5: rate {:.2} fp/img {:.2}",
-                st.detected as f64 / st.images as f64,
-                st.false_pos as f64 / st.images as f64,
+                "survey 1472 px amp {amp}: rate {:.2} fp/img {:.3} IoU>=0.7 {:.2} IoU_p10 {:.2}",
+                st.rate(),
+                st.fp_per_image(),
+                st.iou_at_least(0.7),
                 quantile(&st.ious, 0.1),
-                st.tp_scores.iter().filter(|&&s| s >= 0.5).count() as f64 / st.images as f64,
-                st.fp_scores.iter().filter(|&&s| s >= 0.5).count() as f64 / st.images as f64,
             );
         }
-    }
-
-    #[test]
-    #[ignore]
-    fn debug_bin() {
-        let amp: f64 = std::env::var("STREAK_AMP").unwrap().parse().unwrap();
-        let seed: u64 = std::env::var("STREAK_SEED").unwrap().parse().unwrap();
-        let n: usize = std::env::var("STREAK_N")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(1);
-        let (pix, _) = fixed_image(seed, amp);
-        let mut f = format!("P5\n1024 1024\n255\n").into_bytes();
-        f.extend_from_slice(&pix);
-        std::fs::write("/tmp/sk/dbg.pgm", f).unwrap();
-        run_bin(amp, n, seed);
     }
 
     /// CPU time of this thread, seconds (Linux; 10 ms ticks), for timings on a busy machine.
@@ -2067,123 +2352,6 @@ mod tests {
                 t0.elapsed().as_secs_f64() / n * 1e3,
                 (thread_cpu_s() - c0) / n * 1e3
             );
-        }
-    }
-
-    #[test]
-    fn side_means_remove_a_full_trail() {
-        let (rows, m, hk) = (200, 3, 20);
-        let mut src = vec![0f32; rows * m];
-        for i in 0..rows {
-            src[i * m + 1] = 50.0;
-        }
-        subtract_side_means(&mut src, rows, m, 0.0, hk, 1.5);
-        let col: Vec<f32> = (0..rows).map(|i| src[i * m + 1]).collect();
-        assert!(col.iter().all(|v| v.abs() < 1e-3), "{col:?}");
-        // A finite diagonal trail (slope -1) in a 120 x 120 map.
-        let (rows, m) = (120, 120);
-        let mut src = vec![0f32; rows * m];
-        for i in 20..100 {
-            src[i * m + (110 - i)] = 50.0;
-        }
-        subtract_side_means(&mut src, rows, m, -1.0, hk, 1.5);
-        let on: Vec<f32> = (20..100).map(|i| src[i * m + (110 - i)]).collect();
-        // Removed wherever a full window fits on one side (trail of 80 px, windows of 41).
-        assert!(on.iter().all(|v| v.abs() < 2.0), "{on:?}");
-        assert!(
-            on[..38].iter().chain(&on[42..]).all(|v| v.abs() < 1e-3),
-            "{on:?}"
-        );
-    }
-
-    #[test]
-    #[ignore]
-    fn debug_two_trails() {
-        let (w, h) = (200, 200);
-        let mut img = vec![0.0; w * h];
-        let d = std::f64::consts::FRAC_1_SQRT_2;
-        add_segment(
-            &mut img,
-            w,
-            h,
-            30.0,
-            170.0,
-            30.0 + 80.0 * d,
-            170.0 - 80.0 * d,
-            20.0,
-        );
-        if std::env::var("TWO").is_ok() {
-            add_segment(
-                &mut img,
-                w,
-                h,
-                100.0,
-                130.0,
-                100.0 + 80.0 * d,
-                130.0 - 80.0 * d,
-                20.0,
-            );
-        }
-        let mut z: Vec<f32> = img.iter().map(|&v| v as f32).collect();
-        let p = Sanitized::new(&StreakParams::default());
-        remove_trails(&mut z, w, h, 135f64.to_radians(), &p);
-        let (mut bi, mut bv) = (0, f32::MIN);
-        for (i, &v) in z.iter().enumerate() {
-            if v > bv {
-                bv = v;
-                bi = i;
-            }
-        }
-        println!("max residual {bv} at ({}, {})", bi % w, bi / w);
-        let mut f = format!("P5\n{w} {h}\n255\n").into_bytes();
-        f.extend(z.iter().map(|&v| (128.0 + 6.0 * v).clamp(0.0, 255.0) as u8));
-        std::fs::write("/tmp/sk/two.pgm", f).unwrap();
-    }
-
-    #[test]
-    #[ignore]
-    fn debug_dump_z() {
-        let k: u64 = std::env::var("STREAK_K").unwrap().parse().unwrap();
-        let trail = [0.0, 30.0, 77.0, 135.0][k as usize % 4];
-        let (pix, _) = survey_image(70_000 + k, 1472, 1.0, trail);
-        let (w, h) = (1472, 1472);
-        let p = Sanitized::new(&StreakParams::default());
-        let (bg, sigma) = background(&pix, w, h, &p);
-        let q: Vec<f32> = pix
-            .iter()
-            .zip(bg.iter().zip(&sigma))
-            .map(|(&v, (&b, &s))| (v as f32 - b) / s)
-            .collect();
-        let kernel = gaussian_kernel(p.psf_sigma);
-        let mut z = smooth(&q, w, h, &kernel);
-        let kappa = robust_sigma(&z, w, h);
-        z.iter_mut().for_each(|v| *v /= kappa as f32);
-        let dump = |z: &[f32], name: &str| {
-            let mut f = format!("P5\n{w} {h}\n255\n").into_bytes();
-            f.extend(
-                z.iter()
-                    .map(|&v| (128.0 + 16.0 * v).clamp(0.0, 255.0) as u8),
-            );
-            std::fs::write(name, f).unwrap();
-        };
-        dump(&z, "/tmp/sk/z.pgm");
-        remove_trails(&mut z, w, h, trail.to_radians(), &p);
-        dump(&z, "/tmp/sk/zt.pgm");
-        let mut f = format!("P5\n{w} {h}\n255\n").into_bytes();
-        f.extend_from_slice(&pix);
-        std::fs::write("/tmp/sk/pix.pgm", f).unwrap();
-    }
-
-    #[test]
-    #[ignore]
-    fn debug_star_only() {
-        let (pix, _) = fixed_image(90_000, 0.0);
-        let mut f = format!("P5\n1024 1024\n255\n").into_bytes();
-        f.extend_from_slice(&pix);
-        std::fs::write("/tmp/sk/star0.pgm", f).unwrap();
-        let c = detect_streaks(&pix, 1024, 1024, &StreakParams::default(), None);
-        for cand in &c {
-            println!("{:?}", cand);
         }
     }
 }
