@@ -167,11 +167,15 @@ pub fn train(
     crate::detect::yolo::YoloDetector::load(&model, Default::default())
         .with_context(|| format!("the exported model {} does not load", model.display()))?;
 
-    // Record the run: the model and script are hashed, the rest of train/ (weights, plots,
-    // logs: not bit-reproducible across machines) is volatile.
+    // Record the run: the model and script are hashed; the rest of train/ (weights, plots,
+    // logs: not bit-reproducible across machines) and the label caches Ultralytics leaves
+    // beside the labels are volatile.
     let mut volatile: Vec<String> = manifest::list_files(out)?
         .into_iter()
-        .filter(|f| f.starts_with("train/") && f != "train/model.onnx" && f != "train/train.py")
+        .filter(|f| {
+            (f.starts_with("train/") && f != "train/model.onnx" && f != "train/train.py")
+                || (f.starts_with("labels/") && f.ends_with(".cache"))
+        })
         .collect();
     let old = Manifest::read(out).map_err(anyhow::Error::msg)?;
     volatile.extend(old.volatile.iter().cloned());
