@@ -92,58 +92,32 @@ fn main() -> ExitCode {
             campaign,
             out,
             quiet,
-        } => {
-            let campaign = match Campaign::load(&campaign) {
-                Ok(c) => c,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(2);
-                }
-            };
+        } => user_errors(|| {
+            let campaign = Campaign::load(&campaign)?;
             let output = out.unwrap_or_else(|| campaign.output_dir.clone());
-            match soig::pipeline::run(&campaign, &output, !quiet) {
-                Ok(s) => {
-                    println!(
-                        "{} images in {:.1} s ({:.2} images/s) -> {}\ndigest {}",
-                        s.images,
-                        s.seconds,
-                        s.images as f64 / s.seconds,
-                        s.output.display(),
-                        s.digest
-                    );
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e:#}");
-                    ExitCode::from(2)
-                }
-            }
-        }
+            let s = soig::pipeline::run(&campaign, &output, !quiet)?;
+            println!(
+                "{} images in {:.1} s ({:.2} images/s) -> {}\ndigest {}",
+                s.images,
+                s.seconds,
+                s.images as f64 / s.seconds,
+                s.output.display(),
+                s.digest
+            );
+            Ok(())
+        }),
         Command::Train {
             campaign,
             out,
             python,
             quiet,
-        } => {
-            let campaign = match Campaign::load(&campaign) {
-                Ok(c) => c,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(2);
-                }
-            };
+        } => user_errors(|| {
+            let campaign = Campaign::load(&campaign)?;
             let output = out.unwrap_or_else(|| campaign.output_dir.clone());
-            match soig::train::train(&campaign, &output, python.as_deref(), !quiet) {
-                Ok(model) => {
-                    println!("model {}", model.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e:#}");
-                    ExitCode::from(2)
-                }
-            }
-        }
+            let model = soig::train::train(&campaign, &output, python.as_deref(), !quiet)?;
+            println!("model {}", model.display());
+            Ok(())
+        }),
         Command::Verify { dir } => match soig::manifest::verify(&dir) {
             Ok((m, problems)) if problems.is_empty() => {
                 println!("ok: {} files match, digest {}", m.files.len(), m.digest);
@@ -174,28 +148,34 @@ fn main() -> ExitCode {
             conf,
             iou,
             json,
-        } => match eval(
-            &labels,
-            &predictions,
-            mode,
-            images.as_deref(),
-            image_size,
-            conf,
-            iou,
-            json,
-        ) {
-            Ok(text) => {
-                println!("{text}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("error: {e:#}");
-                ExitCode::from(2)
-            }
-        },
+        } => user_errors(|| {
+            let text = eval(
+                &labels,
+                &predictions,
+                mode,
+                images.as_deref(),
+                image_size,
+                conf,
+                iou,
+                json,
+            )?;
+            println!("{text}");
+            Ok(())
+        }),
         Command::Schema => {
             println!("{}", soig::campaign::schema_json());
             ExitCode::SUCCESS
+        }
+    }
+}
+
+/// Run a command; a failure (bad input, missing file) prints its message and exits 2.
+fn user_errors(f: impl FnOnce() -> anyhow::Result<()>) -> ExitCode {
+    match f() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
         }
     }
 }
