@@ -653,6 +653,9 @@ impl Default for Stars {
     }
 }
 
+/// Largest boresight drift over one survey exposure (the paper's is about 0.5 deg).
+pub const MAX_SURVEY_DRIFT_DEG: f64 = 2.0;
+
 /// A user error in a campaign: which file, where, which field, what is allowed.
 #[derive(Debug, thiserror::Error)]
 #[error("{}{}: {}{}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default(), field.as_ref().map(|f| format!("field `{f}`: ")).unwrap_or_default(), message)]
@@ -788,6 +791,26 @@ impl Campaign {
                     "stars.path",
                     format!("star catalogue {} does not exist", full.display()),
                 ));
+            }
+        }
+        if resolved.pointing.mode == PointingMode::Survey {
+            // The boresight turns at the observer's orbital rate: beyond a few degrees of drift
+            // the star cone and the trails grow without bound, so refuse it up front.
+            let p = &observer.propagator;
+            let t1 = window_start + hifitime::Duration::from_seconds(1.0);
+            if let (Ok(a), Ok(b)) = (p.position_teme_km(window_start), p.position_teme_km(t1)) {
+                let drift = crate::sky::angle_deg(a, b) * resolved.exposure.max_s;
+                if drift > MAX_SURVEY_DRIFT_DEG {
+                    return Err(err(
+                        "exposure.max_s",
+                        format!(
+                            "survey pointing would drift {drift:.1} deg in {} s (the observer turns {:.3} deg/s); \
+                             at most {MAX_SURVEY_DRIFT_DEG} deg is supported: shorten the exposure",
+                            resolved.exposure.max_s,
+                            drift / resolved.exposure.max_s
+                        ),
+                    ));
+                }
             }
         }
         let output_dir = match &file.output {
@@ -1402,6 +1425,14 @@ mod tests {
         let e = load("name = \"t\"\n[observer]\nnorad = 1\n[[debris]]\nnorad = 2\n").unwrap_err();
         assert_eq!(e.field.as_deref(), Some("observer"));
         assert!(e.to_string().contains("exactly one of"), "{e}");
+
+        // A survey exposure so long that the camera would turn by degrees is refused.
+        let e = load(&minimal(
+            "[pointing]\nmode = \"survey\"\n[exposure]\nmax_s = 600.0\n",
+        ))
+        .unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("exposure.max_s"), "{e}");
+        assert!(e.to_string().contains("drift"), "{e}");
 
         let e = load(&minimal("[stages]\n")).unwrap_err();
         assert!(e.line.is_some(), "{e}");
