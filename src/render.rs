@@ -494,15 +494,14 @@ mod tests {
         Campaign::from_toml(&text, Path::new("t.toml")).unwrap()
     }
 
+    /// The projection of the test scenes: centred on (10, 20), 128 px.
+    fn tan_of(c: &Campaign) -> crate::sky::projection::Tan {
+        crate::sky::projection::Tan::new(10.0, 20.0, crate::scene::pixel_scale_deg(c), 128, 128)
+    }
+
     /// A scene centred on (10, 20) with the given stars and a debris streak along +x.
     fn scene(c: &Campaign, stars: Vec<Star>, debris_mag: f64, exposure_s: f64) -> Scene {
-        let tan = crate::sky::projection::Tan::new(
-            10.0,
-            20.0,
-            crate::scene::pixel_scale_deg(c),
-            128,
-            128,
-        );
+        let tan = tan_of(c);
         let n = 200;
         let trajectory = (0..n)
             .map(|k| {
@@ -556,13 +555,7 @@ mod tests {
         // One star in the middle, far from the edges, and a debris streak: over many seeds the
         // mean of the rendered photo-electrons matches t 10^(-0.4 (m - ZP)) within Poisson error.
         let c = campaign("");
-        let tan = crate::sky::projection::Tan::new(
-            10.0,
-            20.0,
-            crate::scene::pixel_scale_deg(&c),
-            128,
-            128,
-        );
+        let tan = tan_of(&c);
         let (ra, dec) = tan.sky(90.0, 90.0);
         let star_mag = 15.0;
         let debris_mag = 14.0;
@@ -644,13 +637,7 @@ mod tests {
         // With the pointing jitter on, a bright star's flux centroid is the traced position
         // (nominal + mean jitter), which is where the FITS WCS (CRPIX shifted) puts it.
         let c = campaign("jitter_deg_per_sqrt_s = 0.0003\n");
-        let tan = crate::sky::projection::Tan::new(
-            10.0,
-            20.0,
-            crate::scene::pixel_scale_deg(&c),
-            128,
-            128,
-        );
+        let tan = tan_of(&c);
         let (ra, dec) = tan.sky(64.3, 70.8);
         let s = scene(
             &c,

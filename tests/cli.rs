@@ -64,24 +64,34 @@ fn digest_of(out: &Output) -> String {
         .to_string()
 }
 
+/// `soig run CAMPAIGN --quiet --out OUT`, which must succeed; returns its digest.
+fn run_ok(campaign: &Path, out: &Path, threads: Option<usize>) -> String {
+    let o = soig(
+        &[
+            "run",
+            campaign.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        threads,
+    );
+    assert!(
+        o.status.success(),
+        "run failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    digest_of(&o)
+}
+
 #[test]
 fn same_digest_on_any_thread_count_and_verify_catches_one_byte() {
     let tmp = tempfile::tempdir().unwrap();
     let campaign = small_campaign(tmp.path(), "");
-    let c = campaign.to_str().unwrap();
     let mut digests = Vec::new();
     for (k, threads) in [(0, None), (1, Some(1)), (2, Some(2))] {
         let out = tmp.path().join(format!("out{k}"));
-        let o = soig(
-            &["run", c, "--quiet", "--out", out.to_str().unwrap()],
-            threads,
-        );
-        assert!(
-            o.status.success(),
-            "run failed: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        digests.push(digest_of(&o));
+        digests.push(run_ok(&campaign, &out, threads));
     }
     assert_eq!(digests[0], digests[1]);
     assert_eq!(digests[0], digests[2]);
@@ -209,20 +219,10 @@ fn survey_rotated_campaign_is_deterministic_and_verifiable() {
         tmp.path(),
         "[pointing]\nmode = \"survey\"\n[enhance]\ngeometry = \"rotated\"\n",
     );
-    let c = campaign.to_str().unwrap();
     let mut digests = Vec::new();
     for threads in [1, 2] {
         let out = tmp.path().join(format!("survey{threads}"));
-        let o = soig(
-            &["run", c, "--quiet", "--out", out.to_str().unwrap()],
-            Some(threads),
-        );
-        assert!(
-            o.status.success(),
-            "run failed: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        digests.push(digest_of(&o));
+        digests.push(run_ok(&campaign, &out, Some(threads)));
         let v = soig(&["verify", out.to_str().unwrap()], None);
         assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
     }
@@ -277,22 +277,7 @@ fn detect_stage_writes_a_reproducible_report_with_both_detectors() {
     let mut digests = Vec::new();
     for threads in [1, 2] {
         let out = tmp.path().join(format!("det{threads}"));
-        let o = soig(
-            &[
-                "run",
-                c.to_str().unwrap(),
-                "--quiet",
-                "--out",
-                out.to_str().unwrap(),
-            ],
-            Some(threads),
-        );
-        assert!(
-            o.status.success(),
-            "run failed: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        digests.push(digest_of(&o));
+        digests.push(run_ok(&c, &out, Some(threads)));
         let v = soig(&["verify", out.to_str().unwrap()], None);
         assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
         let report: serde_json::Value =
