@@ -47,6 +47,25 @@ def setup_offline(out: Path):
     os.environ["YOLO_CONFIG_DIR"] = str(cfg)
 
 
+def polars_or_stand_in() -> bool:
+    """Ultralytics 8.4 imports polars only for its plots and for a copy of results.csv inside
+    the checkpoint. Where polars is missing (its 54 MB wheel did not fit on the GPU machine this
+    project trains on), train without plots and leave that copy empty: a stand-in module whose
+    read_csv raises, which Ultralytics catches. Returns whether the real polars is there."""
+    if importlib.util.find_spec("polars") is not None:
+        return True
+    import types
+
+    def read_csv(*_args, **_kwargs):
+        raise ImportError("polars is not installed")
+
+    stand_in = types.ModuleType("polars")
+    stand_in.read_csv = read_csv
+    sys.modules["polars"] = stand_in
+    print("train.py: polars is not installed; training without Ultralytics' plots", flush=True)
+    return False
+
+
 def sha256(path: Path) -> str:
     h = hashlib.sha256()
     with open(path, "rb") as f:
@@ -69,6 +88,7 @@ def main():
     out.mkdir(parents=True, exist_ok=True)
     setup_offline(out)
 
+    plots = polars_or_stand_in()
     import torch
     import ultralytics
     from ultralytics import YOLO
@@ -80,7 +100,7 @@ def main():
         data=str(data), epochs=a.epochs, batch=a.batch, imgsz=a.imgsz, optimizer=a.optimizer,
         device=device, seed=a.seed, workers=a.workers, patience=a.patience, time=a.time_hours,
         project=str(out), name="train", exist_ok=True,
-        amp=False, deterministic=True, plots=True, val=True,
+        amp=False, deterministic=True, plots=plots, val=True,
     )
     train_wall_s = time.time() - t0
     trainer = model.trainer
@@ -95,7 +115,7 @@ def main():
     # Validation of best.pt: val split, test split (Ultralytics defaults), test split at the paper's conf/iou.
     def val(split, name, **kw):
         return box_metrics(YOLO(str(best)).val(
-            data=str(data), split=split, imgsz=a.imgsz, batch=a.batch, device=device, plots=True,
+            data=str(data), split=split, imgsz=a.imgsz, batch=a.batch, device=device, plots=plots,
             project=str(out), name=name, exist_ok=True, **kw))
 
     metrics = {
@@ -115,6 +135,7 @@ def main():
         "ultralytics": ultralytics.__version__,
         "torch": torch.__version__,
         "args": vars(a),
+        "plots": plots,
         "epochs_completed": epochs_completed,
         "epochs_planned_final": int(trainer.epochs),
         "best_epoch": int(trainer.stopper.best_epoch),  # 1-based, by fitness = mAP50-95 on val

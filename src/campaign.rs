@@ -392,7 +392,8 @@ pub struct Artifacts {
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Train {
-    /// Ultralytics model: a YAML trains from scratch (no download needed), a .pt fine-tunes.
+    /// Ultralytics model: a YAML trains from scratch (no download needed); a .pt (relative to
+    /// the campaign file) fine-tunes those weights.
     #[serde(default = "defaults::train_model")]
     pub model: String,
     #[serde(default = "defaults::train_epochs")]

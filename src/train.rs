@@ -101,6 +101,21 @@ pub fn train(
     std::fs::write(&script, TRAIN_PY)?;
     let t = &campaign.resolved.train;
     let (imgsz, batch) = size_and_batch(campaign);
+    // Starting weights (a .pt) are a file beside the campaign and are hashed into the record;
+    // a model YAML names an architecture that Ultralytics builds from scratch.
+    let (model_arg, start_weights) = if t.model.ends_with(".pt") {
+        let pt = campaign.base_dir.join(&t.model);
+        if !pt.is_file() {
+            bail!(
+                "train.model: starting weights {} not found (relative to the campaign file)",
+                pt.display()
+            );
+        }
+        let sha = manifest::sha256_file(&pt)?.0;
+        (pt.display().to_string(), Some(serde_json::json!({"path": t.model, "sha256": sha})))
+    } else {
+        (t.model.clone(), None)
+    };
     let mut args: Vec<String> = vec![
         script.display().to_string(),
         "--data".into(),
@@ -108,7 +123,7 @@ pub fn train(
         "--out".into(),
         tdir.join("run").display().to_string(),
         "--model".into(),
-        t.model.clone(),
+        model_arg,
         "--epochs".into(),
         t.epochs.to_string(),
         "--batch".into(),
@@ -190,6 +205,7 @@ pub fn train(
         "metrics": summary["metrics"],
         "log": "train/train.log",
         "summary": "train/run/summary.json",
+        "start_weights": start_weights,
     }));
     m.seal();
     m.write(out)?;
