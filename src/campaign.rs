@@ -453,6 +453,9 @@ pub enum Stage {
     Enhance,
     /// Split into the Ultralytics layout with data.yaml.
     Dataset,
+    /// Train a YOLOv8 on the dataset through Ultralytics (`[train]`); the detect stage then
+    /// uses the new model. Optional; needs `scripts/setup-train.sh`.
+    Train,
     /// Run the detectors on the test split, evaluate, write the report.
     Detect,
 }
@@ -1147,10 +1150,16 @@ fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "must be in (0, 1]",
     )?;
     check(d.max_det >= 1, "detect.max_det", "must be >= 1")?;
+    let training = c.stages.contains(&Stage::Train);
     check(
-        d.model.is_some() || d.classical || !c.stages.contains(&Stage::Detect),
+        d.model.is_some() || training || d.classical || !c.stages.contains(&Stage::Detect),
         "detect",
-        "the detect stage needs a `model` or `classical = true`",
+        "the detect stage needs a `model`, a `train` stage or `classical = true`",
+    )?;
+    check(
+        !(training && d.model.is_some()),
+        "detect.model",
+        "a campaign with a `train` stage detects with the model it trains: remove `detect.model`",
     )?;
     let sp = &c.split;
     for (f, x) in [
@@ -1166,16 +1175,34 @@ fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "split",
         &format!("train + val + test must sum to 1 (they sum to {sum})"),
     )?;
-    let order = [Stage::Render, Stage::Enhance, Stage::Dataset, Stage::Detect];
+    // `train` is optional, between dataset and detect; the others form a prefix.
+    let order = [
+        Stage::Render,
+        Stage::Enhance,
+        Stage::Dataset,
+        Stage::Train,
+        Stage::Detect,
+    ];
+    let in_order = c.stages.windows(2).all(|w| {
+        let pos = |s: &Stage| order.iter().position(|o| o == s);
+        pos(&w[0]) < pos(&w[1])
+    });
+    let core: Vec<Stage> = c
+        .stages
+        .iter()
+        .copied()
+        .filter(|s| *s != Stage::Train)
+        .collect();
     check(
-        !c.stages.is_empty() && c.stages.iter().zip(order).all(|(a, b)| *a == b),
+        !c.stages.is_empty()
+            && in_order
+            && core
+                .iter()
+                .zip(order.iter().filter(|s| **s != Stage::Train))
+                .all(|(a, b)| a == b)
+            && (!training || core.contains(&Stage::Dataset)),
         "stages",
-        "must be a prefix of [\"render\", \"enhance\", \"dataset\", \"detect\"] (each stage needs the ones before it)",
-    )?;
-    check(
-        c.stages.len() <= order.len(),
-        "stages",
-        "a stage is listed twice",
+        "must be a prefix of [\"render\", \"enhance\", \"dataset\", \"train\", \"detect\"], `train` optional (each stage needs the ones before it)",
     )?;
     Ok(())
 }
@@ -1437,6 +1464,39 @@ mod tests {
 
         let e = load(&minimal("[stages]\n")).unwrap_err();
         assert!(e.line.is_some(), "{e}");
+    }
+
+    #[test]
+    fn stages_are_a_prefix_with_an_optional_train_stage() {
+        let with =
+            |stages: &str, extra: &str| load(&format!("stages = [{stages}]\n{}", minimal(extra)));
+        let classical = "[detect]\nclassical = true\n";
+        for ok in [
+            r#""render""#,
+            r#""render", "enhance", "dataset""#,
+            r#""render", "enhance", "dataset", "train""#,
+            r#""render", "enhance", "dataset", "train", "detect""#,
+        ] {
+            assert!(with(ok, "").is_ok(), "{ok}: {:?}", with(ok, "").err());
+        }
+        assert!(with(r#""render", "enhance", "dataset", "detect""#, classical).is_ok());
+        for bad in [
+            r#""enhance""#,
+            r#""render", "render""#,
+            r#""render", "enhance", "train""#,
+            r#""render", "enhance", "dataset", "detect", "train""#,
+            r#""render", "enhance", "dataset", "train", "train""#,
+        ] {
+            let e = with(bad, classical).unwrap_err();
+            assert_eq!(e.field.as_deref(), Some("stages"), "{bad}: {e}");
+        }
+        // A train stage detects with the model it trains, not a second one.
+        let e = with(
+            r#""render", "enhance", "dataset", "train", "detect""#,
+            "[detect]\nmodel = \"m.onnx\"\n",
+        )
+        .unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("detect.model"), "{e}");
     }
 
     #[test]

@@ -30,6 +30,9 @@ enum Command {
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
+        /// Python with Ultralytics, for a `train` stage (default: .venv-train/bin/python3).
+        #[arg(long)]
+        python: Option<PathBuf>,
     },
     /// Train a YOLOv8 model on the campaign's dataset through Ultralytics, export ONNX, and
     /// record the run in the manifest (needs `scripts/setup-train.sh`).
@@ -92,10 +95,11 @@ fn main() -> ExitCode {
             campaign,
             out,
             quiet,
+            python,
         } => user_errors(|| {
             let campaign = Campaign::load(&campaign)?;
             let output = out.unwrap_or_else(|| campaign.output_dir.clone());
-            let s = soig::pipeline::run(&campaign, &output, !quiet)?;
+            let s = soig::pipeline::run_with(&campaign, &output, !quiet, python.as_deref())?;
             println!(
                 "{} images in {:.1} s ({:.2} images/s) -> {}\ndigest {}",
                 s.images,

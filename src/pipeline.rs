@@ -43,7 +43,23 @@ pub fn stem(i: u64) -> String {
 /// Run the campaign into `output`. An existing `output` is replaced only if it is a soig output
 /// (it holds a manifest).
 pub fn run(campaign: &Campaign, output: &Path, progress: bool) -> anyhow::Result<RunSummary> {
+    run_with(campaign, output, progress, None)
+}
+
+/// `run`, with the Python interpreter for a `train` stage (default: `train::find_python`).
+pub fn run_with(
+    campaign: &Campaign,
+    output: &Path,
+    progress: bool,
+    python: Option<&Path>,
+) -> anyhow::Result<RunSummary> {
     use anyhow::Context;
+    // Find the training Python before rendering anything, so a missing one fails at once.
+    let python = if campaign.resolved.stages.contains(&Stage::Train) {
+        Some(crate::train::find_python(python)?)
+    } else {
+        None
+    };
     if output.exists() {
         let is_ours = output.join(MANIFEST).is_file();
         let empty = output.is_dir() && std::fs::read_dir(output)?.next().is_none();
@@ -68,7 +84,7 @@ pub fn run(campaign: &Campaign, output: &Path, progress: bool) -> anyhow::Result
     if staging.exists() {
         std::fs::remove_dir_all(&staging)?;
     }
-    let result = write_all(campaign, &staging, progress);
+    let result = write_all(campaign, &staging, progress, python.as_deref());
     match result {
         Ok((digest, images, seconds)) => {
             if output.exists() {
@@ -96,6 +112,7 @@ fn write_all(
     campaign: &Campaign,
     dir: &Path,
     progress: bool,
+    python: Option<&Path>,
 ) -> anyhow::Result<(String, usize, f64)> {
     use anyhow::Context;
     let c = &campaign.resolved;
@@ -155,17 +172,45 @@ fn write_all(
             dataset::data_yaml(&c.name, &campaign.hash),
         )?;
     }
+    // The dataset's own digest goes into the report: taken before training and detection add
+    // their files.
+    let dataset_digest = if stages.contains(&Stage::Detect) {
+        Manifest::build(dir, &campaign.hash, serde_json::to_value(c)?, &[])?.digest
+    } else {
+        String::new()
+    };
+    let trained = match python {
+        Some(python) => Some(crate::train::fit(campaign, dir, python)?),
+        None => None,
+    };
     if stages.contains(&Stage::Detect) {
-        // The dataset's own digest goes into the report, then the report into the manifest.
-        let dataset = Manifest::build(dir, &campaign.hash, serde_json::to_value(c)?, &[])?;
-        detect_and_report(campaign, dir, &written, &dataset.digest, progress)?;
+        // A train stage's model, else the campaign's (validation allows one, not both).
+        let model = match &trained {
+            Some(t) => Some(t.model.clone()),
+            None => c.detect.model.as_ref().map(|m| campaign.base_dir.join(m)),
+        };
+        detect_and_report(
+            campaign,
+            dir,
+            &written,
+            &dataset_digest,
+            model.as_deref(),
+            progress,
+        )?;
     }
-    let volatile: Vec<String> = report::VOLATILE
+    let mut volatile: Vec<String> = report::VOLATILE
         .iter()
         .filter(|v| dir.join(v).is_file())
         .map(|v| v.to_string())
         .collect();
-    let manifest = Manifest::build(dir, &campaign.hash, serde_json::to_value(c)?, &volatile)?;
+    if trained.is_some() {
+        volatile.extend(crate::train::volatile_files(dir)?);
+    }
+    let mut manifest = Manifest::build(dir, &campaign.hash, serde_json::to_value(c)?, &volatile)?;
+    if let Some(t) = trained {
+        manifest.training = Some(t.record);
+        manifest.seal();
+    }
     manifest.write(dir)?;
     Ok((manifest.digest, n, seconds))
 }
@@ -188,6 +233,7 @@ fn detect_and_report(
     dir: &Path,
     written: &[Written],
     dataset_digest: &str,
+    model: Option<&Path>,
     progress: bool,
 ) -> anyhow::Result<()> {
     use anyhow::Context;
@@ -245,15 +291,14 @@ fn detect_and_report(
             seconds,
         });
     }
-    if let Some(model) = &c.detect.model {
-        let path = campaign.base_dir.join(model);
+    if let Some(path) = model {
         let params = YoloParams {
             conf: c.detect.conf,
             iou: c.detect.iou,
             max_det: c.detect.max_det as usize,
             ..YoloParams::default()
         };
-        let mut yolo = YoloDetector::load(&path, params)
+        let mut yolo = YoloDetector::load(path, params)
             .with_context(|| format!("loading model {}", path.display()))?;
         let bar = if progress {
             ProgressBar::new(images.len() as u64)
@@ -277,9 +322,17 @@ fn detect_and_report(
             name: "yolo".into(),
             description: format!(
                 "YOLOv8 {} through ONNX Runtime, conf {}, NMS IoU {}",
-                model, c.detect.conf, c.detect.iou
+                c.detect
+                    .model
+                    .as_deref()
+                    .unwrap_or("train/model.onnx (trained by this run)"),
+                c.detect.conf,
+                c.detect.iou
             ),
-            model_sha256: c.detect.model_sha256.clone(),
+            model_sha256: match &c.detect.model_sha256 {
+                Some(sha) => Some(sha.clone()),
+                None => Some(crate::manifest::sha256_file(path)?.0),
+            },
             detections,
             seconds,
         });

@@ -10,7 +10,7 @@ use std::process::{Command, Stdio};
 
 use anyhow::{Context, bail};
 
-use crate::campaign::{Campaign, GeometryKind};
+use crate::campaign::{Campaign, GeometryKind, Stage};
 use crate::manifest::{self, MANIFEST, Manifest};
 
 /// The training driver, shipped inside the binary so a run records exactly what trained it.
@@ -19,18 +19,21 @@ pub const TRAIN_PY: &str = include_str!("../python/train.py");
 /// Where a run's training outputs go, inside the output directory.
 pub const TRAIN_DIR: &str = "train";
 
-/// The Python interpreter with Ultralytics: `--python`, `$SOIG_TRAIN_PYTHON`, `.venv-train`
-/// in the current directory or beside the executable's repository.
+/// The Python interpreter with Ultralytics: `--python`, else `$SOIG_TRAIN_PYTHON`, else
+/// `.venv-train` in the current directory or beside the executable's repository.
 pub fn find_python(explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
-    let mut candidates: Vec<PathBuf> = Vec::new();
-    if let Some(p) = explicit {
-        candidates.push(p.to_path_buf());
-    }
-    if let Some(p) = std::env::var_os("SOIG_TRAIN_PYTHON") {
-        candidates.push(PathBuf::from(p));
-    }
-    candidates.push(PathBuf::from(".venv-train/bin/python3"));
-    candidates.push(Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv-train/bin/python3"));
+    // An interpreter named by the user is the only one tried: falling back would train with
+    // another environment than the one asked for.
+    let named = explicit
+        .map(Path::to_path_buf)
+        .or_else(|| std::env::var_os("SOIG_TRAIN_PYTHON").map(PathBuf::from));
+    let candidates: Vec<PathBuf> = match named {
+        Some(p) => vec![p],
+        None => vec![
+            PathBuf::from(".venv-train/bin/python3"),
+            Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv-train/bin/python3"),
+        ],
+    };
     for c in &candidates {
         let ok = Command::new(c)
             .args(["-c", "import ultralytics"])
@@ -70,7 +73,15 @@ pub fn size_and_batch(campaign: &Campaign) -> (u32, u32) {
     (imgsz, batch)
 }
 
-/// Train on the dataset in `out` (written first if it is missing or does not verify).
+/// A model trained in an output directory, and the record that goes into its manifest.
+pub struct Trained {
+    pub model: PathBuf,
+    pub record: serde_json::Value,
+}
+
+/// `soig train`: train on the dataset in `out` (written first if it is missing or does not
+/// verify), then record the run in the manifest. A campaign whose stages include `train` is
+/// simply run: the pipeline trains (and detects with the new model) itself.
 pub fn train(
     campaign: &Campaign,
     out: &Path,
@@ -78,6 +89,10 @@ pub fn train(
     progress: bool,
 ) -> anyhow::Result<PathBuf> {
     let python = find_python(python)?;
+    if campaign.resolved.stages.contains(&Stage::Train) {
+        crate::pipeline::run_with(campaign, out, progress, Some(&python))?;
+        return Ok(out.join(TRAIN_DIR).join("model.onnx"));
+    }
     let reusable = out.join(MANIFEST).is_file()
         && manifest::verify(out)
             .is_ok_and(|(m, problems)| problems.is_empty() && m.campaign_hash == campaign.hash);
@@ -85,6 +100,35 @@ pub fn train(
         eprintln!("soig train: writing the dataset into {}", out.display());
         crate::pipeline::run(campaign, out, progress)?;
     }
+    let trained = fit(campaign, out, &python)?;
+    let old = Manifest::read(out).map_err(anyhow::Error::msg)?;
+    let mut volatile = volatile_files(out)?;
+    volatile.extend(old.volatile.iter().cloned());
+    volatile.sort();
+    volatile.dedup();
+    let mut m = Manifest::build(out, &campaign.hash, old.campaign.clone(), &volatile)?;
+    m.training = Some(trained.record);
+    m.seal();
+    m.write(out)?;
+    Ok(trained.model)
+}
+
+/// Training outputs whose bytes depend on the machine (weights, plots, logs: GPU training is
+/// not bit-reproducible) and the label caches Ultralytics leaves beside the labels: listed as
+/// volatile in the manifest. The model and the script are hashed.
+pub fn volatile_files(out: &Path) -> anyhow::Result<Vec<String>> {
+    Ok(manifest::list_files(out)?
+        .into_iter()
+        .filter(|f| {
+            (f.starts_with("train/") && f != "train/model.onnx" && f != "train/train.py")
+                || (f.starts_with("labels/") && f.ends_with(".cache"))
+        })
+        .collect())
+}
+
+/// Train on the dataset already in `out` (its `data.yaml`), export ONNX to
+/// `out/train/model.onnx` and check that the detector loads it.
+pub fn fit(campaign: &Campaign, out: &Path, python: &Path) -> anyhow::Result<Trained> {
     let data = out.join("data.yaml");
     if !data.is_file() {
         bail!(
@@ -112,7 +156,10 @@ pub fn train(
             );
         }
         let sha = manifest::sha256_file(&pt)?.0;
-        (pt.display().to_string(), Some(serde_json::json!({"path": t.model, "sha256": sha})))
+        (
+            pt.display().to_string(),
+            Some(serde_json::json!({"path": t.model, "sha256": sha})),
+        )
     } else {
         (t.model.clone(), None)
     };
@@ -152,7 +199,7 @@ pub fn train(
         args.join(" "),
         log_path.display()
     );
-    let status = Command::new(&python)
+    let status = Command::new(python)
         .args(&args)
         .stdout(log.try_clone()?)
         .stderr(log)
@@ -182,32 +229,17 @@ pub fn train(
     crate::detect::yolo::YoloDetector::load(&model, Default::default())
         .with_context(|| format!("the exported model {} does not load", model.display()))?;
 
-    // Record the run: the model and script are hashed; the rest of train/ (weights, plots,
-    // logs: not bit-reproducible across machines) and the label caches Ultralytics leaves
-    // beside the labels are volatile.
-    let mut volatile: Vec<String> = manifest::list_files(out)?
-        .into_iter()
-        .filter(|f| {
-            (f.starts_with("train/") && f != "train/model.onnx" && f != "train/train.py")
-                || (f.starts_with("labels/") && f.ends_with(".cache"))
-        })
-        .collect();
-    let old = Manifest::read(out).map_err(anyhow::Error::msg)?;
-    volatile.extend(old.volatile.iter().cloned());
-    volatile.sort();
-    volatile.dedup();
-    let mut m = Manifest::build(out, &campaign.hash, old.campaign.clone(), &volatile)?;
-    m.training = Some(serde_json::json!({
-        "model": "train/model.onnx",
-        "model_sha256": manifest::sha256_file(&model)?.0,
-        "ultralytics": summary["ultralytics"],
-        "torch": summary["torch"],
-        "metrics": summary["metrics"],
-        "log": "train/train.log",
-        "summary": "train/run/summary.json",
-        "start_weights": start_weights,
-    }));
-    m.seal();
-    m.write(out)?;
-    Ok(model)
+    Ok(Trained {
+        record: serde_json::json!({
+            "model": "train/model.onnx",
+            "model_sha256": manifest::sha256_file(&model)?.0,
+            "ultralytics": summary["ultralytics"],
+            "torch": summary["torch"],
+            "metrics": summary["metrics"],
+            "log": "train/train.log",
+            "summary": "train/run/summary.json",
+            "start_weights": start_weights,
+        }),
+        model,
+    })
 }

@@ -354,3 +354,42 @@ fn committed_model_detects_the_quickstart_debris() {
     assert!(at["tp"].as_u64().unwrap() >= 4, "{at}");
     assert_eq!(at["fp"].as_u64().unwrap(), 0, "{at}");
 }
+
+/// A `train` stage without a Python that has Ultralytics fails before rendering anything, with
+/// a message that says how to install it, and leaves no output.
+#[test]
+fn train_stage_without_ultralytics_fails_cleanly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let c = small_campaign(tmp.path(), "");
+    let text = std::fs::read_to_string(&c).unwrap();
+    std::fs::write(
+        &c,
+        format!("stages = [\"render\", \"enhance\", \"dataset\", \"train\"]\n{text}"),
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let missing = tmp.path().join("no-such-python");
+    let r = soig(
+        &[
+            "run",
+            c.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--python",
+            missing.to_str().unwrap(),
+            "-q",
+        ],
+        None,
+    );
+    assert_eq!(r.status.code(), Some(2), "{r:?}");
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("no Python with Ultralytics"), "{err}");
+    assert!(err.contains("setup-train.sh"), "{err}");
+    assert!(!out.exists());
+    let leftovers: Vec<_> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .filter(|n| n != "small.toml")
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}
