@@ -542,3 +542,201 @@ fn invalid_tle_errors_name_file_and_line() {
     );
     assert!(msg.contains("TLE line 2: bad checksum"), "{msg}");
 }
+
+/// Near perigee at high speed: a Molniya-like orbit (apogee 39,700 km, perigee 1500 km) in
+/// the observer's orbital plane, with its perigee passage (9.3 km/s) right above the observer
+/// at the window start, on the day side. The trajectory crosses the 0.025 deg field in a
+/// fraction of the exposure: a valid image whose streak leaves it, with the label box clipped.
+#[test]
+fn near_perigee_at_high_speed() {
+    use soig::sky::{angle_deg, norm, radec_unit, sub, unit};
+    let probe = campaign(ELEMENTS_40649, "");
+    let obs = &probe.observer.propagator;
+    // A day-side instant: the Sun 40-80 deg from the observer's zenith.
+    let t0 = (0..1440)
+        .map(|k| {
+            Epoch::from_gregorian_utc_at_midnight(2022, 3, 1)
+                + Duration::from_seconds(60.0 * k as f64)
+        })
+        .find(|&t| {
+            let r = obs.position_teme_km(t).unwrap();
+            let sun = soig::sky::ephemeris::sun_position_km(t);
+            (40.0..80.0).contains(&angle_deg(r, sub(sun, r)))
+        })
+        .expect("a day-side instant");
+    // The observer's orbital plane and argument of latitude at t0 (osculating, TEME).
+    let r = obs.position_teme_km(t0).unwrap();
+    let v = sub(
+        obs.position_teme_km(t0 + Duration::from_seconds(1.0))
+            .unwrap(),
+        r,
+    );
+    let h = unit([
+        r[1] * v[2] - r[2] * v[1],
+        r[2] * v[0] - r[0] * v[2],
+        r[0] * v[1] - r[1] * v[0],
+    ]);
+    let inc = h[2].acos().to_degrees();
+    let raan = h[0].atan2(-h[1]).to_degrees().rem_euclid(360.0);
+    let node = radec_unit(raan, 0.0);
+    let mut arg_lat = angle_deg(node, r);
+    if r[2] < 0.0 {
+        arg_lat = 360.0 - arg_lat;
+    }
+    let start = format!("{t0}");
+    let c = campaign(
+        &format!(
+            "norad = 90002\nelements = {{ period_min = 735.0, inclination_deg = {inc}, apogee_km = 39700.0, perigee_km = 1500.0, raan_deg = {raan}, arg_perigee_deg = {arg_lat}, mean_anomaly_deg = 0.0 }}"
+        ),
+        &format!(
+            "[window]\nstart = \"{start}\"\nend = \"{}\"\n{}",
+            t0 + Duration::from_seconds(60.0),
+            sensor(128, 0.0125)
+        ),
+    );
+    let deb = &c.debris[0].propagator;
+    let d0 = deb.position_teme_km(c.window_start).unwrap();
+    let speed = norm(sub(
+        deb.position_teme_km(c.window_start + Duration::from_seconds(1.0))
+            .unwrap(),
+        d0,
+    ));
+    eprintln!(
+        "perigee radius {:.0} km, speed {speed:.2} km/s, {:.1} deg from the observer's zenith",
+        norm(d0),
+        angle_deg(d0, r)
+    );
+    assert!(speed > 9.0 && norm(d0) < 6378.0 + 1600.0 && angle_deg(d0, r) < 2.0);
+    let scale = scene::pixel_scale_deg(&c);
+    for (s, e) in draw_and_render(&c, 2) {
+        let (first, last) = (s.trajectory.first().unwrap(), s.trajectory.last().unwrap());
+        let moved = angle_deg(
+            radec_unit(first.ra_deg, first.dec_deg),
+            radec_unit(last.ra_deg, last.dec_deg),
+        );
+        eprintln!(
+            "range {:.0} km, {moved:.3} deg in {:.1} s, attempts {}, rejections {:?}, label {:?}",
+            s.geometry.range_km, s.exposure_s, s.attempts, s.rejections, e.truth.label_box_px
+        );
+        assert!(s.geometry.range_km < 3000.0);
+        // Several field widths per exposure: the streak enters and leaves the image.
+        assert!(moved > 4.0 * 128.0 * scale, "moved {moved} deg");
+        let inside = |p: &TrajectorySample| {
+            (-0.5..127.5).contains(&p.x_px) && (-0.5..127.5).contains(&p.y_px)
+        };
+        assert!(!inside(first) || !inside(last));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Phase angles, exposures, magnitudes
+// ---------------------------------------------------------------------------------------------
+
+/// Eq. 6/7 near phase 0 and 180 deg (and beyond, by rounding): F stays in [0, 2/(3 pi)],
+/// finite and monotone; the magnitude is finite, or +infinity where F is 0 (exactly 180 deg),
+/// never NaN; the photon rate is finite and >= 0 (0 for +infinity). A scene whose magnitude is
+/// +infinity is rejected as fainter than the limit; a trajectory sample with it gets no photon.
+#[test]
+fn phase_angles_near_0_and_180_stay_finite() {
+    use std::f64::consts::PI;
+    let mut phases: Vec<f64> = vec![-1e-3, -0.0, 0.0, f64::MIN_POSITIVE, PI, PI + 1e-9, 4.0];
+    for k in 0..=40 {
+        let d = 10f64.powf(-(k as f64) / 2.0); // 1 .. 1e-20 rad
+        phases.push(d);
+        phases.push(PI - d);
+    }
+    phases.sort_by(f64::total_cmp);
+    let mut last_f = f64::INFINITY;
+    for &phi in &phases {
+        let f = diffuse_sphere_phase(phi);
+        assert!(
+            f.is_finite() && f >= 0.0 && f <= 2.0 / (3.0 * PI) + 1e-15,
+            "F({phi}) = {f}"
+        );
+        assert!(f <= last_f + 1e-18, "F not monotone at {phi}");
+        last_f = f;
+        for range_km in [1.0, 700.0, 36_000.0, 400_000.0] {
+            for area in [1e-6, 0.956, 50.0] {
+                let m = debris_magnitude(area, 1.0, phi, range_km);
+                assert!(!m.is_nan() && m != f64::NEG_INFINITY, "m({phi}) = {m}");
+                let rate = photon_rate(m, 22.26);
+                assert!(rate.is_finite() && rate >= 0.0, "rate({m}) = {rate}");
+            }
+        }
+    }
+    // Opposition (0 deg): the brightest a sphere gets, 2.5 log10(pi) = 1.24 mag brighter than
+    // at 90 deg.
+    let m0 = debris_magnitude(1.0, 1.0, 0.0, 1000.0);
+    let m90 = debris_magnitude(1.0, 1.0, PI / 2.0, 1000.0);
+    assert!((m90 - m0 - 2.5 * PI.log10()).abs() < 1e-12);
+    assert_eq!(photon_rate(f64::INFINITY, 22.26), 0.0);
+}
+
+/// Exposures of 0.01 s and 600 s with fixed pointing: valid images whose background and bias
+/// follow Eq. 11 (background scaled linearly with exposure). A 600 s survey exposure is refused
+/// at load (the boresight would drift by tens of degrees), naming the field and its line.
+#[test]
+fn exposures_of_10_ms_and_600_s() {
+    for t in [0.01, 600.0] {
+        let c = campaign(
+            &format!("tle_file = \"{}\"\nnorad = 37476", tle_file().display()),
+            &format!(
+                "{}[exposure]\nmin_s = {t}\nmax_s = {t}\n",
+                sensor(128, 0.0125)
+            ),
+        );
+        for (s, e) in draw_and_render(&c, 1) {
+            assert_eq!(s.exposure_s, t);
+            let n = e.adu.len() as f64;
+            let debris_adu = e.truth.rendered_debris_electrons as f64 / 1.6;
+            let stars_adu = (e.electrons.iter().map(|&v| v as f64).sum::<f64>()
+                - e.truth.rendered_debris_electrons as f64)
+                / 1.6;
+            let mean = e.adu.iter().map(|&a| a as f64).sum::<f64>() / n;
+            let expected = 200.0 * t / 5.0 + 2.5 + (debris_adu + stars_adu) / n;
+            // Consecutive in-image samples at most two PSF sigmas apart: a streak, not dots (the
+            // 600 s trajectory is resampled from 2000 to ~90,000 samples).
+            let spacing_px = scene::max_sample_spacing_px(&c, &s.trajectory);
+            let psf_px = 1.0 / 3600.0 / scene::pixel_scale_deg(&c);
+            assert!(
+                spacing_px <= 2.2 * psf_px,
+                "{spacing_px} px between samples"
+            );
+            eprintln!(
+                "{t} s: mean ADU {mean:.3} (Eq. 11: {expected:.3}), debris {} e- rendered of {:.1} expected, snr {:.2}, sample spacing {spacing_px:.1} px, streak {:?} -> {:?}",
+                e.truth.rendered_debris_electrons,
+                e.truth.expected_debris_electrons,
+                s.snr,
+                e.truth.streak_start_px,
+                e.truth.streak_end_px
+            );
+            assert!(
+                (mean - expected).abs() < 0.01 * expected + 0.05,
+                "{mean} vs {expected}"
+            );
+            if t > 1.0 {
+                // The LEO debris crosses the whole field in a fraction of a second.
+                assert!(
+                    s.trajectory.len() > 20 * 2000,
+                    "{} samples",
+                    s.trajectory.len()
+                );
+                let b = e.truth.label_box_px.expect("debris in the image");
+                assert!((b.x_max - b.x_min).max(b.y_max - b.y_min) > 100.0, "{b:?}");
+            }
+        }
+    }
+    let e = Campaign::from_toml(
+        &campaign_text(
+            ELEMENTS_40649,
+            "[pointing]\nmode = \"survey\"\n[exposure]\nmin_s = 600.0\nmax_s = 600.0\n",
+        ),
+        Path::new("long.toml"),
+    )
+    .unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.starts_with("long.toml:14: field `exposure.max_s`: survey pointing would drift"),
+        "{msg}"
+    );
+}
