@@ -141,8 +141,11 @@ fn fixed_scene(
 
 const ELEMENTS_40649: &str = "norad = 40649\nelements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }";
 
-/// Stars of the procedural sky (seed 0) whose pixel lies in the image.
-fn stars_in_image(tan: &Tan, stars: &[Star], w: u32) -> Vec<(Star, (f64, f64))> {
+/// A star and its pixel.
+type Placed = (Star, (f64, f64));
+
+/// The stars whose pixel lies in the image.
+fn stars_in_image(tan: &Tan, stars: &[Star], w: u32) -> Vec<Placed> {
     let edge = w as f64 - 0.5;
     stars
         .iter()
@@ -310,8 +313,7 @@ fn ra_seam_is_continuous() {
     let inside = stars_in_image(&tan, &s.stars, w);
     let e = render_scene(&c, &s, 2);
     all_finite(&e);
-    let (east, west): (Vec<&(Star, (f64, f64))>, Vec<_>) =
-        inside.iter().partition(|(st, _)| st.ra_deg < 180.0);
+    let (east, west): (Vec<&Placed>, Vec<_>) = inside.iter().partition(|(st, _)| st.ra_deg < 180.0);
     // The seam is at x = cx + 0.05 deg / scale (about 96 px): a quarter of the field is east of it.
     let quarter = expected_stars(359.95, dec0, 2.0 * fov, 16.5) / 4.0;
     eprintln!(
@@ -489,6 +491,9 @@ fn decayed_tle_is_refused_naming_file_and_line() {
     assert!(!dir.path().join("out").exists());
 }
 
+/// A change to the lines of a TLE file.
+type Damage = Box<dyn Fn(&mut Vec<String>)>;
+
 /// Invalid TLEs (bad checksum, a malformed line) are refused when the campaign loads, naming
 /// the campaign file and line of the field, the TLE file and the line in it.
 #[test]
@@ -496,7 +501,7 @@ fn invalid_tle_errors_name_file_and_line() {
     let dir = tempfile::tempdir().unwrap();
     let good = std::fs::read_to_string(tle_file()).unwrap();
     let lines: Vec<String> = good.lines().map(str::to_string).collect();
-    let cases: [(&str, Box<dyn Fn(&mut Vec<String>)>, &str); 3] = [
+    let cases: [(&str, Damage, &str); 3] = [
         (
             "checksum",
             Box::new(|l| l[5].replace_range(68..69, "0")), // 40386 line 2, true checksum 5
@@ -650,7 +655,7 @@ fn phase_angles_near_0_and_180_stay_finite() {
     for &phi in &phases {
         let f = diffuse_sphere_phase(phi);
         assert!(
-            f.is_finite() && f >= 0.0 && f <= 2.0 / (3.0 * PI) + 1e-15,
+            f.is_finite() && (0.0..=2.0 / (3.0 * PI) + 1e-15).contains(&f),
             "F({phi}) = {f}"
         );
         assert!(f <= last_f + 1e-18, "F not monotone at {phi}");
@@ -739,4 +744,232 @@ fn exposures_of_10_ms_and_600_s() {
         msg.starts_with("long.toml:14: field `exposure.max_s`: survey pointing would drift"),
         "{msg}"
     );
+}
+
+/// Magnitudes from -1 to 25, stars and debris: photon counts follow Eq. 3 over 27 magnitudes
+/// (1e-10 of the flux at 25), packets keep the totals exact, pixels stay below u32::MAX, the
+/// ADU finite and the FITS float32 round trip exact. The debris trajectory samples share one
+/// source's packet budget, so a magnitude -1 debris renders in bounded time.
+#[test]
+fn magnitudes_from_minus_1_to_25() {
+    let (w, fov) = (128u32, 0.0125);
+    let c = campaign(ELEMENTS_40649, &sensor(w, fov));
+    let tan = Tan::new(10.0, 20.0, scene::pixel_scale_deg(&c), w, w);
+    let t = 0.01;
+    let zp = c.resolved.sensor.zero_point_mag;
+    let star_at = |x: f64, y: f64, mag: f64| {
+        let (ra_deg, dec_deg) = tan.sky(x, y);
+        Star {
+            ra_deg,
+            dec_deg,
+            mag,
+        }
+    };
+    for (star_mag, debris_mag) in [(-1.0, 25.0), (25.0, -1.0), (6.0, 16.5), (16.5, 6.0)] {
+        let stars = vec![star_at(40.0, 90.0, star_mag)];
+        let s = fixed_scene(
+            &c,
+            (10.0, 20.0),
+            stars,
+            debris_mag,
+            ((70.0, 30.0), (100.0, 40.0)),
+            t,
+        );
+        let e = render_scene(&c, &s, 4);
+        all_finite(&e);
+        let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
+        let debris = e.truth.rendered_debris_electrons;
+        let star = total - debris;
+        for (what, got, mag) in [("star", star, star_mag), ("debris", debris, debris_mag)] {
+            let expected = photon_rate(mag, zp) * t;
+            assert!(
+                (got as f64 - expected).abs() < 6.0 * expected.sqrt() + 1.0,
+                "{what} of magnitude {mag}: {got} e- vs Eq. 3 {expected:.3e}"
+            );
+        }
+        assert!(e.electrons.iter().all(|&v| v < u32::MAX));
+        eprintln!(
+            "star {star_mag} / debris {debris_mag}: {star} / {debris} e-, peak {}",
+            e.electrons.iter().max().unwrap()
+        );
+    }
+    // The float32 FITS holds the brightest image exactly.
+    let s = fixed_scene(
+        &c,
+        (10.0, 20.0),
+        vec![star_at(64.0, 64.0, -1.0)],
+        -1.0,
+        ((10.0, 10.0), (120.0, 20.0)),
+        t,
+    );
+    let e = render_scene(&c, &s, 5);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bright.fits");
+    soig::fits::write_image(
+        &path,
+        e.width,
+        e.height,
+        soig::fits::Pixels::F32(&e.adu),
+        &soig::fits::wcs_cards(&tan),
+    )
+    .unwrap();
+    let (back, rows, cols) = soig::fits::read_f32(&path).unwrap();
+    assert_eq!((rows, cols), (e.height, e.width));
+    assert_eq!(back, e.adu);
+}
+
+/// A magnitude-6 star in the field (the brightest the visibility rules admit, paper 3.2.3) over
+/// the paper's 5 s: 1.6e7 photo-electrons, traced in 5-photon packets; no full-well
+/// saturation is modelled, so its core holds ~1e6 e- per pixel, exact in u32 and in the
+/// float32 FITS. The enhanced PNG stays valid, with the star at the top of the range.
+#[test]
+fn magnitude_6_star_in_the_field() {
+    let (w, fov) = (128u32, 0.0125);
+    let c = campaign(ELEMENTS_40649, &sensor(w, fov));
+    let tan = Tan::new(10.0, 20.0, scene::pixel_scale_deg(&c), w, w);
+    let (ra, dec) = tan.sky(64.0, 64.0);
+    let star = Star {
+        ra_deg: ra,
+        dec_deg: dec,
+        mag: 6.0,
+    };
+    let s = fixed_scene(
+        &c,
+        (10.0, 20.0),
+        vec![star],
+        14.0,
+        ((10.0, 20.0), (50.0, 30.0)),
+        5.0,
+    );
+    let e = render_scene(&c, &s, 6);
+    all_finite(&e);
+    let expected = photon_rate(6.0, c.resolved.sensor.zero_point_mag) * 5.0;
+    let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
+    let star_e = (total - e.truth.rendered_debris_electrons) as f64;
+    assert!(
+        (star_e - expected).abs() < 6.0 * expected.sqrt() + 0.001 * expected,
+        "{star_e} vs {expected}"
+    );
+    let peak = *e.electrons.iter().max().unwrap();
+    assert!(peak > 500_000 && peak < u32::MAX / 100, "peak {peak}");
+    let png = soig::enhance::enhance(&e.adu, e.width, e.height, &c.resolved.enhance, true);
+    let centre = png.pixels[64 * w as usize + 64];
+    let median = {
+        let mut p = png.pixels.clone();
+        p.sort();
+        p[p.len() / 2]
+    };
+    assert!(
+        centre >= 250 && median > 20 && median < 200,
+        "centre {centre}, median {median}"
+    );
+    // The visibility rule: a star brighter than 6 in the star cone rejects the draw.
+    assert_eq!(c.resolved.visibility.brightest_star_mag, 6.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// A streak leaving the image; a huge Poisson mean
+// ---------------------------------------------------------------------------------------------
+
+/// A streak leaving the image: the label box is the box of the flux that landed, clipped to
+/// the image; the SNR gate counts only the in-image part of the streak. A streak wholly
+/// outside has SNR 0 (the gate rejects the draw) and, if rendered, no label box (an empty
+/// label file, a background image for YOLO).
+#[test]
+fn streak_leaving_the_image() {
+    let (w, fov) = (128u32, 0.0125);
+    let c = campaign(ELEMENTS_40649, &sensor(w, fov));
+    let sigma = scene::background_sigma_adu(&c, 2.0, None);
+    // From the centre out through the right edge: half the streak is in the image.
+    let s = fixed_scene(
+        &c,
+        (10.0, 20.0),
+        vec![],
+        11.0,
+        ((64.0, 64.0), (320.0, 64.0)),
+        2.0,
+    );
+    let e = render_scene(&c, &s, 7);
+    all_finite(&e);
+    let b = e.truth.label_box_px.expect("debris in the image");
+    assert!(b.x_max == 127.5 && (b.x_min - 64.0).abs() < 4.0, "{b:?}");
+    assert!(b.y_min > 55.0 && b.y_max < 73.0, "{b:?}");
+    let expected = e.truth.expected_debris_electrons;
+    let landed = e.truth.rendered_debris_electrons as f64;
+    // The streak is 256 px long and 64 px of it lie in the image: a quarter of the flux.
+    assert!(
+        (landed / expected - 0.25).abs() < 0.02,
+        "{landed} of {expected}"
+    );
+    assert!(e.truth.streak_end_px[0] > 300.0);
+    // The SNR of the leaving streak is that of its in-image part alone.
+    let inside: Vec<TrajectorySample> = s
+        .trajectory
+        .iter()
+        .copied()
+        .filter(|p| p.x_px < 127.5)
+        .collect();
+    let full = scene::expected_snr(&c, &s.trajectory, sigma);
+    assert!(full > 0.0 && (full - scene::expected_snr(&c, &inside, sigma)).abs() < 1e-12 * full);
+    // Wholly outside: SNR 0, below any gate; rendered anyway, no label.
+    let out = fixed_scene(
+        &c,
+        (10.0, 20.0),
+        vec![],
+        11.0,
+        ((200.0, 64.0), (400.0, 64.0)),
+        2.0,
+    );
+    assert_eq!(scene::expected_snr(&c, &out.trajectory, sigma), 0.0);
+    let e = render_scene(&c, &out, 8);
+    all_finite(&e);
+    assert_eq!(e.truth.label_box_px, None);
+    assert_eq!(e.truth.rendered_debris_electrons, 0);
+}
+
+/// A huge Poisson mean: rand_distr refuses means above ~1.8e19 (about u64::MAX); soig's draw
+/// returns the rounded mean there, saturating at u64::MAX for larger and infinite means (the
+/// Poisson spread is below 1e-9 of the mean). A source that bright renders in bounded time
+/// (at most MAX_PACKETS_PER_SOURCE packets of at most u32::MAX photons), every pixel it hits
+/// saturated at u32::MAX, and the image finite.
+#[test]
+fn huge_poisson_mean() {
+    let mut r = stream(0, 0, Purpose::Photons);
+    let limit = rand_distr::Poisson::<f64>::MAX_LAMBDA;
+    assert!(limit > 1.8e19 && limit < 1.9e19);
+    let below = poisson(&mut r, 1e19) as f64;
+    assert!((below - 1e19).abs() < 1e19 * 1e-8, "{below}");
+    assert_eq!(poisson(&mut r, limit), limit.round() as u64);
+    for mean in [1e20, 1e30, f64::MAX, f64::INFINITY] {
+        assert_eq!(poisson(&mut r, mean), u64::MAX, "{mean}");
+    }
+    for mean in [0.0, -1.0, f64::NEG_INFINITY, f64::NAN] {
+        assert_eq!(poisson(&mut r, mean), 0, "{mean}");
+    }
+    // A magnitude -30 star for 0.01 s: 1.3e19 expected photo-electrons. Before the renderer
+    // clamped its count this traced ~1e11 single photons (a hang).
+    let (w, fov) = (64u32, 0.00625);
+    let c = campaign(ELEMENTS_40649, &sensor(w, fov));
+    let tan = Tan::new(10.0, 20.0, scene::pixel_scale_deg(&c), w, w);
+    let (ra, dec) = tan.sky(32.0, 32.0);
+    let star = Star {
+        ra_deg: ra,
+        dec_deg: dec,
+        mag: -30.0,
+    };
+    let s = fixed_scene(
+        &c,
+        (10.0, 20.0),
+        vec![star],
+        -40.0,
+        ((5.0, 5.0), (60.0, 10.0)),
+        0.01,
+    );
+    let started = std::time::Instant::now();
+    let e = render_scene(&c, &s, 9);
+    eprintln!("rendered in {:.1} s", started.elapsed().as_secs_f64());
+    all_finite(&e);
+    assert_eq!(e.electrons[32 * w as usize + 32], u32::MAX);
+    assert!(e.adu.iter().all(|a| a.is_finite()));
+    assert!(*e.adu.iter().fold(&0.0f32, |a, b| if b > a { b } else { a }) > 2.0e9);
 }
