@@ -754,6 +754,40 @@ impl Campaign {
                     .map_err(|(f, m)| err(&format!("debris[{i}]{f}"), m))?,
             );
         }
+        // An object SGP4 cannot propagate anywhere in the window (decayed before it opens,
+        // or diverged) would fail every scene draw, ending in "no acceptable scene" after
+        // max_attempts draws: refuse it here, naming its field and its TLE.
+        let specs = std::iter::once(("observer".to_string(), &file.observer, &observer)).chain(
+            file.debris
+                .iter()
+                .zip(&debris)
+                .enumerate()
+                .map(|(i, (spec, body))| (format!("debris[{i}]"), spec, body)),
+        );
+        for (field, spec, body) in specs {
+            if let Err(e) = check_propagates(body, window_start, window_end) {
+                let (suffix, source) = match (&spec.tle_file, &spec.tle, &spec.elements) {
+                    (Some(f), _, _) => {
+                        let full = base_dir.join(f);
+                        let line = std::fs::read_to_string(&full).ok().and_then(|t| {
+                            let [l1, _] = resolved_tle(&resolved, &field)?;
+                            t.lines().position(|l| l.trim_end() == l1).map(|n| n + 1)
+                        });
+                        let at = line.map(|n| format!("line {n} of ")).unwrap_or_default();
+                        (".tle_file", format!(" (the TLE at {at}{})", full.display()))
+                    }
+                    (_, Some(_), _) => (".tle", String::new()),
+                    _ => (".elements", String::new()),
+                };
+                return Err(err(
+                    &format!("{field}{suffix}"),
+                    format!(
+                        "{e}{source}: the object cannot be propagated anywhere in the window {} .. {}",
+                        file.window.start, file.window.end
+                    ),
+                ));
+            }
+        }
         if let Background::Frames { paths } = &resolved.background {
             if paths.is_empty() {
                 return Err(err("background.paths", "name at least one frame".into()));
@@ -1321,6 +1355,39 @@ fn resolve_object(
         norad,
         propagator,
     })
+}
+
+/// Instants at which `check_propagates` tries an object, evenly over the window.
+const PROPAGATION_CHECKS: u32 = 65;
+
+/// Ok if the body propagates at one of `PROPAGATION_CHECKS` instants of the window; else the
+/// first failure (at the window start). An object that decays inside the window is kept:
+/// draws after its decay are rejected as "propagation failed".
+fn check_propagates(body: &Body, start: Epoch, end: Epoch) -> Result<(), orbit::OrbitError> {
+    let span = (end - start).to_seconds();
+    let mut first = None;
+    for k in 0..PROPAGATION_CHECKS {
+        let f = k as f64 / (PROPAGATION_CHECKS - 1) as f64;
+        let t = start + hifitime::Duration::from_seconds(span * f);
+        match body.propagator.position_teme_km(t) {
+            Ok(_) => return Ok(()),
+            Err(e) => {
+                first.get_or_insert(e);
+            }
+        }
+    }
+    Err(first.expect("at least one check"))
+}
+
+/// The resolved TLE lines of `observer` or `debris[i]`.
+fn resolved_tle<'a>(resolved: &'a CampaignFile, field: &str) -> Option<&'a [String; 2]> {
+    let spec = match field.strip_prefix("debris[") {
+        Some(rest) => resolved
+            .debris
+            .get(rest.trim_end_matches(']').parse::<usize>().ok()?)?,
+        None => &resolved.observer,
+    };
+    spec.tle.as_ref()
 }
 
 /// 1-based line of a byte offset.

@@ -16,8 +16,9 @@ use crate::scene::{Pointing, Scene};
 use crate::sky::photometry::photon_rate;
 
 /// Above this many packets per source the packet weight grows so that no source traces more
-/// (only reached by sources far brighter than a scene allows, e.g. a magnitude -1 star).
-const MAX_PACKETS_PER_SOURCE: u64 = 50_000_000;
+/// (only reached by sources far brighter than a scene allows, e.g. a magnitude -1 star). The
+/// debris counts as one source: its trajectory samples share this budget.
+pub const MAX_PACKETS_PER_SOURCE: u64 = 50_000_000;
 
 /// Spacing of the time nodes along a survey star trail, pixels.
 const SURVEY_NODE_SPACING_PX: f64 = 4.0;
@@ -179,33 +180,50 @@ impl Canvas {
 
 /// Trace `count` photons of one source: positions at arrival time `time(rng)`, plus jitter and
 /// PSF. Sources above the merge threshold are traced in packets of `merge_factor` photons
-/// (the paper's approximation), the remainder singly so the total is exact.
+/// (the paper's approximation); any source beyond `max_packets` photons in heavier packets
+/// to stay within `max_packets` (whatever the threshold); a remainder of
+/// at most `merge_factor` photons is traced singly, a larger one as one packet, so the total
+/// is exact and the loop bounded (it once traced up to 3.7e11 singles for a saturated Poisson
+/// draw: a hang).
 #[allow(clippy::too_many_arguments)]
 fn trace(
     canvas: &mut Canvas,
     rng: &mut ChaCha12Rng,
     count: u64,
     merge: (u64, u32),
+    max_packets: u64,
     jitter: &Jitter,
     psf_px: f64,
     debris: bool,
     mut position: impl FnMut(&mut ChaCha12Rng) -> (f64, f64, f64),
 ) {
     let (threshold, factor) = merge;
-    let weight = if count > threshold {
-        (factor as u64).max(count.div_ceil(MAX_PACKETS_PER_SOURCE))
-    } else {
-        1
-    };
+    // Packets carry at most u32::MAX photons (a pixel's capacity): beyond max_packets such
+    // packets (2.1e17 photons for one source) every pixel the source touches is saturated
+    // anyway, so the count is clamped there.
+    let count = count.min(max_packets.saturating_mul(u32::MAX as u64));
+    let weight = if count > threshold { factor as u64 } else { 1 };
+    let weight = weight.max(count.div_ceil(max_packets));
     let packets = count / weight;
-    let singles = count % weight;
-    let w32 = weight.min(u32::MAX as u64) as u32;
-    for n in 0..packets + singles {
+    let rest = count % weight;
+    let (singles, tail) = if rest <= factor as u64 {
+        (rest, 0)
+    } else {
+        (0, 1)
+    };
+    let w32 = weight as u32; // <= u32::MAX by the clamp above
+    for n in 0..packets + singles + tail {
         let (t, x0, y0) = position(rng);
         let (jx, jy) = jitter.at(t);
         let gx: f64 = rng.sample(StandardNormal);
         let gy: f64 = rng.sample(StandardNormal);
-        let w = if n < packets { w32 } else { 1 };
+        let w = if n < packets {
+            w32
+        } else if tail == 1 {
+            rest as u32
+        } else {
+            1
+        };
         canvas.add(x0 + jx + gx * psf_px, y0 + jy + gy * psf_px, w, debris);
     }
 }
@@ -278,6 +296,7 @@ pub fn render(
                     photons_rng,
                     count,
                     merge,
+                    MAX_PACKETS_PER_SOURCE,
                     &jitter,
                     psf_px,
                     false,
@@ -329,6 +348,7 @@ pub fn render(
                     photons_rng,
                     count,
                     merge,
+                    MAX_PACKETS_PER_SOURCE,
                     &jitter,
                     psf_px,
                     false,
@@ -349,7 +369,10 @@ pub fn render(
         }
     }
 
-    // Debris: each trajectory sample is a source whose photons arrive at its time.
+    // Debris: each trajectory sample is a source whose photons arrive at its time; together
+    // they share one source's packet budget (2000 samples of a magnitude -1 debris would
+    // otherwise trace 2e9 packets).
+    let debris_packets = (MAX_PACKETS_PER_SOURCE / scene.trajectory.len().max(1) as u64).max(1);
     let mut expected_debris = 0.0;
     let mut mag_min = f64::INFINITY;
     let mut mag_max = f64::NEG_INFINITY;
@@ -367,6 +390,7 @@ pub fn render(
             photons_rng,
             count,
             merge,
+            debris_packets,
             &jitter,
             psf_px,
             true,

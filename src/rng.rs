@@ -33,14 +33,16 @@ pub fn stream(seed: u64, image: u64, purpose: Purpose) -> ChaCha12Rng {
     ChaCha12Rng::from_seed(h.finalize().into())
 }
 
-/// A Poisson draw that accepts any mean >= 0 (0 for a zero or non-finite mean; above
-/// rand_distr's limit of ~1.8e19, about u64::MAX, it saturates: the relative Poisson spread
-/// there is below 1e-9).
+/// A Poisson draw that accepts any mean: 0 for a zero, negative or NaN mean. From rand_distr's
+/// limit of ~1.8e19 (about u64::MAX) up it returns the mean rounded, saturating at u64::MAX for
+/// larger or infinite means (the relative Poisson spread there is below 1e-9; an infinitely
+/// bright source saturates rather than vanishing).
 pub fn poisson<R: rand::Rng + ?Sized>(rng: &mut R, mean: f64) -> u64 {
-    if mean.is_nan() || mean <= 0.0 || !mean.is_finite() {
+    if mean.is_nan() || mean <= 0.0 {
         return 0;
     }
     if mean >= Poisson::<f64>::MAX_LAMBDA {
+        // `as` saturates: 1e25 and +inf give u64::MAX.
         return mean.round() as u64;
     }
     Poisson::new(mean).expect("mean checked").sample(rng) as u64
@@ -69,6 +71,8 @@ mod tests {
         assert_eq!(poisson(&mut r, -1.0), 0);
         assert_eq!(poisson(&mut r, f64::NAN), 0);
         assert_eq!(poisson(&mut r, 1e20), u64::MAX);
+        assert_eq!(poisson(&mut r, f64::INFINITY), u64::MAX);
+        assert_eq!(poisson(&mut r, f64::NEG_INFINITY), 0);
         let big = poisson(&mut r, 1e15) as f64;
         assert!((big - 1e15).abs() < 6.0 * 1e15f64.sqrt());
         let n = 20_000;

@@ -471,43 +471,63 @@ fn try_draw(
 
     // The trajectory, cut in samples at the centres of equal time slices.
     let mid_tan = tan_at(campaign, ra_p, dec_p);
-    let n = c.render.trajectory_samples as usize;
-    let dt = exposure_s / n as f64;
-    let mut trajectory = Vec::with_capacity(n);
-    for k in 0..n {
-        let t_s = (k as f64 + 0.5) * dt;
-        let t = start + Duration::from_seconds(t_s);
-        let (o, d) = positions(campaign, debris_index, t, &frame).ok_or("propagation failed")?;
-        let los = sub(d, o);
-        let (ra_deg, dec_deg) = radec_deg(los);
-        let phase = angle_deg(sub(sun, d), sub(o, d)).to_radians();
-        let mut mag = debris_magnitude(area_m2, c.photometry.albedo, phase, norm(los));
-        if let Some(tb) = tumble {
-            let factor = 1.0
-                + tb.amplitude * (std::f64::consts::TAU * t_s / tb.period_s + tb.phase_rad).sin();
-            mag -= 2.5 * factor.log10();
+    let sample = |n: usize| -> Result<Vec<TrajectorySample>, &'static str> {
+        let dt = exposure_s / n as f64;
+        let mut trajectory = Vec::with_capacity(n);
+        for k in 0..n {
+            let t_s = (k as f64 + 0.5) * dt;
+            let t = start + Duration::from_seconds(t_s);
+            let (o, d) =
+                positions(campaign, debris_index, t, &frame).ok_or("propagation failed")?;
+            let los = sub(d, o);
+            let (ra_deg, dec_deg) = radec_deg(los);
+            let phase = angle_deg(sub(sun, d), sub(o, d)).to_radians();
+            let mut mag = debris_magnitude(area_m2, c.photometry.albedo, phase, norm(los));
+            if let Some(tb) = tumble {
+                let factor = 1.0
+                    + tb.amplitude
+                        * (std::f64::consts::TAU * t_s / tb.period_s + tb.phase_rad).sin();
+                mag -= 2.5 * factor.log10();
+            }
+            let expected_electrons = if mag.is_finite() {
+                photon_rate(mag, c.sensor.zero_point_mag) * dt
+            } else {
+                0.0
+            };
+            let (ra_cam, dec_cam) = match pointing {
+                Pointing::Fixed { .. } => (ra_deg, dec_deg),
+                Pointing::Survey(track) => track.to_mid_frame(t_s, ra_deg, dec_deg),
+            };
+            let (x_px, y_px) = mid_tan
+                .pixel(ra_cam, dec_cam)
+                .unwrap_or((f64::NAN, f64::NAN));
+            trajectory.push(TrajectorySample {
+                t_s,
+                ra_deg,
+                dec_deg,
+                mag,
+                expected_electrons,
+                x_px,
+                y_px,
+            });
         }
-        let expected_electrons = if mag.is_finite() {
-            photon_rate(mag, c.sensor.zero_point_mag) * dt
-        } else {
-            0.0
-        };
-        let (ra_cam, dec_cam) = match pointing {
-            Pointing::Fixed { .. } => (ra_deg, dec_deg),
-            Pointing::Survey(track) => track.to_mid_frame(t_s, ra_deg, dec_deg),
-        };
-        let (x_px, y_px) = mid_tan
-            .pixel(ra_cam, dec_cam)
-            .unwrap_or((f64::NAN, f64::NAN));
-        trajectory.push(TrajectorySample {
-            t_s,
-            ra_deg,
-            dec_deg,
-            mag,
-            expected_electrons,
-            x_px,
-            y_px,
-        });
+        Ok(trajectory)
+    };
+    let n = c.render.trajectory_samples as usize;
+    let mut trajectory = sample(n)?;
+    // Samples farther apart in the image than two PSF sigmas render a row of dots, not a
+    // streak (a 600 s exposure of LEO debris with 2000 samples: one dot per 128 px; 0.7% of the
+    // quickstart draws: 4-8 px). Such a trajectory is sampled again, finer by the factor that
+    // brings the spacing to two sigmas; beyond MAX_TRAJECTORY_SAMPLES the draw is rejected.
+    let psf_px = c.sensor.psf_sigma_arcsec / 3600.0 / scale;
+    let spacing = max_sample_spacing_px(campaign, &trajectory);
+    if spacing > MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px {
+        let factor = (spacing / (MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px)).ceil() as usize;
+        let finer = n.saturating_mul(factor);
+        if finer > MAX_TRAJECTORY_SAMPLES {
+            return Err("streak too fast to sample (over 1e6 trajectory samples)");
+        }
+        trajectory = sample(finer)?;
     }
 
     let snr = expected_snr(
@@ -584,6 +604,29 @@ pub fn expected_snr(
     } else {
         0.0
     }
+}
+
+/// Largest in-image distance between consecutive trajectory samples, in PSF sigmas, before the
+/// trajectory is sampled more finely: a sum of Gaussians 2 sigma apart ripples by 1.4%.
+pub const MAX_SAMPLE_SPACING_PSF_SIGMAS: f64 = 2.0;
+
+/// Most trajectory samples a refined trajectory may have (the campaign's own limit).
+pub const MAX_TRAJECTORY_SAMPLES: usize = 1_000_000;
+
+/// Largest pixel distance between consecutive trajectory samples of which at least one lies in
+/// the image (0 when none does).
+pub fn max_sample_spacing_px(campaign: &Campaign, trajectory: &[TrajectorySample]) -> f64 {
+    let s = &campaign.resolved.sensor;
+    let (w, h) = (s.width_px as f64, s.height_px as f64);
+    let inside = |p: &TrajectorySample| {
+        p.x_px >= -0.5 && p.x_px < w - 0.5 && p.y_px >= -0.5 && p.y_px < h - 0.5
+    };
+    trajectory
+        .windows(2)
+        .filter(|pair| inside(&pair[0]) || inside(&pair[1]))
+        .map(|pair| (pair[1].x_px - pair[0].x_px).hypot(pair[1].y_px - pair[0].y_px))
+        .filter(|d| d.is_finite())
+        .fold(0.0, f64::max)
 }
 
 /// Extra radius of the survey star cone beyond the field along the drift.
