@@ -9,11 +9,13 @@ use rand_distr::StandardNormal;
 use serde::Serialize;
 
 use crate::background::RealFrame;
-use crate::campaign::Campaign;
+use crate::campaign::{Campaign, RenderMethod};
 use crate::geometry::{BoxPx, Frame, LABEL_SHARE, flux_box};
 use crate::rng::poisson;
 use crate::scene::{Pointing, Scene};
 use crate::sky::photometry::photon_rate;
+
+pub mod expected;
 
 /// Above this many packets per source the packet weight grows so that no source traces more
 /// (only reached by sources far brighter than a scene allows, e.g. a magnitude -1 star).
@@ -95,12 +97,44 @@ pub struct Exposure {
 }
 
 /// The shared Brownian pointing jitter, as pixel shifts of every source, on a regular time grid.
-struct Jitter {
+pub struct Jitter {
     dt: f64,
     shift: Vec<(f64, f64)>,
 }
 
 impl Jitter {
+    /// The jitter path of a scene, drawn first from the photon stream.
+    pub fn of_scene(campaign: &Campaign, scene: &Scene, rng: &mut ChaCha12Rng) -> Jitter {
+        let s = &campaign.resolved.sensor;
+        Jitter::draw(
+            rng,
+            s.jitter_deg_per_sqrt_s,
+            scene.exposure_s,
+            campaign.resolved.render.jitter_steps as usize,
+            scene.projection(campaign).scale_deg,
+        )
+    }
+
+    /// Steps of the path.
+    pub fn steps(&self) -> usize {
+        self.shift.len() - 1
+    }
+
+    /// The same Brownian path seen on a coarser grid of `steps` steps (its values at every
+    /// k-th node, linear in between), as a simulation with fewer jitter steps would draw it.
+    /// None unless `steps` divides the path's steps.
+    pub fn coarsened(&self, steps: usize) -> Option<Jitter> {
+        let n = self.steps();
+        if steps == 0 || n % steps != 0 {
+            return None;
+        }
+        let k = n / steps;
+        Some(Jitter {
+            dt: self.dt * k as f64,
+            shift: self.shift.iter().step_by(k).copied().collect(),
+        })
+    }
+
     fn draw(
         rng: &mut ChaCha12Rng,
         sigma_deg_sqrt_s: f64,
@@ -177,10 +211,56 @@ impl Canvas {
     }
 }
 
-/// Trace `count` photons of one source: positions at arrival time `time(rng)`, plus jitter and
+/// Where a source is over its share of the exposure, before jitter and PSF.
+#[derive(Clone, Copy)]
+enum Path<'a> {
+    /// Fixed on the detector (a star under fixed pointing).
+    Still { x: f64, y: f64 },
+    /// A survey star trail, linear between nodes `step` seconds apart.
+    Trail { nodes: &'a [(f64, f64)], step: f64 },
+    /// A debris trajectory sample: all its photons arrive at `t`.
+    Instant { t: f64, x: f64, y: f64 },
+}
+
+impl Path<'_> {
+    fn at(&self, t: f64) -> (f64, f64) {
+        match *self {
+            Path::Still { x, y } | Path::Instant { x, y, .. } => (x, y),
+            Path::Trail { nodes, step } => {
+                let u = t / step;
+                let i = (u as usize).min(nodes.len() - 2);
+                let f = u - i as f64;
+                let (p, q) = (nodes[i], nodes[i + 1]);
+                (p.0 + f * (q.0 - p.0), p.1 + f * (q.1 - p.1))
+            }
+        }
+    }
+}
+
+/// One light source of the scene: its expected photo-electrons, arriving uniformly over
+/// [t_a, t_b) along `path` (or all at once for a debris sample).
+struct Source<'a> {
+    expected: f64,
+    path: Path<'a>,
+    t_a: f64,
+    t_b: f64,
+    debris: bool,
+}
+
+impl Source<'_> {
+    /// Arrival time of one photon.
+    fn arrival(&self, rng: &mut ChaCha12Rng) -> f64 {
+        match self.path {
+            Path::Instant { t, .. } => t,
+            _ if self.t_b > self.t_a => rng.random_range(self.t_a..self.t_b),
+            _ => self.t_a,
+        }
+    }
+}
+
+/// Trace `count` photons of one source: positions at their arrival times, plus jitter and
 /// PSF. Sources above the merge threshold are traced in packets of `merge_factor` photons
 /// (the paper's approximation), the remainder singly so the total is exact.
-#[allow(clippy::too_many_arguments)]
 fn trace(
     canvas: &mut Canvas,
     rng: &mut ChaCha12Rng,
@@ -188,8 +268,7 @@ fn trace(
     merge: (u64, u32),
     jitter: &Jitter,
     psf_px: f64,
-    debris: bool,
-    mut position: impl FnMut(&mut ChaCha12Rng) -> (f64, f64, f64),
+    source: &Source,
 ) {
     let (threshold, factor) = merge;
     let weight = if count > threshold {
@@ -201,46 +280,42 @@ fn trace(
     let singles = count % weight;
     let w32 = weight.min(u32::MAX as u64) as u32;
     for n in 0..packets + singles {
-        let (t, x0, y0) = position(rng);
+        let t = source.arrival(rng);
+        let (x0, y0) = source.path.at(t);
         let (jx, jy) = jitter.at(t);
         let gx: f64 = rng.sample(StandardNormal);
         let gy: f64 = rng.sample(StandardNormal);
         let w = if n < packets { w32 } else { 1 };
-        canvas.add(x0 + jx + gx * psf_px, y0 + jy + gy * psf_px, w, debris);
+        canvas.add(
+            x0 + jx + gx * psf_px,
+            y0 + jy + gy * psf_px,
+            w,
+            source.debris,
+        );
     }
 }
 
-/// Render a scene: photons (one stream), then detector noise (another stream).
-pub fn render(
+/// Where the photons of the sources go: traced one by one, or as expected flux per pixel.
+enum Photons {
+    Mapped(Canvas),
+    Expected(expected::Flux),
+}
+
+/// Every source of a scene that can put photons in the image, in a fixed order (the order
+/// in which photon mapping consumes its stream), and the stars as traced.
+fn for_each_source(
     campaign: &Campaign,
     scene: &Scene,
-    frame: Option<&RealFrame>,
-    photons_rng: &mut ChaCha12Rng,
-    noise_rng: &mut ChaCha12Rng,
-) -> Exposure {
-    let c = &campaign.resolved;
-    let s = &c.sensor;
-    let (width, height) = (s.width_px as usize, s.height_px as usize);
+    jitter: &Jitter,
+    mut add: impl FnMut(&Source),
+) -> Vec<TracedStar> {
+    let s = &campaign.resolved.sensor;
+    let (width, height) = (s.width_px as f64, s.height_px as f64);
     let tan = scene.projection(campaign);
     let scale = tan.scale_deg;
     let psf_px = s.psf_sigma_arcsec / 3600.0 / scale;
     let t_exp = scene.exposure_s;
-    let jitter = Jitter::draw(
-        photons_rng,
-        s.jitter_deg_per_sqrt_s,
-        t_exp,
-        c.render.jitter_steps as usize,
-        scale,
-    );
     let jitter_mean = jitter.mean();
-    let merge = (c.render.merge_threshold, c.render.merge_factor);
-    let mut canvas = Canvas {
-        width,
-        height,
-        electrons: vec![0; width * height],
-        debris: vec![0; width * height],
-        debris_total: 0,
-    };
 
     // Stars too far outside the image for any photon to land are skipped, and in survey
     // images a star is exposed only while its trail is in the field (no work a scene does not
@@ -249,8 +324,8 @@ pub fn render(
     let near = |x: f64, y: f64| {
         x > -0.5 - margin
             && y > -0.5 - margin
-            && x < width as f64 - 0.5 + margin
-            && y < height as f64 - 0.5 + margin
+            && x < width - 0.5 + margin
+            && y < height - 0.5 + margin
     };
     let mut traced = Vec::new();
     match scene.pointing {
@@ -272,17 +347,13 @@ pub fn render(
                     y: y0 + jitter_mean.1,
                     expected_electrons: expected,
                 });
-                let count = poisson(photons_rng, expected);
-                trace(
-                    &mut canvas,
-                    photons_rng,
-                    count,
-                    merge,
-                    &jitter,
-                    psf_px,
-                    false,
-                    |r| (r.random_range(0.0..t_exp), x0, y0),
-                );
+                add(&Source {
+                    expected,
+                    path: Path::Still { x: x0, y: y0 },
+                    t_a: 0.0,
+                    t_b: t_exp,
+                    debris: false,
+                });
             }
         }
         Pointing::Survey(track) => {
@@ -322,57 +393,94 @@ pub fn render(
                     y: ym + jitter_mean.1,
                     expected_electrons: expected,
                 });
-                let count = poisson(photons_rng, expected);
-                let trail = &trail;
-                trace(
-                    &mut canvas,
-                    photons_rng,
-                    count,
-                    merge,
-                    &jitter,
-                    psf_px,
-                    false,
-                    |r| {
-                        let t = if t_b > t_a {
-                            r.random_range(t_a..t_b)
-                        } else {
-                            t_a
-                        };
-                        let u = t / step;
-                        let i = (u as usize).min(nodes - 2);
-                        let f = u - i as f64;
-                        let (p, q) = (trail[i], trail[i + 1]);
-                        (t, p.0 + f * (q.0 - p.0), p.1 + f * (q.1 - p.1))
+                add(&Source {
+                    expected,
+                    path: Path::Trail {
+                        nodes: &trail,
+                        step,
                     },
-                );
+                    t_a,
+                    t_b,
+                    debris: false,
+                });
             }
         }
     }
 
     // Debris: each trajectory sample is a source whose photons arrive at its time.
-    let mut expected_debris = 0.0;
-    let mut mag_min = f64::INFINITY;
-    let mut mag_max = f64::NEG_INFINITY;
     for p in &scene.trajectory {
-        expected_debris += p.expected_electrons;
-        mag_min = mag_min.min(p.mag);
-        mag_max = mag_max.max(p.mag);
-        let (x0, y0) = (p.x_px, p.y_px);
-        if !near(x0, y0) {
-            continue;
+        if near(p.x_px, p.y_px) {
+            add(&Source {
+                expected: p.expected_electrons,
+                path: Path::Instant {
+                    t: p.t_s,
+                    x: p.x_px,
+                    y: p.y_px,
+                },
+                t_a: p.t_s,
+                t_b: p.t_s,
+                debris: true,
+            });
         }
-        let count = poisson(photons_rng, p.expected_electrons);
-        trace(
-            &mut canvas,
-            photons_rng,
-            count,
-            merge,
-            &jitter,
-            psf_px,
-            true,
-            |_| (p.t_s, x0, y0),
-        );
     }
+    traced
+}
+
+/// Render a scene: photons (one stream, the jitter path first), then detector noise (another).
+pub fn render(
+    campaign: &Campaign,
+    scene: &Scene,
+    frame: Option<&RealFrame>,
+    photons_rng: &mut ChaCha12Rng,
+    noise_rng: &mut ChaCha12Rng,
+) -> Exposure {
+    let jitter = Jitter::of_scene(campaign, scene, photons_rng);
+    render_with_jitter(campaign, scene, frame, &jitter, photons_rng, noise_rng)
+}
+
+/// Render a scene for a given jitter path, with the campaign's renderer.
+pub fn render_with_jitter(
+    campaign: &Campaign,
+    scene: &Scene,
+    frame: Option<&RealFrame>,
+    jitter: &Jitter,
+    photons_rng: &mut ChaCha12Rng,
+    noise_rng: &mut ChaCha12Rng,
+) -> Exposure {
+    let c = &campaign.resolved;
+    let s = &c.sensor;
+    let (width, height) = (s.width_px as usize, s.height_px as usize);
+    let psf_px = s.psf_sigma_arcsec / 3600.0 / scene.projection(campaign).scale_deg;
+    let t_exp = scene.exposure_s;
+    let jitter_mean = jitter.mean();
+    let merge = (c.render.merge_threshold, c.render.merge_factor);
+    let mut photons = match c.render.method {
+        RenderMethod::PhotonMapping => Photons::Mapped(Canvas {
+            width,
+            height,
+            electrons: vec![0; width * height],
+            debris: vec![0; width * height],
+            debris_total: 0,
+        }),
+        RenderMethod::Expected => Photons::Expected(expected::Flux::new(width, height, psf_px)),
+    };
+    let traced = for_each_source(campaign, scene, jitter, |source| match &mut photons {
+        Photons::Mapped(canvas) => {
+            let count = poisson(photons_rng, source.expected);
+            trace(canvas, photons_rng, count, merge, jitter, psf_px, source);
+        }
+        Photons::Expected(flux) => flux.add(source, jitter),
+    });
+    let canvas = match photons {
+        Photons::Mapped(canvas) => canvas,
+        Photons::Expected(flux) => flux.draw(photons_rng),
+    };
+    let (expected_debris, mag_min, mag_max) = scene
+        .trajectory
+        .iter()
+        .fold((0.0, f64::INFINITY, f64::NEG_INFINITY), |(e, lo, hi), p| {
+            (e + p.expected_electrons, lo.min(p.mag), hi.max(p.mag))
+        });
 
     // Detector, Eq. 11: ADU = electrons / gain + background + bias. The background is the
     // paper's uniform one (its range scaled linearly with exposure) or a real frame's.

@@ -112,7 +112,10 @@ pub fn train(
             );
         }
         let sha = manifest::sha256_file(&pt)?.0;
-        (pt.display().to_string(), Some(serde_json::json!({"path": t.model, "sha256": sha})))
+        (
+            pt.display().to_string(),
+            Some(serde_json::json!({"path": t.model, "sha256": sha})),
+        )
     } else {
         (t.model.clone(), None)
     };
