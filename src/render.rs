@@ -125,7 +125,7 @@ impl Jitter {
     /// None unless `steps` divides the path's steps.
     pub fn coarsened(&self, steps: usize) -> Option<Jitter> {
         let n = self.steps();
-        if steps == 0 || n % steps != 0 {
+        if steps == 0 || !n.is_multiple_of(steps) {
             return None;
         }
         let k = n / steps;

@@ -269,7 +269,7 @@ fn settings(base: &Render, quick: bool, ref_steps: usize) -> Vec<Setting> {
     let js = r.jitter_steps as u64;
     let steps: Vec<u64> = pick(vec![js / 100, js / 10, js, js * 10], vec![js / 10, js])
         .into_iter()
-        .filter(|&n| n >= 1 && ref_steps as u64 % n == 0)
+        .filter(|&n| n >= 1 && (ref_steps as u64).is_multiple_of(n))
         .collect();
     for n in steps {
         add(

@@ -49,7 +49,7 @@ impl Flux {
     /// The PSF centred on (x, y), integrated over each pixel of its support: separable, so the
     /// product of two 1-D pixel integrals (differences of the normal CDF at pixel edges).
     fn deposit(&mut self, amount: f64, x: f64, y: f64, debris: bool) {
-        if !(amount > 0.0) || !x.is_finite() || !y.is_finite() {
+        if amount.is_nan() || amount <= 0.0 || !x.is_finite() || !y.is_finite() {
             return;
         }
         let Some((i0, wx)) = pixel_weights(x, self.psf_px, self.width) else {
