@@ -326,6 +326,28 @@ pub struct Render {
     /// Steps of the Brownian jitter path over the exposure.
     #[serde(default = "defaults::jitter_steps")]
     pub jitter_steps: u32,
+    /// How photons reach the detector: `photon_mapping` (the paper's Monte Carlo, with the
+    /// merging approximation) or `expected` (each source's expected photons per pixel, the PSF
+    /// integrated over pixels along its path, then one Poisson draw per pixel: the same
+    /// distribution as photon mapping without merging). Omitted from the resolved campaign
+    /// when it is the default, so existing campaign hashes stay.
+    #[serde(default, skip_serializing_if = "RenderMethod::is_photon_mapping")]
+    pub method: RenderMethod,
+}
+
+/// The renderer of a campaign (see `Render::method`).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum RenderMethod {
+    #[default]
+    PhotonMapping,
+    Expected,
+}
+
+impl RenderMethod {
+    pub fn is_photon_mapping(&self) -> bool {
+        *self == RenderMethod::PhotonMapping
+    }
 }
 
 /// FITS -> PNG enhancement (paper 3.3).

@@ -20,4 +20,5 @@ pub mod report;
 pub mod rng;
 pub mod scene;
 pub mod sky;
+pub mod study;
 pub mod train;

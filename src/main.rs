@@ -51,6 +51,24 @@ enum Command {
         /// An output directory of `soig run`.
         dir: PathBuf,
     },
+    /// Measure what each rendering approximation (renderer, photon merging, trajectory
+    /// samples, jitter steps) costs in accuracy and saves in time on one scene of the campaign:
+    /// study.csv, study.md, study.png and a manifest.
+    Study {
+        campaign: PathBuf,
+        /// Output directory (default: `<campaign output>-study`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Photon seeds per setting (at least 2).
+        #[arg(long, default_value_t = 8)]
+        seeds: u32,
+        /// The image of the campaign whose scene is studied.
+        #[arg(long, default_value_t = 0)]
+        image: u64,
+        /// Fewer values per knob (a smoke test).
+        #[arg(long)]
+        quick: bool,
+    },
     /// Print the JSON Schema of the campaign format.
     Schema,
     /// Score YOLO-format predictions (`cls xc yc w h score`) against YOLO labels, exactly as
@@ -164,6 +182,33 @@ fn main() -> ExitCode {
                 json,
             )?;
             println!("{text}");
+            Ok(())
+        }),
+        Command::Study {
+            campaign,
+            out,
+            seeds,
+            image,
+            quick,
+        } => user_errors(|| {
+            let mut campaign = Campaign::load(&campaign)?;
+            let output = out.unwrap_or_else(|| {
+                let mut name = campaign.output_dir.as_os_str().to_owned();
+                name.push("-study");
+                PathBuf::from(name)
+            });
+            let opts = soig::study::Options {
+                seeds,
+                image,
+                quick,
+            };
+            let s = soig::study::run(&mut campaign, &output, &opts)?;
+            println!(
+                "{} settings in {:.1} s -> {}",
+                s.rows.len(),
+                s.seconds,
+                output.display()
+            );
             Ok(())
         }),
         Command::Schema => {

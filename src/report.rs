@@ -383,9 +383,8 @@ fn markdown(r: &Report, conversion: &Timing, detection: &[(String, Timing)], con
     s
 }
 
-/// Precision against recall at IoU 0.5 for each detector.
-fn pr_plot(path: &Path, curves: &[(String, Vec<f64>, Vec<f64>, f64)]) -> anyhow::Result<()> {
-    use plotters::prelude::*;
+/// The embedded sans-serif font of every plot (plotters has no system fonts here).
+pub fn register_font() {
     static FONT: std::sync::Once = std::sync::Once::new();
     FONT.call_once(|| {
         let _ = plotters::style::register_font(
@@ -394,6 +393,12 @@ fn pr_plot(path: &Path, curves: &[(String, Vec<f64>, Vec<f64>, f64)]) -> anyhow:
             include_bytes!("../assets/DejaVuSans.ttf"),
         );
     });
+}
+
+/// Precision against recall at IoU 0.5 for each detector.
+fn pr_plot(path: &Path, curves: &[(String, Vec<f64>, Vec<f64>, f64)]) -> anyhow::Result<()> {
+    use plotters::prelude::*;
+    register_font();
     let (w, h) = (640u32, 480u32);
     let mut buf = vec![0u8; (w * h * 3) as usize];
     {

@@ -393,3 +393,76 @@ fn train_stage_without_ultralytics_fails_cleanly() {
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
+
+#[test]
+fn study_writes_a_sane_table_plot_and_manifest() {
+    // A reduced study of the small campaign: every setting has a row, the exact settings have
+    // Poisson-like errors, merging inflates the variance, the manifest verifies.
+    let tmp = tempfile::tempdir().unwrap();
+    let c = small_campaign(tmp.path(), "");
+    let out = tmp.path().join("study");
+    let args = [
+        "study",
+        c.to_str().unwrap(),
+        "--quick",
+        "--seeds",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let o = soig(&args, None);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "study.csv",
+        "study.md",
+        "study.png",
+        "errors.csv",
+        "study.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let png = std::fs::read(out.join("study.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG"));
+    let mut rows = csv::Reader::from_path(out.join("study.csv")).unwrap();
+    let headers = rows.headers().unwrap().clone();
+    let col = |name: &str| headers.iter().position(|h| h == name).unwrap();
+    let rows: Vec<csv::StringRecord> = rows.records().map(|r| r.unwrap()).collect();
+    assert_eq!(
+        rows.len(),
+        9,
+        "2 methods, 2 factors, 1 threshold, 2 samples, 2 jitter steps"
+    );
+    let get = |knob: &str, value: &str, name: &str| -> f64 {
+        let r = rows
+            .iter()
+            .find(|r| &r[0] == knob && &r[1] == value)
+            .unwrap();
+        r[col(name)].parse().unwrap()
+    };
+    for r in &rows {
+        assert!(r[col("render_ms")].parse::<f64>().unwrap() > 0.0);
+        let e: f64 = r[col("rms_error_noise")].parse().unwrap();
+        assert!(e.is_finite() && e > 0.5, "{r:?}");
+    }
+    // Exact renderers: variance close to Poisson; merging 5: well above.
+    assert!((get("merge_factor", "1", "variance_ratio") - 1.0).abs() < 0.3);
+    assert!((get("method", "expected", "variance_ratio") - 1.0).abs() < 0.3);
+    assert!(get("merge_threshold", "1000", "variance_ratio") > 2.0);
+    let v = soig(&["verify", out.to_str().unwrap()], None);
+    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+
+    // Bad input: a clear error and exit 2, never a panic.
+    let bad_out = tmp.path().join("bad");
+    for (bad, says) in [
+        (vec!["--seeds", "1"], "--seeds"),
+        (vec!["--image", "99"], "--image"),
+    ] {
+        let mut a = vec!["study", c.to_str().unwrap()];
+        a.extend(bad);
+        a.extend(["--out", bad_out.to_str().unwrap()]);
+        let o = soig(&a, None);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(says) && !err.contains("panicked"), "{err}");
+    }
+}

@@ -1,0 +1,615 @@
+//! `soig study`: what each rendering approximation costs in accuracy and saves in time, on one
+//! scene of a campaign. Each knob (renderer, photon merging factor and threshold, trajectory
+//! samples, jitter steps) is varied alone, the others at the campaign's values, and every
+//! setting is rendered over several photon seeds for one fixed jitter path. The errors are
+//! measured on the noise-free photon image against the exact expected flux of a high-fidelity
+//! reference (expected renderer, no merging, many trajectory samples and jitter steps), so
+//! the detector noise, identical for every setting, does not hide them.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Context;
+use serde::Serialize;
+
+use crate::campaign::{Campaign, Render, RenderMethod};
+use crate::geometry::{BoxPx, LABEL_SHARE, flux_box};
+use crate::manifest::{MANIFEST, Manifest};
+use crate::render::expected::expected_flux;
+use crate::render::{Jitter, render_with_jitter};
+use crate::rng::{Purpose, stream};
+use crate::scene::{self, Inputs, Scene};
+
+/// The reference takes this many times the campaign's trajectory samples and jitter steps.
+const REFERENCE_REFINEMENT: u32 = 10;
+
+/// Files holding run times: they must exist but are not hashed.
+const VOLATILE: [&str; 3] = ["study.csv", "study.md", "study.png"];
+
+/// What to study.
+pub struct Options {
+    /// Photon seeds per setting (>= 2: the variance needs two).
+    pub seeds: u32,
+    /// Which image of the campaign gives the scene.
+    pub image: u64,
+    /// Fewer values per knob (a smoke test).
+    pub quick: bool,
+}
+
+/// One setting: a knob at one value, the others at the campaign's.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub knob: String,
+    pub value: String,
+    /// RMS over seeds and pixels of (image - reference flux), in units of the Poisson noise
+    /// of the reference (sqrt of its mean flux per pixel): 1 for an exact renderer.
+    pub rms_error_noise: f64,
+    /// RMS per-pixel bias of the mean image over the seeds (sampling noise subtracted), in the
+    /// same units: 0 for an exact renderer.
+    pub bias_noise: f64,
+    /// Sum of per-pixel variances over the sum of reference fluxes: 1 for Poisson.
+    pub variance_ratio: f64,
+    /// Relative error of the mean total photo-electrons.
+    pub flux_error: f64,
+    /// Relative error of the mean debris photo-electrons.
+    pub debris_flux_error: f64,
+    /// Mean distance between the debris flux centroid and the reference's, pixels.
+    pub centroid_error_px: f64,
+    /// Mean of the largest edge difference between the label box and the reference's, px.
+    pub label_box_error_px: f64,
+    /// Median wall time of the scene draw (trajectory) and of one render, milliseconds.
+    pub scene_ms: f64,
+    pub render_ms: f64,
+}
+
+/// The errors alone (deterministic, hashed in the manifest).
+#[derive(Serialize)]
+struct ErrorRow<'a> {
+    knob: &'a str,
+    value: &'a str,
+    rms_error_noise: f64,
+    bias_noise: f64,
+    variance_ratio: f64,
+    flux_error: f64,
+    debris_flux_error: f64,
+    centroid_error_px: f64,
+    label_box_error_px: f64,
+}
+
+/// What a finished study reports.
+pub struct Summary {
+    pub rows: Vec<Row>,
+    pub seconds: f64,
+}
+
+/// A setting to render: its label and the campaign and jitter path it renders with.
+struct Setting {
+    knob: &'static str,
+    value: String,
+    render: Render,
+}
+
+/// Run the study into `out` (the campaign's render settings are changed in turn, then put
+/// back).
+pub fn run(campaign: &mut Campaign, out: &Path, opts: &Options) -> anyhow::Result<Summary> {
+    anyhow::ensure!(
+        opts.seeds >= 2,
+        "--seeds must be at least 2 (got {})",
+        opts.seeds
+    );
+    anyhow::ensure!(
+        opts.image < campaign.resolved.images as u64,
+        "--image {} is past the campaign's {} images",
+        opts.image,
+        campaign.resolved.images
+    );
+    if out.exists() {
+        let ours = out.join(MANIFEST).is_file();
+        let empty = out.is_dir() && std::fs::read_dir(out)?.next().is_none();
+        anyhow::ensure!(
+            ours || empty,
+            "{} exists and is not a soig output (no {MANIFEST}); refusing to overwrite it",
+            out.display()
+        );
+    }
+    let started = Instant::now();
+    let inputs = Inputs::load(campaign).map_err(anyhow::Error::msg)?;
+    let base = campaign.resolved.render.clone();
+
+    // The reference: exact renderer, no merging, refined trajectory and jitter path.
+    let ref_samples = base
+        .trajectory_samples
+        .saturating_mul(REFERENCE_REFINEMENT)
+        .min(1_000_000);
+    let ref_steps = (base.jitter_steps as usize) * REFERENCE_REFINEMENT as usize;
+    campaign.resolved.render = with(&base, |r| {
+        r.method = RenderMethod::Expected;
+        r.merge_threshold = u64::MAX;
+        r.trajectory_samples = ref_samples;
+        r.jitter_steps = ref_steps as u32;
+    });
+    let (ref_scene, _) = draw(campaign, &inputs, opts.image)?;
+    let jitter = Jitter::of_scene(
+        campaign,
+        &ref_scene,
+        &mut stream(campaign.resolved.seed, opts.image, Purpose::Photons),
+    );
+    let flux = expected_flux(campaign, &ref_scene, &jitter);
+    let mu: Vec<f64> = flux
+        .stars
+        .iter()
+        .zip(&flux.debris)
+        .map(|(s, d)| s + d)
+        .collect();
+    let mu_debris = flux.debris;
+    let (w, h) = (flux.width, flux.height);
+    let truth = Reference {
+        total: mu.iter().sum(),
+        debris_total: mu_debris.iter().sum(),
+        centroid: centroid(&mu_debris, w),
+        label_box: flux_box(
+            &mu_debris.iter().map(|&v| v as f32).collect::<Vec<_>>(),
+            w,
+            h,
+            LABEL_SHARE,
+        ),
+        mu,
+    };
+    anyhow::ensure!(
+        truth.debris_total > 0.0,
+        "the debris of image {} puts no light in the image",
+        opts.image
+    );
+
+    let mut rows = Vec::new();
+    for s in settings(&base, opts.quick, ref_steps) {
+        campaign.resolved.render = s.render.clone();
+        let (scene, scene_ms) = draw(campaign, &inputs, opts.image)?;
+        let steps = s.render.jitter_steps as usize;
+        let path = jitter
+            .coarsened(steps)
+            .with_context(|| format!("jitter steps {steps} do not divide {ref_steps}"))?;
+        rows.push(measure(
+            campaign, &s, &scene, &path, &truth, opts.seeds, &inputs, scene_ms,
+        ));
+    }
+    campaign.resolved.render = base;
+    write(out, campaign, opts, &rows, ref_samples, ref_steps)?;
+    Ok(Summary {
+        rows,
+        seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// The reference figures every setting is compared with.
+struct Reference {
+    mu: Vec<f64>,
+    total: f64,
+    debris_total: f64,
+    centroid: Option<(f64, f64)>,
+    label_box: Option<BoxPx>,
+}
+
+/// A copy of render settings, changed.
+fn with(render: &Render, change: impl FnOnce(&mut Render)) -> Render {
+    let mut r = render.clone();
+    change(&mut r);
+    r
+}
+
+/// The scene of the image (with the campaign's trajectory samples), and the median time of
+/// three draws, milliseconds.
+fn draw(campaign: &Campaign, inputs: &Inputs, image: u64) -> anyhow::Result<(Scene, f64)> {
+    let mut times = Vec::new();
+    let mut scene = None;
+    for _ in 0..3 {
+        let t = Instant::now();
+        let s = scene::draw(
+            campaign,
+            inputs,
+            image,
+            &mut stream(campaign.resolved.seed, image, Purpose::Scene),
+        )?;
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+        scene = Some(s);
+    }
+    Ok((scene.expect("drawn"), median(&mut times)))
+}
+
+/// Each knob alone over its values (the campaign's value among them).
+fn settings(base: &Render, quick: bool, ref_steps: usize) -> Vec<Setting> {
+    let r = base;
+    let campaign = base;
+    let pick = |full: Vec<u64>, short: Vec<u64>| if quick { short } else { full };
+    let mut out = Vec::new();
+    let mut add = |knob: &'static str, value: String, render: Render| {
+        out.push(Setting {
+            knob,
+            value,
+            render,
+        });
+    };
+    for m in [RenderMethod::PhotonMapping, RenderMethod::Expected] {
+        let name = match m {
+            RenderMethod::PhotonMapping => "photon_mapping",
+            RenderMethod::Expected => "expected",
+        };
+        add("method", name.into(), with(campaign, |r| r.method = m));
+    }
+    // The approximations of photon mapping, studied with photon mapping.
+    let pm = with(campaign, |r| r.method = RenderMethod::PhotonMapping);
+    for f in pick(vec![1, 2, 5, 10, 20], vec![1, 5]) {
+        add(
+            "merge_factor",
+            f.to_string(),
+            with(&pm, |r| r.merge_factor = f as u32),
+        );
+    }
+    for t in pick(
+        vec![1_000, 10_000, 100_000, 1_000_000, 10_000_000],
+        vec![1_000],
+    ) {
+        add(
+            "merge_threshold",
+            t.to_string(),
+            with(&pm, |r| r.merge_threshold = t),
+        );
+    }
+    for n in pick(
+        vec![10, 30, 100, 300, 1000, 2000, 5000, 20000],
+        vec![10, 100],
+    ) {
+        add(
+            "trajectory_samples",
+            n.to_string(),
+            with(campaign, |r| r.trajectory_samples = n as u32),
+        );
+    }
+    // Coarser views of the reference path: every value must divide its steps.
+    let js = r.jitter_steps as u64;
+    let steps: Vec<u64> = pick(vec![js / 100, js / 10, js, js * 10], vec![js / 10, js])
+        .into_iter()
+        .filter(|&n| n >= 1 && (ref_steps as u64).is_multiple_of(n))
+        .collect();
+    for n in steps {
+        add(
+            "jitter_steps",
+            n.to_string(),
+            with(campaign, |r| r.jitter_steps = n as u32),
+        );
+    }
+    out
+}
+
+/// Render a setting over the seeds and compare with the reference.
+#[allow(clippy::too_many_arguments)]
+fn measure(
+    campaign: &Campaign,
+    s: &Setting,
+    scene: &Scene,
+    jitter: &Jitter,
+    truth: &Reference,
+    seeds: u32,
+    inputs: &Inputs,
+    scene_ms: f64,
+) -> Row {
+    let n = truth.mu.len();
+    let (mut sum, mut sum2) = (vec![0.0f64; n], vec![0.0f64; n]);
+    let (mut sq_err, mut total, mut debris_total) = (0.0, 0.0, 0.0);
+    let (mut centroid_err, mut box_err) = (Vec::new(), Vec::new());
+    let mut times = Vec::new();
+    let seed = campaign.resolved.seed;
+    let frame = inputs.frame(scene.background);
+    for k in 0..seeds as u64 {
+        // Photon seeds apart from the campaign's images: (seed + 1 + k, image).
+        let t = Instant::now();
+        let e = render_with_jitter(
+            campaign,
+            scene,
+            frame,
+            jitter,
+            &mut stream(
+                seed.wrapping_add(1 + k),
+                scene.image_index,
+                Purpose::Photons,
+            ),
+            &mut stream(seed.wrapping_add(1 + k), scene.image_index, Purpose::Noise),
+        );
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+        for (i, &v) in e.electrons.iter().enumerate() {
+            let v = v as f64;
+            sum[i] += v;
+            sum2[i] += v * v;
+            sq_err += (v - truth.mu[i]).powi(2);
+            total += v;
+        }
+        debris_total += e.truth.rendered_debris_electrons as f64;
+        let debris: Vec<f64> = e.debris_electrons.iter().map(|&v| v as f64).collect();
+        if let (Some(a), Some(b)) = (centroid(&debris, e.width), truth.centroid) {
+            centroid_err.push((a.0 - b.0).hypot(a.1 - b.1));
+        }
+        let label = flux_box(
+            &e.debris_electrons
+                .iter()
+                .map(|&v| v as f32)
+                .collect::<Vec<_>>(),
+            e.width,
+            e.height,
+            LABEL_SHARE,
+        );
+        if let (Some(a), Some(b)) = (label, truth.label_box) {
+            box_err.push(
+                [
+                    a.x_min - b.x_min,
+                    a.y_min - b.y_min,
+                    a.x_max - b.x_max,
+                    a.y_max - b.y_max,
+                ]
+                .iter()
+                .fold(0.0f64, |m, d| m.max(d.abs())),
+            );
+        }
+    }
+    let r = seeds as f64;
+    let (mut bias2, mut var) = (0.0, 0.0);
+    for i in 0..n {
+        let m = sum[i] / r;
+        let v = (sum2[i] - r * m * m).max(0.0) / (r - 1.0);
+        var += v;
+        // The squared bias of the mean, less the sampling variance of the mean.
+        bias2 += (m - truth.mu[i]).powi(2) - v / r;
+    }
+    let mean = |v: &[f64]| {
+        if v.is_empty() {
+            f64::NAN
+        } else {
+            v.iter().sum::<f64>() / v.len() as f64
+        }
+    };
+    Row {
+        knob: s.knob.into(),
+        value: s.value.clone(),
+        rms_error_noise: (sq_err / r / truth.total).sqrt(),
+        bias_noise: (bias2.max(0.0) / truth.total).sqrt(),
+        variance_ratio: var / truth.total,
+        flux_error: total / r / truth.total - 1.0,
+        debris_flux_error: debris_total / r / truth.debris_total - 1.0,
+        centroid_error_px: mean(&centroid_err),
+        label_box_error_px: mean(&box_err),
+        scene_ms,
+        render_ms: median(&mut times),
+    }
+}
+
+/// Flux-weighted centroid (pixel centres at integers).
+fn centroid(img: &[f64], width: usize) -> Option<(f64, f64)> {
+    let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
+    for (k, &v) in img.iter().enumerate() {
+        sx += v * (k % width) as f64;
+        sy += v * (k / width) as f64;
+        sw += v;
+    }
+    (sw > 0.0).then(|| (sx / sw, sy / sw))
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
+}
+
+/// study.json (parameters), errors.csv (hashed), study.csv, study.md, study.png (with run
+/// times: volatile), and the manifest.
+fn write(
+    out: &Path,
+    campaign: &Campaign,
+    opts: &Options,
+    rows: &[Row],
+    ref_samples: u32,
+    ref_steps: usize,
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let params = serde_json::json!({
+        "campaign": campaign.resolved.name,
+        "campaign_hash": campaign.hash,
+        "image": opts.image,
+        "seeds": opts.seeds,
+        "quick": opts.quick,
+        "reference": {
+            "method": "expected",
+            "merge": "off",
+            "trajectory_samples": ref_samples,
+            "jitter_steps": ref_steps,
+        },
+        "photon_seeds": "stream(campaign seed + 1 + k, image, photons), k < seeds",
+    });
+    std::fs::write(
+        out.join("study.json"),
+        serde_json::to_string_pretty(&params)? + "\n",
+    )?;
+    let mut errors = csv::Writer::from_path(out.join("errors.csv"))?;
+    for r in rows {
+        errors.serialize(ErrorRow {
+            knob: &r.knob,
+            value: &r.value,
+            rms_error_noise: r.rms_error_noise,
+            bias_noise: r.bias_noise,
+            variance_ratio: r.variance_ratio,
+            flux_error: r.flux_error,
+            debris_flux_error: r.debris_flux_error,
+            centroid_error_px: r.centroid_error_px,
+            label_box_error_px: r.label_box_error_px,
+        })?;
+    }
+    errors.flush()?;
+    let mut all = csv::Writer::from_path(out.join("study.csv"))?;
+    for r in rows {
+        all.serialize(r)?;
+    }
+    all.flush()?;
+    std::fs::write(
+        out.join("study.md"),
+        table(campaign, opts, rows, ref_samples, ref_steps),
+    )?;
+    plot(&out.join("study.png"), rows)?;
+    let volatile: Vec<String> = VOLATILE.iter().map(|v| v.to_string()).collect();
+    let manifest = Manifest::build(
+        out,
+        &campaign.hash,
+        serde_json::to_value(&campaign.resolved)?,
+        &volatile,
+    )?;
+    manifest.write(out)?;
+    Ok(())
+}
+
+fn table(
+    campaign: &Campaign,
+    opts: &Options,
+    rows: &[Row],
+    ref_samples: u32,
+    ref_steps: usize,
+) -> String {
+    let r = &campaign.resolved.render;
+    let mut s = format!(
+        "# Render settings: error against run time\n\nCampaign `{}`, image {}, {} photon seeds per setting, one fixed jitter path. Each knob varies alone; the others stay at the campaign's values (method {}, merge_factor {}, merge_threshold {}, trajectory_samples {}, jitter_steps {}). Reference: the expected-flux renderer, no merging, {ref_samples} trajectory samples, {ref_steps} jitter steps; errors are on the noise-free photon image.\n\n",
+        campaign.resolved.name,
+        opts.image,
+        opts.seeds,
+        if r.method == RenderMethod::Expected {
+            "expected"
+        } else {
+            "photon_mapping"
+        },
+        r.merge_factor,
+        r.merge_threshold,
+        r.trajectory_samples,
+        r.jitter_steps
+    );
+    s += "- rms error: RMS of (image - reference flux) per pixel, in units of the Poisson noise (1 = exact Poisson rendering)\n";
+    s += "- bias: RMS per-pixel bias of the mean image, same units (0 = unbiased; sampling noise subtracted)\n";
+    s += "- var ratio: per-pixel variance over the Poisson variance (1 = Poisson)\n";
+    s += "- centroid, label box: debris centroid distance and largest label-box edge difference to the reference, px\n";
+    s +=
+        "- time: median wall time of one render (+ scene draw, which holds the trajectory), ms\n\n";
+    s += "| knob | value | rms error | bias | var ratio | flux error | debris flux error | centroid px | label box px | render ms | scene ms |\n";
+    s += "|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {:.3} | {:.3} | {:.2} | {:+.2e} | {:+.2e} | {:.3} | {:.2} | {:.1} | {:.1} |\n",
+            r.knob,
+            r.value,
+            r.rms_error_noise,
+            r.bias_noise,
+            r.variance_ratio,
+            r.flux_error,
+            r.debris_flux_error,
+            r.centroid_error_px,
+            r.label_box_error_px,
+            r.render_ms,
+            r.scene_ms
+        );
+    }
+    s += "\n![error against run time](study.png)\n";
+    s
+}
+
+/// RMS error (in Poisson-noise units) against run time, one series per knob.
+fn plot(path: &Path, rows: &[Row]) -> anyhow::Result<()> {
+    use plotters::prelude::*;
+    crate::report::register_font();
+    let time = |r: &Row| r.render_ms + r.scene_ms;
+    let finite = |v: f64| v.is_finite() && v > 0.0;
+    let xs: Vec<f64> = rows.iter().map(time).filter(|&v| finite(v)).collect();
+    let ys: Vec<f64> = rows
+        .iter()
+        .map(|r| r.rms_error_noise)
+        .filter(|&v| finite(v))
+        .collect();
+    anyhow::ensure!(
+        !xs.is_empty() && !ys.is_empty(),
+        "no finite figures to plot"
+    );
+    let (x0, x1) = bounds(&xs);
+    let (y0, y1) = bounds(&ys);
+    let (w, h) = (800u32, 560u32);
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "Render settings: error against run time",
+                ("sans-serif", 22),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc("render + scene time per image, ms")
+            .y_desc("RMS error / Poisson noise (1 = exact)")
+            .draw()?;
+        let colors = [
+            RGBColor(200, 30, 30),
+            RGBColor(30, 90, 200),
+            RGBColor(30, 150, 60),
+            RGBColor(150, 60, 180),
+            RGBColor(220, 130, 0),
+        ];
+        let mut knobs: Vec<&str> = Vec::new();
+        for r in rows {
+            if !knobs.contains(&r.knob.as_str()) {
+                knobs.push(&r.knob);
+            }
+        }
+        for (k, knob) in knobs.iter().enumerate() {
+            let c = colors[k % colors.len()];
+            let pts: Vec<(f64, f64, String)> = rows
+                .iter()
+                .filter(|r| r.knob == *knob && finite(time(r)) && finite(r.rms_error_noise))
+                .map(|r| (time(r), r.rms_error_noise, r.value.clone()))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(
+                    pts.iter().map(|p| (p.0, p.1)),
+                    c.stroke_width(2),
+                ))?
+                .label(knob.to_string())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                });
+            chart.draw_series(pts.iter().map(|p| {
+                EmptyElement::at((p.0, p.1))
+                    + Circle::new((0, 0), 4, c.filled())
+                    + Text::new(
+                        p.2.clone(),
+                        (5, -14),
+                        ("sans-serif", 13).into_font().color(&c),
+                    )
+            }))?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()?;
+        root.present()?;
+    }
+    let img = image::RgbImage::from_raw(w, h, buf).expect("buffer size");
+    img.save(path)?;
+    Ok(())
+}
+
+/// A log-axis range around the values, with some room.
+fn bounds(v: &[f64]) -> (f64, f64) {
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (lo / 1.5, hi * 1.5)
+}
