@@ -1,0 +1,82 @@
+//! Benchmarks of the per-image pipeline on the quickstart scenes (`cargo bench`; criterion
+//! reports the median and its confidence interval). They read the shared TLE catalogue beside
+//! the repository, like the campaigns, and skip YOLO when ONNX Runtime is not installed.
+
+use std::hint::black_box;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use soig::campaign::{Campaign, RenderMethod};
+use soig::detect::streak::{StreakParams, detect_streaks};
+use soig::detect::yolo::{YoloDetector, YoloParams, find_onnxruntime};
+use soig::rng::{Purpose, stream};
+use soig::{enhance, render, scene};
+
+fn campaign(name: &str) -> Campaign {
+    let path: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR")).join("campaigns").join(name);
+    Campaign::load(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Scene draw and render of one image, as `soig run` does it.
+fn render_image(c: &Campaign, inputs: &scene::Inputs, i: u64) -> render::Exposure {
+    let seed = c.resolved.seed;
+    let scene = scene::draw(c, inputs, i, &mut stream(seed, i, Purpose::Scene)).unwrap();
+    render::render(
+        c,
+        &scene,
+        inputs.frame(scene.background),
+        &mut stream(seed, i, Purpose::Photons),
+        &mut stream(seed, i, Purpose::Noise),
+    )
+}
+
+fn benches(cr: &mut Criterion) {
+    let fixed = campaign("quickstart.toml");
+    let survey = campaign("survey-quickstart.toml");
+    let mut expected = campaign("quickstart.toml");
+    expected.resolved.render.method = RenderMethod::Expected;
+    let inputs = scene::Inputs::load(&fixed).unwrap();
+    let survey_inputs = scene::Inputs::load(&survey).unwrap();
+
+    let mut g = cr.benchmark_group("render");
+    g.sample_size(10).measurement_time(Duration::from_secs(8));
+    g.bench_function("fixed 1024px photon mapping", |b| {
+        b.iter(|| render_image(&fixed, &inputs, black_box(0)))
+    });
+    g.bench_function("fixed 1024px expected flux", |b| {
+        b.iter(|| render_image(&expected, &inputs, black_box(0)))
+    });
+    g.bench_function("survey 1024px photon mapping", |b| {
+        b.iter(|| render_image(&survey, &survey_inputs, black_box(0)))
+    });
+    g.finish();
+
+    let exposure = render_image(&fixed, &inputs, 0);
+    let (w, h) = (exposure.width, exposure.height);
+    let settings = &fixed.resolved.enhance;
+    let mut g = cr.benchmark_group("enhance and detect");
+    g.sample_size(20);
+    g.bench_function("enhance 1024px (sqrt, log, CLAHE, gamma)", |b| {
+        b.iter(|| enhance::enhance(black_box(&exposure.adu), w, h, settings, settings.sqrt))
+    });
+    let png = enhance::enhance(&exposure.adu, w, h, settings, settings.sqrt);
+    let pixels = png.pixels;
+    let params = StreakParams::default();
+    g.bench_function("streak detector 1024px", |b| {
+        b.iter(|| detect_streaks(black_box(&pixels), w, h, &params, None))
+    });
+    if find_onnxruntime().is_ok() {
+        let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/soig-yolov8n-fixed.onnx");
+        let mut yolo = YoloDetector::load(&model, YoloParams::default()).unwrap();
+        g.bench_function("YOLOv8n at 1024 (committed model, 1 thread)", |b| {
+            b.iter(|| yolo.detect(black_box(&pixels), w, h).unwrap())
+        });
+    } else {
+        eprintln!("ONNX Runtime not installed: YOLO benchmark skipped (scripts/setup.sh)");
+    }
+    g.finish();
+}
+
+criterion_group!(pipeline, benches);
+criterion_main!(pipeline);
