@@ -14,7 +14,9 @@ use soig::rng::{Purpose, stream};
 use soig::{enhance, render, scene};
 
 fn campaign(name: &str) -> Campaign {
-    let path: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR")).join("campaigns").join(name);
+    let path: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("campaigns")
+        .join(name);
     Campaign::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
