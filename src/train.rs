@@ -88,11 +88,12 @@ pub fn train(
     python: Option<&Path>,
     progress: bool,
 ) -> anyhow::Result<PathBuf> {
-    let python = find_python(python)?;
     if campaign.resolved.stages.contains(&Stage::Train) {
-        crate::pipeline::run_with(campaign, out, progress, Some(&python))?;
+        // The pipeline finds (and checks) the interpreter itself.
+        crate::pipeline::run_with(campaign, out, progress, python)?;
         return Ok(out.join(TRAIN_DIR).join("model.onnx"));
     }
+    let python = find_python(python)?;
     let reusable = out.join(MANIFEST).is_file()
         && manifest::verify(out)
             .is_ok_and(|(m, problems)| problems.is_empty() && m.campaign_hash == campaign.hash);
