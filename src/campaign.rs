@@ -348,6 +348,14 @@ impl RenderMethod {
     pub fn is_photon_mapping(&self) -> bool {
         *self == RenderMethod::PhotonMapping
     }
+
+    /// The name a campaign file uses.
+    pub fn name(&self) -> &'static str {
+        match self {
+            RenderMethod::PhotonMapping => "photon_mapping",
+            RenderMethod::Expected => "expected",
+        }
+    }
 }
 
 /// FITS -> PNG enhancement (paper 3.3).

@@ -53,13 +53,31 @@ pub fn run_with(
     progress: bool,
     python: Option<&Path>,
 ) -> anyhow::Result<RunSummary> {
-    use anyhow::Context;
     // Find the training Python before rendering anything, so a missing one fails at once.
     let python = if campaign.resolved.stages.contains(&Stage::Train) {
         Some(crate::train::find_python(python)?)
     } else {
         None
     };
+    let (digest, images, seconds) = write_replacing(output, |staging| {
+        write_all(campaign, staging, progress, python.as_deref())
+    })?;
+    Ok(RunSummary {
+        output: output.to_path_buf(),
+        digest,
+        images,
+        seconds,
+    })
+}
+
+/// Write a soig output directory whole or not at all: `write` fills a hidden staging directory
+/// beside `output`, which replaces `output` only when it succeeds and is deleted when it fails.
+/// An existing `output` is replaced only if it is a soig output (it holds a manifest) or empty.
+pub fn write_replacing<T>(
+    output: &Path,
+    write: impl FnOnce(&Path) -> anyhow::Result<T>,
+) -> anyhow::Result<T> {
+    use anyhow::Context;
     if output.exists() {
         let is_ours = output.join(MANIFEST).is_file();
         let empty = output.is_dir() && std::fs::read_dir(output)?.next().is_none();
@@ -84,9 +102,8 @@ pub fn run_with(
     if staging.exists() {
         std::fs::remove_dir_all(&staging)?;
     }
-    let result = write_all(campaign, &staging, progress, python.as_deref());
-    match result {
-        Ok((digest, images, seconds)) => {
+    match write(&staging) {
+        Ok(value) => {
             if output.exists() {
                 std::fs::remove_dir_all(output)
                     .with_context(|| format!("cannot replace {}", output.display()))?;
@@ -94,12 +111,7 @@ pub fn run_with(
             std::fs::rename(&staging, output).with_context(|| {
                 format!("cannot move {} to {}", staging.display(), output.display())
             })?;
-            Ok(RunSummary {
-                output: output.to_path_buf(),
-                digest,
-                images,
-                seconds,
-            })
+            Ok(value)
         }
         Err(e) => {
             let _ = std::fs::remove_dir_all(&staging);

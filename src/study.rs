@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::campaign::{Campaign, Render, RenderMethod};
 use crate::geometry::{BoxPx, LABEL_SHARE, flux_box};
-use crate::manifest::{MANIFEST, Manifest};
+use crate::manifest::Manifest;
 use crate::render::expected::expected_flux;
 use crate::render::{Jitter, render_with_jitter};
 use crate::rng::{Purpose, stream};
@@ -89,8 +89,8 @@ struct Setting {
     render: Render,
 }
 
-/// Run the study into `out` (the campaign's render settings are changed in turn, then put
-/// back).
+/// Run the study into `out`, whole or not at all (the campaign's render settings are changed
+/// in turn, then put back).
 pub fn run(campaign: &mut Campaign, out: &Path, opts: &Options) -> anyhow::Result<Summary> {
     anyhow::ensure!(
         opts.seeds >= 2,
@@ -103,15 +103,11 @@ pub fn run(campaign: &mut Campaign, out: &Path, opts: &Options) -> anyhow::Resul
         opts.image,
         campaign.resolved.images
     );
-    if out.exists() {
-        let ours = out.join(MANIFEST).is_file();
-        let empty = out.is_dir() && std::fs::read_dir(out)?.next().is_none();
-        anyhow::ensure!(
-            ours || empty,
-            "{} exists and is not a soig output (no {MANIFEST}); refusing to overwrite it",
-            out.display()
-        );
-    }
+    crate::pipeline::write_replacing(out, |dir| study(campaign, dir, opts))
+}
+
+/// The study itself, its files written into `dir`.
+fn study(campaign: &mut Campaign, dir: &Path, opts: &Options) -> anyhow::Result<Summary> {
     let started = Instant::now();
     let inputs = Inputs::load(campaign).map_err(anyhow::Error::msg)?;
     let base = campaign.resolved.render.clone();
@@ -174,7 +170,7 @@ pub fn run(campaign: &mut Campaign, out: &Path, opts: &Options) -> anyhow::Resul
         ));
     }
     campaign.resolved.render = base;
-    write(out, campaign, opts, &rows, ref_samples, ref_steps)?;
+    write(dir, campaign, opts, &rows, ref_samples, ref_steps)?;
     Ok(Summary {
         rows,
         seconds: started.elapsed().as_secs_f64(),
@@ -213,13 +209,11 @@ fn draw(campaign: &Campaign, inputs: &Inputs, image: u64) -> anyhow::Result<(Sce
         times.push(t.elapsed().as_secs_f64() * 1e3);
         scene = Some(s);
     }
-    Ok((scene.expect("drawn"), median(&mut times)))
+    Ok((scene.expect("drawn"), median(&times)))
 }
 
 /// Each knob alone over its values (the campaign's value among them).
 fn settings(base: &Render, quick: bool, ref_steps: usize) -> Vec<Setting> {
-    let r = base;
-    let campaign = base;
     let pick = |full: Vec<u64>, short: Vec<u64>| if quick { short } else { full };
     let mut out = Vec::new();
     let mut add = |knob: &'static str, value: String, render: Render| {
@@ -230,14 +224,10 @@ fn settings(base: &Render, quick: bool, ref_steps: usize) -> Vec<Setting> {
         });
     };
     for m in [RenderMethod::PhotonMapping, RenderMethod::Expected] {
-        let name = match m {
-            RenderMethod::PhotonMapping => "photon_mapping",
-            RenderMethod::Expected => "expected",
-        };
-        add("method", name.into(), with(campaign, |r| r.method = m));
+        add("method", m.name().into(), with(base, |r| r.method = m));
     }
     // The approximations of photon mapping, studied with photon mapping.
-    let pm = with(campaign, |r| r.method = RenderMethod::PhotonMapping);
+    let pm = with(base, |r| r.method = RenderMethod::PhotonMapping);
     for f in pick(vec![1, 2, 5, 10, 20], vec![1, 5]) {
         add(
             "merge_factor",
@@ -262,11 +252,11 @@ fn settings(base: &Render, quick: bool, ref_steps: usize) -> Vec<Setting> {
         add(
             "trajectory_samples",
             n.to_string(),
-            with(campaign, |r| r.trajectory_samples = n as u32),
+            with(base, |r| r.trajectory_samples = n as u32),
         );
     }
     // Coarser views of the reference path: every value must divide its steps.
-    let js = r.jitter_steps as u64;
+    let js = base.jitter_steps as u64;
     let steps: Vec<u64> = pick(vec![js / 100, js / 10, js, js * 10], vec![js / 10, js])
         .into_iter()
         .filter(|&n| n >= 1 && (ref_steps as u64).is_multiple_of(n))
@@ -275,7 +265,7 @@ fn settings(base: &Render, quick: bool, ref_steps: usize) -> Vec<Setting> {
         add(
             "jitter_steps",
             n.to_string(),
-            with(campaign, |r| r.jitter_steps = n as u32),
+            with(base, |r| r.jitter_steps = n as u32),
         );
     }
     out
@@ -377,8 +367,12 @@ fn measure(
         centroid_error_px: mean(&centroid_err),
         label_box_error_px: mean(&box_err),
         scene_ms,
-        render_ms: median(&mut times),
+        render_ms: median(&times),
     }
+}
+
+fn median(v: &[f64]) -> f64 {
+    crate::report::Timing::of(v).median_s
 }
 
 /// Flux-weighted centroid (pixel centres at integers).
@@ -390,16 +384,6 @@ fn centroid(img: &[f64], width: usize) -> Option<(f64, f64)> {
         sw += v;
     }
     (sw > 0.0).then(|| (sx / sw, sy / sw))
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        (v[n / 2 - 1] + v[n / 2]) / 2.0
-    }
 }
 
 /// study.json (parameters), errors.csv (hashed), study.csv, study.md, study.png (with run
@@ -480,11 +464,7 @@ fn table(
         campaign.resolved.name,
         opts.image,
         opts.seeds,
-        if r.method == RenderMethod::Expected {
-            "expected"
-        } else {
-            "photon_mapping"
-        },
+        r.method.name(),
         r.merge_factor,
         r.merge_threshold,
         r.trajectory_samples,
