@@ -332,7 +332,7 @@ fn for_each_source(
     let (width, height) = (s.width_px as f64, s.height_px as f64);
     let tan = scene.projection(campaign);
     let scale = tan.scale_deg;
-    let psf_px = s.psf_sigma_arcsec / 3600.0 / scale;
+    let psf_px = crate::scene::psf_sigma_px(campaign);
     let t_exp = scene.exposure_s;
     let jitter_mean = jitter.mean();
 
@@ -469,7 +469,7 @@ pub fn render_with_jitter(
     let c = &campaign.resolved;
     let s = &c.sensor;
     let (width, height) = (s.width_px as usize, s.height_px as usize);
-    let psf_px = s.psf_sigma_arcsec / 3600.0 / scene.projection(campaign).scale_deg;
+    let psf_px = crate::scene::psf_sigma_px(campaign);
     let t_exp = scene.exposure_s;
     let jitter_mean = jitter.mean();
     let merge = (c.render.merge_threshold, c.render.merge_factor);
@@ -970,7 +970,7 @@ mod tests {
         // P = N div F packets and S = N mod F singles, each landing in the pixel with chance p:
         // p (1 - p) (F^2 E[P] + E[S]) + p^2 lambda. Summed over the pixels with signal.
         let f = 5.0;
-        let psf_px = exact.resolved.sensor.psf_sigma_arcsec / 3600.0 / tan.scale_deg;
+        let psf_px = crate::scene::psf_sigma_px(&exact);
         let mut predicted = vec![0.0; a.mean.len()];
         for_each_source(&merged, &s, &jitter, |source| {
             let mut flux = expected::Flux::new(128, 128, psf_px);

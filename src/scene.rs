@@ -248,6 +248,11 @@ pub fn pixel_scale_deg(campaign: &Campaign) -> f64 {
     s.fov_radius_deg / (s.width_px as f64 / 2.0)
 }
 
+/// The PSF's Gaussian sigma in pixels.
+pub fn psf_sigma_px(campaign: &Campaign) -> f64 {
+    campaign.resolved.sensor.psf_sigma_arcsec / 3600.0 / pixel_scale_deg(campaign)
+}
+
 /// Why no scene could be drawn.
 #[derive(Debug, thiserror::Error)]
 #[error("image {image}: no acceptable scene in {attempts} draws (rejections: {reasons})")]
@@ -519,7 +524,7 @@ fn try_draw(
     // streak (a 600 s exposure of LEO debris with 2000 samples: one dot per 128 px; 0.7% of the
     // quickstart draws: 4-8 px). Such a trajectory is sampled again, finer by the factor that
     // brings the spacing to two sigmas; beyond MAX_TRAJECTORY_SAMPLES the draw is rejected.
-    let psf_px = c.sensor.psf_sigma_arcsec / 3600.0 / scale;
+    let psf_px = psf_sigma_px(campaign);
     let spacing = max_sample_spacing_px(campaign, &trajectory);
     if spacing > MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px {
         let factor = (spacing / (MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px)).ceil() as usize;

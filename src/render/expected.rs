@@ -103,7 +103,7 @@ pub fn expected_flux(
     jitter: &Jitter,
 ) -> Flux {
     let s = &campaign.resolved.sensor;
-    let psf_px = s.psf_sigma_arcsec / 3600.0 / scene.projection(campaign).scale_deg;
+    let psf_px = crate::scene::psf_sigma_px(campaign);
     let mut flux = Flux::new(s.width_px as usize, s.height_px as usize, psf_px);
     super::for_each_source(campaign, scene, jitter, |source| flux.add(source, jitter));
     flux
