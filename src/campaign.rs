@@ -11,6 +11,9 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+pub use crate::geometry::FrameKind;
+pub use crate::render::RenderMethod;
+pub use crate::scene::{Body, PointingMode};
 use crate::sky::orbit::{self, OrbitalElements, Propagator, Tle};
 
 /// A campaign as written in TOML. Every section is optional and defaults to the paper's values.
@@ -125,17 +128,6 @@ pub struct Exposure {
     pub min_s: f64,
     #[serde(default = "defaults::exposure_max")]
     pub max_s: f64,
-}
-
-/// How the sensor points during the exposure.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum PointingMode {
-    /// Inertially fixed on a random direction around the debris.
-    #[default]
-    Fixed,
-    /// Following the observer's nadir-pointing attitude: star trails across the image.
-    Survey,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
@@ -335,29 +327,6 @@ pub struct Render {
     pub method: RenderMethod,
 }
 
-/// The renderer of a campaign (see `Render::method`).
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum RenderMethod {
-    #[default]
-    PhotonMapping,
-    Expected,
-}
-
-impl RenderMethod {
-    pub fn is_photon_mapping(&self) -> bool {
-        *self == RenderMethod::PhotonMapping
-    }
-
-    /// The name a campaign file uses.
-    pub fn name(&self) -> &'static str {
-        match self {
-            RenderMethod::PhotonMapping => "photon_mapping",
-            RenderMethod::Expected => "expected",
-        }
-    }
-}
-
 /// FITS -> PNG enhancement (paper 3.3).
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -376,18 +345,9 @@ pub struct Enhance {
     /// Frame of the PNGs and labels: `original`, `padded` (noise border of `pad_px` on each
     /// side: 1024 -> 1088) or `rotated` (survey only: star trails horizontal, 1024 -> 1472).
     #[serde(default)]
-    pub geometry: GeometryKind,
+    pub geometry: FrameKind,
     #[serde(default = "defaults::pad_px")]
     pub pad_px: u32,
-}
-
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum GeometryKind {
-    #[default]
-    Original,
-    Padded,
-    Rotated,
 }
 
 /// Dataset split ratios; they must sum to 1.
@@ -698,14 +658,6 @@ pub struct CampaignError {
     pub line: Option<usize>,
     pub field: Option<String>,
     pub message: String,
-}
-
-/// One body of the scene with its propagator, resolved from an `ObjectSpec`.
-#[derive(Debug)]
-pub struct Body {
-    pub name: String,
-    pub norad: u64,
-    pub propagator: Propagator,
 }
 
 /// A validated campaign with every default filled in, files read, and its hash.
@@ -1143,7 +1095,7 @@ fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     )?;
     let r = &c.render;
     check(
-        (2..=1_000_000).contains(&r.trajectory_samples),
+        (2..=crate::scene::MAX_TRAJECTORY_SAMPLES as u32).contains(&r.trajectory_samples),
         "render.trajectory_samples",
         "must be between 2 and 1000000",
     )?;
@@ -1176,7 +1128,7 @@ fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     check(pos(en.gamma), "enhance.gamma", "must be positive")?;
     check(en.pad_px <= 4096, "enhance.pad_px", "must be at most 4096")?;
     check(
-        en.geometry != GeometryKind::Rotated || c.pointing.mode == PointingMode::Survey,
+        en.geometry != FrameKind::Rotated || c.pointing.mode == PointingMode::Survey,
         "enhance.geometry",
         "`rotated` needs survey pointing (fixed images have no star trails to align)",
     )?;
