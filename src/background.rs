@@ -19,6 +19,8 @@ use std::path::{Path, PathBuf};
 
 use fitsio::FitsFile;
 
+use crate::error::Error;
+
 use crate::geometry::robust_stats;
 use crate::rng::{Purpose, stream};
 use rand::RngExt;
@@ -46,8 +48,8 @@ const MASK_GROW_PX: usize = 2;
 impl RealFrame {
     /// Read a 2-D FITS frame and its exposure in seconds (`EXPTIME`, else `EXPOSURE` as NEOSSat
     /// writes it, else `AEXPTIME`). Non-finite pixels become the frame median.
-    pub fn load(path: &Path) -> Result<RealFrame, String> {
-        let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+    pub fn load(path: &Path) -> Result<RealFrame, Error> {
+        let err = |e: &dyn std::fmt::Display| Error::input(path, e);
         let (mut pixels, rows, cols) = crate::fits::read_f32(path).map_err(|e| err(&e))?;
         let mut f = FitsFile::open(path).map_err(|e| err(&e))?;
         let hdu = f.primary_hdu().map_err(|e| err(&e))?;
@@ -199,7 +201,7 @@ pub enum BackgroundModel {
 
 impl BackgroundModel {
     /// The uniform model without frames, else every frame loaded.
-    pub fn load(frames: &[PathBuf]) -> Result<BackgroundModel, String> {
+    pub fn load(frames: &[PathBuf]) -> Result<BackgroundModel, Error> {
         if frames.is_empty() {
             return Ok(BackgroundModel::Uniform);
         }
@@ -287,6 +289,7 @@ mod tests {
             - q.iter().cloned().fold(f64::INFINITY, f64::min);
         assert!(spread < 0.1 * f.sigma, "{q:?}");
         let missing = RealFrame::load(Path::new("/nonexistent/frame.fits")).unwrap_err();
+        let missing = missing.to_string();
         assert!(missing.contains("/nonexistent/frame.fits"), "{missing}");
     }
 }

@@ -11,6 +11,7 @@ use serde::Serialize;
 use crate::background::BackgroundModel;
 use crate::campaign::{Background, Campaign, LightCurve, Stars};
 use crate::enhance;
+use crate::error::Error;
 use crate::geometry::FrameKind;
 use crate::render;
 use crate::scene::{self, Gate, Inputs, PointingMode, StarField, TumbleRange};
@@ -171,16 +172,16 @@ impl Experiment {
 }
 
 /// Read what a campaign needs before its first image: bodies, stars and background frames.
-pub fn inputs(campaign: &Campaign) -> Result<Inputs, String> {
+pub fn inputs(campaign: &Campaign) -> Result<Inputs, Error> {
     let c = &campaign.resolved;
     let stars = match &c.stars {
         Stars::Procedural { sky_seed, .. } => StarField::Procedural(ProceduralSky::new(*sky_seed)),
         Stars::Catalog {
             path, epoch_jyear, ..
-        } => StarField::Catalog(
-            StarCatalog::from_csv_path(&campaign.base_dir.join(path), *epoch_jyear)
-                .map_err(|e| e.to_string())?,
-        ),
+        } => StarField::Catalog(StarCatalog::from_csv_path(
+            &campaign.base_dir.join(path),
+            *epoch_jyear,
+        )?),
     };
     let frames: Vec<PathBuf> = match &c.background {
         Background::Uniform => Vec::new(),

@@ -11,6 +11,7 @@ pub mod campaign;
 pub mod dataset;
 pub mod detect;
 pub mod enhance;
+pub mod error;
 pub mod experiment;
 pub mod fits;
 pub mod geometry;

@@ -7,6 +7,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+use crate::error::Error;
+
 use crate::campaign::hex;
 
 pub const MANIFEST: &str = "manifest.json";
@@ -128,12 +130,11 @@ impl Manifest {
         std::fs::write(dir.join(MANIFEST), text)
     }
 
-    pub fn read(dir: &Path) -> Result<Manifest, String> {
+    pub fn read(dir: &Path) -> Result<Manifest, Error> {
         let path = dir.join(MANIFEST);
-        let text =
-            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let text = std::fs::read_to_string(&path).map_err(|e| Error::input(&path, e))?;
         serde_json::from_str(&text)
-            .map_err(|e| format!("{}: not a soig manifest: {e}", path.display()))
+            .map_err(|e| Error::input(&path, format!("not a soig manifest: {e}")))
     }
 }
 
@@ -161,13 +162,13 @@ impl std::fmt::Display for Problem {
 }
 
 /// Recompute every hash of `dir` against its manifest.
-pub fn verify(dir: &Path) -> Result<(Manifest, Vec<Problem>), String> {
+pub fn verify(dir: &Path) -> Result<(Manifest, Vec<Problem>), Error> {
     let m = Manifest::read(dir)?;
     let mut problems = Vec::new();
     if digest_of(&m) != m.digest {
         problems.push(Problem::Digest);
     }
-    let present = list_files(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let present = list_files(dir).map_err(|e| Error::input(dir, e))?;
     for rel in &m.volatile {
         if !present.contains(rel) {
             problems.push(Problem::Missing(rel.clone()));
@@ -177,7 +178,7 @@ pub fn verify(dir: &Path) -> Result<(Manifest, Vec<Problem>), String> {
         match m.files.get(rel) {
             None => problems.push(Problem::Extra(rel.clone())),
             Some(entry) => {
-                let (sha, _) = sha256_file(&dir.join(rel)).map_err(|e| format!("{rel}: {e}"))?;
+                let (sha, _) = sha256_file(&dir.join(rel)).map_err(|e| Error::input(rel, e))?;
                 if sha != entry.sha256 {
                     problems.push(Problem::Mismatch(rel.clone()));
                 }

@@ -86,7 +86,7 @@ pub fn train(
         run(campaign, out, None, progress)?;
     }
     let trained = train::fit(campaign, out, &python, progress)?;
-    let old = Manifest::read(out).map_err(anyhow::Error::msg)?;
+    let old = Manifest::read(out)?;
     let mut volatile = train::volatile_files(out)?;
     volatile.extend(old.volatile.iter().cloned());
     volatile.sort();
@@ -155,7 +155,7 @@ fn write_all(
     }
 
     let x = Experiment::new(campaign);
-    let inputs = experiment::inputs(campaign).map_err(anyhow::Error::msg)?;
+    let inputs = experiment::inputs(campaign)?;
     let provenance = Provenance {
         campaign: c.name.clone(),
         campaign_hash: campaign.hash.clone(),

@@ -109,7 +109,7 @@ pub fn run(campaign: &Campaign, out: &Path, opts: &Options) -> anyhow::Result<Su
 /// The study itself, its files written into `dir`.
 fn study(campaign: &Campaign, dir: &Path, opts: &Options) -> anyhow::Result<Summary> {
     let started = Instant::now();
-    let inputs = experiment::inputs(campaign).map_err(anyhow::Error::msg)?;
+    let inputs = experiment::inputs(campaign)?;
     let base = Experiment::new(campaign);
 
     // The reference: exact renderer, no merging, refined trajectory and jitter path.
