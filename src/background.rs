@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use fitsio::FitsFile;
 
 use crate::campaign::{Background, Campaign};
-use crate::geometry::robust_stats;
+use crate::imaging::robust_stats;
 use crate::rng::{Purpose, stream};
 use rand::RngExt;
 
