@@ -5,7 +5,7 @@ use std::fmt;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use super::{Star, chord2, chord2_of_radius, normalize_ra, sort_stars};
+use super::{Star, chord2, cone, normalize_ra, sort_stars};
 use crate::sky::radec_unit;
 
 /// Milliarcseconds per degree: the "conversion factor" of Eq. 8.
@@ -324,15 +324,13 @@ impl StarCatalog {
         at_jyear: f64,
     ) -> Vec<Star> {
         let mut out = Vec::new();
-        let Some(max_chord2) = chord2_of_radius(radius_deg) else {
+        let Some((centre, max_chord2)) = cone(ra_deg, dec_deg, radius_deg, mag_max) else {
             return out;
         };
-        if !ra_deg.is_finite() || !dec_deg.is_finite() || !at_jyear.is_finite() || mag_max.is_nan()
-        {
+        if !at_jyear.is_finite() {
             return out;
         }
         let dt = at_jyear - self.epoch_jyear;
-        let centre = radec_unit(normalize_ra(ra_deg), dec_deg.clamp(-90.0, 90.0));
         // Eq. 8 moves dec by at most max|pmdec| dt (a pole crossing only folds it back), so only
         // stars whose catalog dec is that close to the cone's dec range can end up inside.
         let slack = self.max_abs_pmdec * dt.abs() / MAS_PER_DEG + 1e-9;
@@ -466,46 +464,46 @@ mod tests {
 
     #[test]
     fn malformed_rows_name_line_and_field() {
-        let e = err_text("# c1\n# c2\nra,dec,pmra,pmdec,mag\n1,2,3,4,5\n1,2,x3,4,5\n");
-        assert!(
-            e.contains("<reader>:5:") && e.contains("`pmra`") && e.contains("x3"),
-            "{e}"
-        );
-        let e = err_text("ra,dec,pmra,pmdec,phot_g_mean_mag\n1,2,3,4,5\n1,2,3,4,\n");
-        assert!(
-            e.contains(":3:") && e.contains("`phot_g_mean_mag`") && e.contains("empty"),
-            "{e}"
-        );
-        let e = err_text("RA_ICRS,DE_ICRS,pmRA,pmDE,Gmag\n1,95,3,4,5\n");
-        assert!(
-            e.contains(":2:") && e.contains("`DE_ICRS`") && e.contains("range"),
-            "{e}"
-        );
-        let e = err_text("ra,dec,mag\n1,2,3\n# note\n1,2\n");
-        assert!(e.contains(":4:") && e.contains("2 fields"), "{e}");
-        let e = err_text("\u{feff}ra,dec,mag\r\n1,2,3\r\n\r\n#x\r\n  # y\r\n1,2\r\n");
-        assert!(e.contains("<reader>:6:") && e.contains("2 fields"), "{e}");
-        let e = err_text("\n\nra,dec,mag\r\n1,2,3\r\n1,2,3,4\r\n");
-        assert!(e.contains("<reader>:5:") && e.contains("4 fields"), "{e}");
-        let e = err_text("ra,dec,mag\n1,2,3\n\n\n\"1\",\"x\n\",3\n");
-        assert!(e.contains("<reader>:5:") && e.contains("`dec`"), "{e}");
-        let e = err_text("ra,dec,mag\n1,2,NaN\n");
-        assert!(
-            e.contains(":2:") && e.contains("`mag`") && e.contains("finite"),
-            "{e}"
-        );
-        let e = err_text("# only\nra,dec,pmra,pmdec\n1,2,3,4\n");
-        assert!(
-            e.contains(":2:") && e.contains("magnitude") && e.contains("gmag"),
-            "{e}"
-        );
-        let e = err_text("ra,dec,gmag,mag\n");
-        assert!(
-            e.contains(":1:") && e.contains("`gmag`") && e.contains("`mag`"),
-            "{e}"
-        );
-        assert!(err_text("").contains("no header"));
-        assert!(err_text("# nothing\n").contains("no header"));
+        // (catalog text, what its error message must contain)
+        let cases: [(&str, &[&str]); 12] = [
+            (
+                "# c1\n# c2\nra,dec,pmra,pmdec,mag\n1,2,3,4,5\n1,2,x3,4,5\n",
+                &["<reader>:5:", "`pmra`", "x3"],
+            ),
+            (
+                "ra,dec,pmra,pmdec,phot_g_mean_mag\n1,2,3,4,5\n1,2,3,4,\n",
+                &[":3:", "`phot_g_mean_mag`", "empty"],
+            ),
+            (
+                "RA_ICRS,DE_ICRS,pmRA,pmDE,Gmag\n1,95,3,4,5\n",
+                &[":2:", "`DE_ICRS`", "range"],
+            ),
+            ("ra,dec,mag\n1,2,3\n# note\n1,2\n", &[":4:", "2 fields"]),
+            (
+                "\u{feff}ra,dec,mag\r\n1,2,3\r\n\r\n#x\r\n  # y\r\n1,2\r\n",
+                &["<reader>:6:", "2 fields"],
+            ),
+            (
+                "\n\nra,dec,mag\r\n1,2,3\r\n1,2,3,4\r\n",
+                &["<reader>:5:", "4 fields"],
+            ),
+            (
+                "ra,dec,mag\n1,2,3\n\n\n\"1\",\"x\n\",3\n",
+                &["<reader>:5:", "`dec`"],
+            ),
+            ("ra,dec,mag\n1,2,NaN\n", &[":2:", "`mag`", "finite"]),
+            (
+                "# only\nra,dec,pmra,pmdec\n1,2,3,4\n",
+                &[":2:", "magnitude", "gmag"],
+            ),
+            ("ra,dec,gmag,mag\n", &[":1:", "`gmag`", "`mag`"]),
+            ("", &["no header"]),
+            ("# nothing\n", &["no header"]),
+        ];
+        for (text, needles) in cases {
+            let e = err_text(text);
+            assert!(needles.iter().all(|n| e.contains(n)), "{text:?}: {e}");
+        }
     }
 
     #[test]

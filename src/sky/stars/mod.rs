@@ -18,7 +18,7 @@ pub use counts::{
 pub use galactic::equatorial_to_galactic;
 pub use procedural::{CELL_DEG, ProceduralSky};
 
-use crate::sky::{dot, sub};
+use crate::sky::{Vec3, dot, radec_unit, sub};
 
 /// A star: ICRS position in degrees and magnitude.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -51,6 +51,18 @@ fn chord2_of_radius(radius_deg: f64) -> Option<f64> {
     }
     let c = 2.0 * (0.5 * radius_deg.to_radians()).sin();
     Some(c * c)
+}
+
+/// Centre (unit vector, RA wrapped, Dec clamped to the poles) and squared chord radius of a cone
+/// query; `None` when the query selects nothing: a negative or NaN radius, a non-finite centre,
+/// a NaN magnitude limit.
+fn cone(ra_deg: f64, dec_deg: f64, radius_deg: f64, mag_max: f64) -> Option<(Vec3, f64)> {
+    let max_chord2 = chord2_of_radius(radius_deg)?;
+    if !ra_deg.is_finite() || !dec_deg.is_finite() || mag_max.is_nan() {
+        return None;
+    }
+    let centre = radec_unit(normalize_ra(ra_deg), dec_deg.clamp(-90.0, 90.0));
+    Some((centre, max_chord2))
 }
 
 fn sort_stars(stars: &mut [Star]) {

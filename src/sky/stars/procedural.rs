@@ -17,7 +17,7 @@ use rand_distr::{Distribution, Poisson};
 use sha2::{Digest, Sha256};
 
 use super::counts::{BRIGHT_MAG_LIMIT, GENERATION_MAG_LIMIT, model};
-use super::{Star, chord2, chord2_of_radius, equatorial_to_galactic, normalize_ra, sort_stars};
+use super::{Star, chord2, cone, equatorial_to_galactic, normalize_ra, sort_stars};
 use crate::sky::radec_unit;
 
 /// Height of the declination bands (and about the width of the cells) of the procedural sky.
@@ -233,15 +233,11 @@ impl ProceduralSky {
         mag_max: f64,
     ) -> Vec<Star> {
         let mut out = Vec::new();
-        let Some(max_chord2) = chord2_of_radius(radius_deg) else {
+        let Some((centre, max_chord2)) = cone(ra_deg, dec_deg, radius_deg, mag_max) else {
             return out;
         };
-        if !ra_deg.is_finite() || !dec_deg.is_finite() || mag_max.is_nan() {
-            return out;
-        }
         let ra0 = normalize_ra(ra_deg);
         let dec0 = dec_deg.clamp(-90.0, 90.0);
-        let centre = radec_unit(ra0, dec0);
         let r = radius_deg.min(180.0);
         Self::cells_for_cone(ra0, dec0, radius_deg, |band, k, n| {
             // Skip cells wholly outside the cone; take cells wholly inside without testing stars
@@ -286,7 +282,7 @@ impl ProceduralSky {
 mod tests {
     use super::super::counts::cumulative_density_per_deg2;
     use super::super::galactic::galactic_to_equatorial;
-    use super::super::separation_deg;
+    use super::super::{chord2_of_radius, separation_deg};
     use super::*;
     use crate::sky::{cross, dot, norm, scale, sub};
 
