@@ -24,9 +24,6 @@ pub use tle::{Tle, TleError, parse_tles};
 pub use super::frames::{teme_to_gcrs, teme_to_gcrs_matrix};
 pub use super::vec3::{Mat3, mat_vec};
 
-/// WGS72 equatorial radius (km): the radius SGP4 uses with the WGS72 constants.
-const EARTH_RADIUS_KM: f64 = 6378.135;
-
 /// UTC calendar time of the `sgp4` crate (chrono) to a hifitime UTC epoch.
 fn chrono_to_epoch(dt: &sgp4::chrono::NaiveDateTime) -> Option<Epoch> {
     let (y, mo, d) = (

@@ -2,11 +2,13 @@
 
 use hifitime::Epoch;
 
+use super::epoch_to_chrono;
 use super::tle::Tle;
-use super::{EARTH_RADIUS_KM, epoch_to_chrono};
 use crate::sky::frames::teme_to_gcrs;
 use crate::sky::norm;
 
+/// WGS72 equatorial radius (km): the radius SGP4 uses with the WGS72 constants.
+const EARTH_RADIUS_KM: f64 = 6378.135;
 /// WGS72 gravitational parameter (km^3/s^2), for the period check of [`OrbitalElements`].
 const MU_KM3_S2: f64 = 398_600.8;
 /// SGP4 switches to the deep-space (SDP4) branch for periods of 225 min and more.

@@ -36,7 +36,7 @@ fn normalize_ra(ra: f64) -> f64 {
 
 /// Squared chord length between two unit vectors (monotone in the angular distance, accurate for
 /// small angles, unlike `acos` of the dot product).
-fn chord2(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+fn chord2(a: &Vec3, b: &Vec3) -> f64 {
     let d = sub(*a, *b);
     dot(d, d)
 }
