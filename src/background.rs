@@ -20,8 +20,7 @@ use std::path::{Path, PathBuf};
 use fitsio::FitsFile;
 
 use crate::error::Error;
-
-use crate::geometry::robust_stats;
+use crate::imaging::robust_stats;
 use crate::rng::{Purpose, stream};
 use rand::RngExt;
 

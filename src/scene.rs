@@ -15,12 +15,14 @@ use serde::Serialize;
 use crate::background::{BackgroundModel, FrameChoice, RealFrame};
 use crate::sensor::Sensor;
 use crate::sky::ephemeris::{moon_position_km, sun_position_km};
-use crate::sky::orbit::{Mat3, Propagator, mat_vec, teme_to_gcrs_matrix};
+use crate::sky::frames::teme_to_gcrs_matrix;
+use crate::sky::orbit::Propagator;
 use crate::sky::photometry::{debris_magnitude, photon_rate};
 use crate::sky::projection::Tan;
 use crate::sky::stars::{ProceduralSky, Star, StarCatalog};
 use crate::sky::{
-    Vec3, angle_deg, dot, norm, radec_deg, radec_unit, scale, segment_hits_sphere, sub, unit,
+    Mat3, Vec3, angle_deg, cross, dot, mat_vec, norm, radec_deg, radec_unit, rotate, scale,
+    segment_hits_sphere, sub, unit,
 };
 
 /// WGS84 equatorial radius, km.
@@ -182,19 +184,6 @@ impl SurveyTrack {
             -self.angle_rad(t_s),
         ))
     }
-}
-
-/// Rodrigues' rotation of `v` about the unit `axis` by `angle` radians.
-fn rotate(v: Vec3, axis: Vec3, angle: f64) -> Vec3 {
-    let (s, c) = angle.sin_cos();
-    let k = axis;
-    let kxv = [
-        k[1] * v[2] - k[2] * v[1],
-        k[2] * v[0] - k[0] * v[2],
-        k[0] * v[1] - k[1] * v[0],
-    ];
-    let kv = dot(k, v) * (1.0 - c);
-    [0, 1, 2].map(|i| v[i] * c + kxv[i] * s + k[i] * kv)
 }
 
 /// One point of the debris trajectory: a source with its share of the exposure.
@@ -624,11 +613,7 @@ fn survey_track(
     let (r1, _) = positions(inputs, debris, mid + Duration::from_seconds(h), frame)?;
     let (r, _) = positions(inputs, debris, mid, frame)?;
     let v = scale(sub(r1, r0), 1.0 / (2.0 * h));
-    let n = [
-        r[1] * v[2] - r[2] * v[1],
-        r[2] * v[0] - r[0] * v[2],
-        r[0] * v[1] - r[1] * v[0],
-    ];
+    let n = cross(r, v);
     let rate_deg_s = (norm(n) / dot(r, r)).to_degrees();
     let axis = unit(n);
     // The boresight moves on a small circle about the orbit normal.

@@ -236,7 +236,7 @@ fn semisynthetic_background_has_the_real_frames_noise_scaled_by_exposure() {
             .zip(&e.electrons)
             .map(|(&a, &el)| a - el as f32 / 1.6 - 2.5)
             .collect();
-        let (median, sigma) = geometry::robust_stats(&bg);
+        let (median, sigma) = soig::imaging::robust_stats(&bg);
         let k = s.exposure_s / real.exposure_s;
         let expected_sigma = ((real.sigma * k).powi(2) + 1.0 / 12.0).sqrt();
         assert!(

@@ -2,101 +2,19 @@
 //! Geometry is in f64, positions in km, angles in degrees unless a name says otherwise.
 
 pub mod ephemeris;
+pub mod frames;
 pub mod orbit;
 pub mod photometry;
 pub mod projection;
 pub mod stars;
-
-/// A 3-vector in km (or unitless when normalised).
-pub type Vec3 = [f64; 3];
-
-pub fn sub(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-pub fn dot(a: Vec3, b: Vec3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-pub fn norm(a: Vec3) -> f64 {
-    dot(a, a).sqrt()
-}
-
-pub fn scale(a: Vec3, k: f64) -> Vec3 {
-    [a[0] * k, a[1] * k, a[2] * k]
-}
-
-pub fn unit(a: Vec3) -> Vec3 {
-    scale(a, 1.0 / norm(a))
-}
-
-/// Angle between two vectors, degrees (robust near 0 and 180 via atan2).
-pub fn angle_deg(a: Vec3, b: Vec3) -> f64 {
-    let c = [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ];
-    norm(c).atan2(dot(a, b)).to_degrees()
-}
-
-/// Right ascension in [0, 360) and declination of a direction, degrees.
-pub fn radec_deg(v: Vec3) -> (f64, f64) {
-    let ra = v[1].atan2(v[0]).to_degrees().rem_euclid(360.0);
-    let dec = v[2].atan2((v[0] * v[0] + v[1] * v[1]).sqrt()).to_degrees();
-    (ra, dec)
-}
-
-/// Unit vector of (ra, dec) in degrees.
-pub fn radec_unit(ra_deg: f64, dec_deg: f64) -> Vec3 {
-    let (sa, ca) = ra_deg.to_radians().sin_cos();
-    let (sd, cd) = dec_deg.to_radians().sin_cos();
-    [cd * ca, cd * sa, sd]
-}
-
-/// Does the segment from `a` to `b` pass within `radius` of the origin?
-pub fn segment_hits_sphere(a: Vec3, b: Vec3, radius: f64) -> bool {
-    let d = sub(b, a);
-    let len2 = dot(d, d);
-    let t = if len2 > 0.0 {
-        (-dot(a, d) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let closest = [a[0] + t * d[0], a[1] + t * d[1], a[2] + t * d[2]];
-    norm(closest) < radius
-}
-
 #[cfg(test)]
-mod tests {
-    use super::*;
+mod testing;
+pub mod vec3;
 
-    #[test]
-    fn radec_round_trip_and_angles() {
-        for &(ra, dec) in &[(0.0, 0.0), (359.9, -89.0), (123.4, 45.6), (180.0, 89.999)] {
-            let (r, d) = radec_deg(radec_unit(ra, dec));
-            assert!(
-                (r - ra).abs() < 1e-9 && (d - dec).abs() < 1e-9,
-                "{ra} {dec} -> {r} {d}"
-            );
-        }
-        assert!((angle_deg([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]) - 90.0).abs() < 1e-12);
-        assert!((angle_deg([1.0, 0.0, 0.0], [-1.0, 1e-9, 0.0]) - 180.0).abs() < 1e-6);
-    }
+pub use vec3::{
+    Mat3, Vec3, angle_deg, cross, dot, mat_mul, mat_vec, norm, radec_deg, radec_unit, rotate,
+    scale, segment_hits_sphere, sub, transpose, unit,
+};
 
-    #[test]
-    fn segment_sphere() {
-        assert!(segment_hits_sphere(
-            [-10.0, 0.5, 0.0],
-            [10.0, 0.5, 0.0],
-            1.0
-        ));
-        assert!(!segment_hits_sphere(
-            [-10.0, 1.5, 0.0],
-            [10.0, 1.5, 0.0],
-            1.0
-        ));
-        // The sphere is behind the start point: no hit.
-        assert!(!segment_hits_sphere([2.0, 0.0, 0.0], [10.0, 0.0, 0.0], 1.0));
-    }
-}
+/// One arcsecond in radians.
+const ARCSEC: f64 = std::f64::consts::PI / (180.0 * 3600.0);

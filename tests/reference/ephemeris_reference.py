@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
-"""Reference geocentric Sun and Moon positions for `src/ephemeris.rs` tests.
+"""Reference geocentric Sun and Moon positions for `src/sky/ephemeris.rs` tests.
 
 Prints one Rust tuple literal per epoch, ready to paste into the `REFERENCE`
-table of the tests:
+table of tests/fixtures/sky/ephemeris.rs:
 
     (year, month, day, hour, minute, second, is_tt, [sun x, y, z], [moon x, y, z])
 

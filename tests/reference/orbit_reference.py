@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Reference figures for the tests of src/orbit.rs (soig, module sky::orbit).
+"""Reference figures for the tests of src/sky/orbit/ and src/sky/frames.rs (the tables of
+tests/fixtures/sky/orbit_teme.rs and teme_gcrs.rs, and the figures inline in those tests).
 
 Run: python3 reference/orbit_reference.py [path/to/catalog.tle]
 Needs the PyPI packages sgp4 (2.x), astropy and numpy (pyerfa comes with astropy). No network:
@@ -57,7 +58,7 @@ def afspc_satrec(l1, l2):
 
 
 def when(label):
-    """Rust literal of the instant a row is for (`When` in the tests of src/orbit.rs)."""
+    """Rust literal of the instant a row is for (`When` of src/sky/testing.rs)."""
     if label.startswith("epoch"):
         return f"When::SinceEpoch({float(label[5:] or 0)!r})"
     d = datetime.fromisoformat(label)

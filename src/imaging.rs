@@ -1,0 +1,32 @@
+//! Image-plane helpers shared across the crate: bilinear sampling between pixel centres and
+//! robust statistics (median and 1.4826 MAD sigma) of pixel values. Images are row-major `f32`
+//! slices with pixel centres at integer coordinates.
+
+/// Bilinear interpolation between pixel centres (as `cv2.warpAffine` with INTER_LINEAR), in
+/// single precision; a point beyond the outer pixel centres takes the edge value.
+pub fn bilinear(img: &[f32], width: usize, height: usize, x: f64, y: f64) -> f32 {
+    let x = x.clamp(0.0, (width - 1) as f64);
+    let y = y.clamp(0.0, (height - 1) as f64);
+    let (i, j) = (x.floor() as usize, y.floor() as usize);
+    let (i1, j1) = ((i + 1).min(width - 1), (j + 1).min(height - 1));
+    let (fx, fy) = ((x - i as f64) as f32, (y - j as f64) as f32);
+    let at = |a: usize, b: usize| img[b * width + a];
+    let top = at(i, j) * (1.0 - fx) + at(i1, j) * fx;
+    let bottom = at(i, j1) * (1.0 - fx) + at(i1, j1) * fx;
+    top * (1.0 - fy) + bottom * fy
+}
+
+/// Median and robust standard deviation (1.4826 MAD) of the finite pixels of an image: the sky
+/// level and noise, unmoved by stars, which would inflate a plain standard deviation. The
+/// median of an even count is the upper middle value; `(0, 0)` when no pixel is finite.
+pub fn robust_stats(img: &[f32]) -> (f64, f64) {
+    let mut v: Vec<f32> = img.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return (0.0, 0.0);
+    }
+    let mid = v.len() / 2;
+    let median = *v.select_nth_unstable_by(mid, f32::total_cmp).1;
+    let mut dev: Vec<f32> = v.iter().map(|x| (x - median).abs()).collect();
+    let mad = *dev.select_nth_unstable_by(mid, f32::total_cmp).1;
+    (median as f64, 1.4826 * mad as f64)
+}
