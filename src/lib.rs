@@ -20,6 +20,7 @@ pub mod manifest;
 pub mod metrics;
 pub mod output;
 pub mod pipeline;
+pub mod plot;
 pub mod progress;
 pub mod render;
 pub mod report;

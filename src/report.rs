@@ -6,12 +6,14 @@
 //!
 //! Everything here is a pure function of the images and detections, except the timing, which is
 //! written to `report/timing.json` and `report/report.md` only: the manifest lists those two as
-//! volatile (present, not hashed), so the digest stays reproducible.
+//! volatile (present, not hashed), so the digest stays reproducible. The figures are drawn in
+//! `figures`.
+
+mod figures;
 
 use std::fmt::Write as _;
 use std::path::Path;
 
-use image::{Rgb, RgbImage};
 use serde::Serialize;
 
 use crate::detect::Detection;
@@ -239,7 +241,7 @@ pub fn write(
             u.pr_curve_map50.clone(),
             u.map50,
         ));
-        previews(&rdir.join("previews"), images, run, conf)?;
+        figures::previews(&rdir.join("previews"), images, run, conf)?;
         detectors.push(m);
     }
     csv_rows.flush()?;
@@ -287,7 +289,7 @@ pub fn write(
         ])?;
     }
     table.flush()?;
-    pr_plot(&rdir.join("pr_curve.png"), &curves)?;
+    figures::pr_plot(&rdir.join("pr_curve.png"), &curves)?;
 
     // Table 6: conversion and detection time per image (volatile).
     let conversion = Timing::of(conversion_s);
@@ -381,160 +383,6 @@ fn markdown(r: &Report, conversion: &Timing, detection: &[(String, Timing)], con
         "\n![precision-recall](pr_curve.png)\n\nPreviews of true positives, false positives and misses are in `previews/` (ground truth green, predictions red)."
     );
     s
-}
-
-/// The embedded sans-serif font of every plot (plotters has no system fonts here).
-pub fn register_font() {
-    static FONT: std::sync::Once = std::sync::Once::new();
-    FONT.call_once(|| {
-        let _ = plotters::style::register_font(
-            "sans-serif",
-            plotters::style::FontStyle::Normal,
-            include_bytes!("../assets/DejaVuSans.ttf"),
-        );
-    });
-}
-
-/// Precision against recall at IoU 0.5 for each detector.
-fn pr_plot(path: &Path, curves: &[(String, Vec<f64>, Vec<f64>, f64)]) -> anyhow::Result<()> {
-    use plotters::prelude::*;
-    register_font();
-    let (w, h) = (640u32, 480u32);
-    let mut buf = vec![0u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption("Precision-recall at IoU 0.5", ("sans-serif", 22))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(50)
-            .build_cartesian_2d(0.0..1.0, 0.0..1.05)?;
-        chart
-            .configure_mesh()
-            .x_desc("recall")
-            .y_desc("precision")
-            .draw()?;
-        let colors = [
-            RGBColor(200, 30, 30),
-            RGBColor(30, 90, 200),
-            RGBColor(30, 150, 60),
-        ];
-        for (k, (name, px, py, map50)) in curves.iter().enumerate() {
-            let c = colors[k % colors.len()];
-            chart
-                .draw_series(LineSeries::new(
-                    px.iter().copied().zip(py.iter().copied()),
-                    c.stroke_width(2),
-                ))?
-                .label(format!("{name} (mAP50 {map50:.3})"))
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                });
-        }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerLeft)
-            .draw()?;
-        root.present()?;
-    }
-    let img = RgbImage::from_raw(w, h, buf).expect("buffer size");
-    img.save(path)?;
-    Ok(())
-}
-
-/// Up to three previews each of true positives, false positives and misses of one detector at
-/// the campaign's confidence: a crop around the boxes, ground truth green, predictions red.
-fn previews(dir: &Path, images: &[TestImage], run: &DetectorRun, conf: f64) -> anyhow::Result<()> {
-    let (mut tp, mut fp, mut miss) = (0, 0, 0);
-    for (img, dets) in images.iter().zip(&run.detections) {
-        let kept: Vec<&Detection> = dets.iter().filter(|d| d.score >= conf).collect();
-        let matched = |t: &[f64; 4]| {
-            kept.iter()
-                .any(|d| metrics::iou(t, &[d.x1, d.y1, d.x2, d.y2]) >= 0.5)
-        };
-        let true_pos = |d: &Detection| {
-            img.truth
-                .iter()
-                .any(|t| metrics::iou(t, &[d.x1, d.y1, d.x2, d.y2]) >= 0.5)
-        };
-        let kind = if img.truth.iter().any(|t| !matched(t)) && miss < 3 {
-            miss += 1;
-            "miss"
-        } else if kept.iter().any(|d| !true_pos(d)) && fp < 3 {
-            fp += 1;
-            "false-positive"
-        } else if !kept.is_empty() && img.truth.iter().all(matched) && tp < 3 {
-            tp += 1;
-            "true-positive"
-        } else {
-            continue;
-        };
-        let gray = image::open(&img.png)?.to_luma8();
-        let mut rgb = RgbImage::from_fn(gray.width(), gray.height(), |x, y| {
-            let v = gray.get_pixel(x, y)[0];
-            Rgb([v, v, v])
-        });
-        let boxes: Vec<([f64; 4], Rgb<u8>)> = img
-            .truth
-            .iter()
-            .map(|t| (*t, Rgb([0, 220, 0])))
-            .chain(
-                kept.iter()
-                    .map(|d| ([d.x1, d.y1, d.x2, d.y2], Rgb([230, 0, 0]))),
-            )
-            .collect();
-        for (b, c) in &boxes {
-            draw_rect(&mut rgb, b, *c);
-        }
-        // Crop to the boxes with a margin, at least 256 px.
-        let (mut x0, mut y0, mut x1, mut y1) = (
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NEG_INFINITY,
-        );
-        for (b, _) in &boxes {
-            x0 = x0.min(b[0]);
-            y0 = y0.min(b[1]);
-            x1 = x1.max(b[2]);
-            y1 = y1.max(b[3]);
-        }
-        let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-        let side = ((x1 - x0).max(y1 - y0) + 64.0).max(256.0);
-        let (w, h) = (rgb.width() as f64, rgb.height() as f64);
-        let left = (cx - side / 2.0).clamp(0.0, (w - side).max(0.0)) as u32;
-        let top = (cy - side / 2.0).clamp(0.0, (h - side).max(0.0)) as u32;
-        let s = side.min(w).min(h) as u32;
-        let crop = image::imageops::crop_imm(&rgb, left, top, s, s).to_image();
-        crop.save(dir.join(format!("{}_{kind}_{}.png", run.name, img.stem)))?;
-    }
-    Ok(())
-}
-
-fn draw_rect(img: &mut RgbImage, b: &[f64; 4], c: Rgb<u8>) {
-    let (w, h) = (img.width() as i64, img.height() as i64);
-    let clamp = |v: f64, n: i64| (v.round() as i64).clamp(0, n - 1);
-    let (x0, y0, x1, y1) = (
-        clamp(b[0], w),
-        clamp(b[1], h),
-        clamp(b[2] - 1.0, w),
-        clamp(b[3] - 1.0, h),
-    );
-    for t in 0..2 {
-        for x in x0..=x1 {
-            for y in [(y0 + t).min(h - 1), (y1 - t).max(0)] {
-                img.put_pixel(x as u32, y as u32, c);
-            }
-        }
-        for y in y0..=y1 {
-            for x in [(x0 + t).min(w - 1), (x1 - t).max(0)] {
-                img.put_pixel(x as u32, y as u32, c);
-            }
-        }
-    }
 }
 
 #[cfg(test)]

@@ -501,7 +501,7 @@ fn table(
 /// RMS error (in Poisson-noise units) against run time, one series per knob.
 fn plot(path: &Path, rows: &[Row]) -> anyhow::Result<()> {
     use plotters::prelude::*;
-    crate::report::register_font();
+    crate::plot::register_font();
     let time = |r: &Row| r.render_ms + r.scene_ms;
     let finite = |v: f64| v.is_finite() && v > 0.0;
     let xs: Vec<f64> = rows.iter().map(time).filter(|&v| finite(v)).collect();

@@ -1,0 +1,122 @@
+//! Box IoU and this crate's own fixed-threshold counts (precision, recall, TP, FP, FN at one
+//! confidence and IoU), the figures the paper reports at conf 0.5, IoU 0.5.
+
+use super::{ImageEval, cmp_desc, det_box};
+use crate::detect::Detection;
+use serde::{Deserialize, Serialize};
+
+/// Intersection over union of two `[x1, y1, x2, y2]` boxes (no `+1`, no epsilon); 0 when the union is
+/// empty.
+pub fn iou(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+    let w = (a[2].min(b[2]) - a[0].max(b[0])).max(0.0);
+    let h = (a[3].min(b[3]) - a[1].max(b[1])).max(0.0);
+    let inter = w * h;
+    let union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter;
+    if union > 0.0 { inter / union } else { 0.0 }
+}
+
+/// Counts at one confidence and IoU threshold.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AtThreshold {
+    /// `tp / (tp + fp)`; 0 when no detection passes the confidence threshold.
+    pub precision: f64,
+    /// `tp / (tp + fn)`; 0 when there are no objects.
+    pub recall: f64,
+    pub tp: usize,
+    pub fp: usize,
+    pub fn_: usize,
+}
+
+/// Precision, recall, TP, FP, FN counting detections with `score >= conf` (the paper reports conf 0.5,
+/// IoU 0.5). Matching per image and class, greedy by score as COCO does: detections in descending score
+/// (ties in input order) each take the still unmatched object of their class with the highest IoU
+/// ([`iou`], plain `f64`), provided it is `>= iou_threshold` (IoU ties: the first object). Unmatched
+/// detections are FP, unmatched objects FN.
+pub fn at_threshold(images: &[ImageEval], conf: f64, iou_threshold: f64) -> AtThreshold {
+    let (mut tp, mut fp, mut fn_) = (0usize, 0usize, 0usize);
+    for im in images {
+        im.check();
+        let mut dets: Vec<&Detection> = im.detections.iter().filter(|d| d.score >= conf).collect();
+        dets.sort_by(|a, b| cmp_desc(a.score, b.score));
+        let mut matched = vec![false; im.truth.len()];
+        for d in dets {
+            let db = det_box(d);
+            let mut best: Option<(usize, f64)> = None;
+            for (g, (tb, &tc)) in im.truth.iter().zip(&im.truth_class).enumerate() {
+                if matched[g] || tc != d.class {
+                    continue;
+                }
+                let v = iou(tb, &db);
+                if v >= iou_threshold && best.is_none_or(|(_, bv)| v > bv) {
+                    best = Some((g, v));
+                }
+            }
+            match best {
+                Some((g, _)) => {
+                    matched[g] = true;
+                    tp += 1;
+                }
+                None => fp += 1,
+            }
+        }
+        fn_ += matched.iter().filter(|&&m| !m).count();
+    }
+    let ratio = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f64 / b as f64 };
+    AtThreshold {
+        precision: ratio(tp, tp + fp),
+        recall: ratio(tp, tp + fn_),
+        tp,
+        fp,
+        fn_,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::cases::{case, img};
+    use super::*;
+
+    #[test]
+    fn iou_basics() {
+        assert_eq!(iou(&[0., 0., 10., 10.], &[0., 0., 10., 10.]), 1.0);
+        assert_eq!(iou(&[0., 0., 10., 10.], &[10., 0., 20., 10.]), 0.0);
+        assert!((iou(&[0., 0., 10., 10.], &[5., 0., 15., 10.]) - 1.0 / 3.0).abs() < 1e-15);
+        assert_eq!(iou(&[0., 0., 0., 0.], &[0., 0., 0., 0.]), 0.0);
+        // scale invariance (up to rounding)
+        let a = [0.1, 0.2, 0.3, 0.5];
+        let b = [0.15, 0.25, 0.35, 0.45];
+        let s = |x: [f64; 4]| [x[0] * 640.0, x[1] * 480.0, x[2] * 640.0, x[3] * 480.0];
+        assert!((iou(&a, &b) - iou(&s(a), &s(b))).abs() < 1e-12);
+    }
+
+    #[test]
+    fn at_threshold_counts() {
+        let images = case("mixed");
+        // conf 0.5: image 2 keeps 0.55 (class 1, no object: FP); image 3 keeps 0.95 (IoU 0.8, TP),
+        // 0.85 (class 1, IoU 0.84, TP), 0.65 (FP), 0.5 (class 0 on the class-1 object: FP); image 4 keeps
+        // both 0.75 (class 1 on object 0: TP; class 0: FP). Objects missed: image 1, image 3 third, image 4
+        // second.
+        let r = at_threshold(&images, 0.5, 0.5);
+        assert_eq!((r.tp, r.fp, r.fn_), (3, 4, 3));
+        assert!((r.precision - 3.0 / 7.0).abs() < 1e-15 && (r.recall - 0.5).abs() < 1e-15);
+        let r = at_threshold(&case("duplicates"), 0.5, 0.5);
+        assert_eq!((r.tp, r.fp, r.fn_), (2, 2, 0));
+        let r = at_threshold(&case("no_predictions"), 0.5, 0.5);
+        assert_eq!(
+            (r.tp, r.fp, r.fn_, r.precision, r.recall),
+            (0, 0, 3, 0.0, 0.0)
+        );
+        let r = at_threshold(&case("no_labels"), 0.5, 0.5);
+        assert_eq!(
+            (r.tp, r.fp, r.fn_, r.precision, r.recall),
+            (0, 2, 0, 0.0, 0.0)
+        );
+        // the higher score takes the object even when the lower one overlaps better
+        let im = img(
+            &[([0., 0., 10., 10.], 0)],
+            &[([0., 0., 10., 10.], 0.6, 0), ([0., 0., 10., 8.], 0.9, 0)],
+        );
+        let r = at_threshold(&[im], 0.5, 0.5);
+        assert_eq!((r.tp, r.fp), (1, 1));
+    }
+}
