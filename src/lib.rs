@@ -15,6 +15,7 @@ pub mod geometry;
 pub mod manifest;
 pub mod metrics;
 pub mod pipeline;
+pub mod python;
 pub mod render;
 pub mod report;
 pub mod rng;
