@@ -652,14 +652,15 @@ pub mod defaults {
     pub fn train_patience() -> u32 {
         100
     }
+    // The YOLO thresholds live with the detector, which must not depend on the campaign.
     pub fn detect_conf() -> f64 {
-        0.5
+        crate::detect::yolo::DEFAULT_CONF
     }
     pub fn detect_iou() -> f64 {
-        0.5
+        crate::detect::yolo::DEFAULT_IOU
     }
     pub fn max_det() -> u32 {
-        300
+        crate::detect::yolo::DEFAULT_MAX_DET
     }
 }
 
