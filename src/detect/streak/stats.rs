@@ -69,8 +69,9 @@ pub(super) fn median_of(v: &mut [f64]) -> f64 {
     }
 }
 
-/// Median of a map, from a regular subsample.
-pub(super) fn robust_median(v: &[f32], w: usize, h: usize) -> f64 {
+/// A regular subsample of a map: every pixel, or every third pixel of every third row above
+/// 40 000 pixels.
+fn subsample(v: &[f32], w: usize, h: usize) -> Vec<f32> {
     let step = if w * h > 40_000 { 3 } else { 1 };
     let mut s: Vec<f32> = Vec::with_capacity((w / step + 1) * (h / step + 1));
     for y in (0..h).step_by(step) {
@@ -78,6 +79,12 @@ pub(super) fn robust_median(v: &[f32], w: usize, h: usize) -> f64 {
             s.push(v[y * w + x]);
         }
     }
+    s
+}
+
+/// Median of a map, from a regular subsample.
+pub(super) fn robust_median(v: &[f32], w: usize, h: usize) -> f64 {
+    let mut s = subsample(v, w, h);
     if s.is_empty() {
         return 0.0;
     }
@@ -88,13 +95,7 @@ pub(super) fn robust_median(v: &[f32], w: usize, h: usize) -> f64 {
 /// Robust (1.4826 MAD) standard deviation of a map, from a regular subsample.
 #[inline(never)]
 pub(super) fn robust_sigma(v: &[f32], w: usize, h: usize) -> f64 {
-    let step = if w * h > 40_000 { 3 } else { 1 };
-    let mut s: Vec<f32> = Vec::with_capacity((w / step + 1) * (h / step + 1));
-    for y in (0..h).step_by(step) {
-        for x in (0..w).step_by(step) {
-            s.push(v[y * w + x]);
-        }
-    }
+    let mut s = subsample(v, w, h);
     if s.is_empty() {
         return 0.0;
     }
