@@ -207,6 +207,142 @@ impl Default for StreakParams {
     }
 }
 
+impl StreakParams {
+    /// Whether every knob is [`StreakParams::default`] (a campaign then leaves `[detect.streak]`
+    /// out of its resolved form, so its hash does not change).
+    pub fn is_default(&self) -> bool {
+        *self == StreakParams::default()
+    }
+
+    /// Checks every knob's range: the first one outside it, as (field, what is allowed).
+    /// [`detect_streaks`] itself clamps out-of-range values to something it can run; a campaign
+    /// must instead run what it says, so it refuses them.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        let at_least = |v: f64, lo: f64| v.is_finite() && v >= lo;
+        let within = |v: f64, lo: f64, hi: f64| v.is_finite() && (lo..=hi).contains(&v);
+        let fin = |v: f64| v.is_finite();
+        let nonneg = "must be a finite number >= 0";
+        let checks = [
+            (
+                "mesh_size",
+                self.mesh_size >= 8,
+                "must be at least 8 pixels",
+            ),
+            (
+                "mesh_clip_sigma",
+                at_least(self.mesh_clip_sigma, 1.0),
+                "must be a finite number >= 1",
+            ),
+            (
+                "min_noise_sigma",
+                at_least(self.min_noise_sigma, 1e-3),
+                "must be a finite number >= 0.001",
+            ),
+            (
+                "psf_sigma_px",
+                within(self.psf_sigma_px, 0.3, 20.0),
+                "must be between 0.3 and 20 pixels",
+            ),
+            (
+                "clip_sigma",
+                at_least(self.clip_sigma, 0.5),
+                "must be a finite number >= 0.5",
+            ),
+            (
+                "star_mask_sigma",
+                at_least(self.star_mask_sigma, 1.0),
+                "must be a finite number >= 1",
+            ),
+            (
+                "star_ring_ratio",
+                within(self.star_ring_ratio, 0.0, 1.0),
+                "must be in [0, 1]",
+            ),
+            (
+                "n_angles",
+                (4..=180).contains(&self.n_angles),
+                "must be between 4 and 180",
+            ),
+            (
+                "line_lengths_px",
+                !self.line_lengths_px.is_empty()
+                    && self.line_lengths_px.iter().all(|k| (3..=4001).contains(k)),
+                "give at least one length, each between 3 and 4001 pixels",
+            ),
+            (
+                "threshold_sigma",
+                fin(self.threshold_sigma),
+                "must be a finite number",
+            ),
+            (
+                "seed_sigma",
+                fin(self.seed_sigma),
+                "must be a finite number",
+            ),
+            ("min_pixels", self.min_pixels >= 1, "must be >= 1"),
+            (
+                "min_fragment_px",
+                at_least(self.min_fragment_px, 0.0),
+                nonneg,
+            ),
+            ("min_length_px", at_least(self.min_length_px, 0.0), nonneg),
+            ("min_elongation", at_least(self.min_elongation, 0.0), nonneg),
+            ("min_snr", at_least(self.min_snr, 0.0), nonneg),
+            (
+                "star_trail_tolerance_deg",
+                within(self.star_trail_tolerance_deg, 0.0, 90.0),
+                "must be between 0 and 90 degrees",
+            ),
+            (
+                "trail_filter_px",
+                self.trail_filter_px <= 4001,
+                "must be at most 4001 pixels (0 turns it off)",
+            ),
+            (
+                "merge_angle_deg",
+                within(self.merge_angle_deg, 0.0, 90.0),
+                "must be between 0 and 90 degrees",
+            ),
+            (
+                "merge_offset_px",
+                at_least(self.merge_offset_px, 0.0),
+                nonneg,
+            ),
+            ("merge_gap_px", at_least(self.merge_gap_px, 0.0), nonneg),
+            (
+                "duplicate_distance_px",
+                at_least(self.duplicate_distance_px, 0.0),
+                nonneg,
+            ),
+            (
+                "box_pad_along_sigma",
+                at_least(self.box_pad_along_sigma, 0.0),
+                nonneg,
+            ),
+            (
+                "box_pad_across_sigma",
+                at_least(self.box_pad_across_sigma, 0.0),
+                nonneg,
+            ),
+            (
+                "score_snr_scale",
+                fin(self.score_snr_scale) && self.score_snr_scale > 0.0,
+                "must be a positive finite number",
+            ),
+            (
+                "score_elongation_scale",
+                fin(self.score_elongation_scale) && self.score_elongation_scale > 0.0,
+                "must be a positive finite number",
+            ),
+            ("max_candidates", self.max_candidates >= 1, "must be >= 1"),
+        ];
+        match checks.into_iter().find(|c| !c.1) {
+            Some((field, _, msg)) => Err((field, msg.to_string())),
+            None => Ok(()),
+        }
+    }
+}
+
 /// One detected streak.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Candidate {
@@ -390,6 +526,8 @@ struct Sanitized {
 
 impl Sanitized {
     fn new(p: &StreakParams) -> Self {
+        // Non-finite values fall back to the defaults.
+        let d = StreakParams::default();
         let fin = |v: f64, d: f64| if v.is_finite() { v } else { d };
         let mut half_lengths: Vec<usize> = p
             .line_lengths_px
@@ -403,32 +541,32 @@ impl Sanitized {
         }
         Sanitized {
             mesh: p.mesh_size.max(8),
-            mesh_clip: fin(p.mesh_clip_sigma, 3.0).max(1.0),
-            min_sigma: fin(p.min_noise_sigma, 0.5).max(1e-3),
-            psf_sigma: fin(p.psf_sigma_px, 1.5).clamp(0.3, 20.0),
-            clip: fin(p.clip_sigma, 4.0).max(0.5),
-            star_z: fin(p.star_mask_sigma, 5.0).max(1.0),
-            star_ring_ratio: fin(p.star_ring_ratio, 0.5).clamp(0.0, 1.0),
+            mesh_clip: fin(p.mesh_clip_sigma, d.mesh_clip_sigma).max(1.0),
+            min_sigma: fin(p.min_noise_sigma, d.min_noise_sigma).max(1e-3),
+            psf_sigma: fin(p.psf_sigma_px, d.psf_sigma_px).clamp(0.3, 20.0),
+            clip: fin(p.clip_sigma, d.clip_sigma).max(0.5),
+            star_z: fin(p.star_mask_sigma, d.star_mask_sigma).max(1.0),
+            star_ring_ratio: fin(p.star_ring_ratio, d.star_ring_ratio).clamp(0.0, 1.0),
             n_angles: p.n_angles.clamp(4, 180),
             half_lengths,
-            threshold: fin(p.threshold_sigma, 3.0) as f32,
-            seed: fin(p.seed_sigma, 5.0) as f32,
+            threshold: fin(p.threshold_sigma, d.threshold_sigma) as f32,
+            seed: fin(p.seed_sigma, d.seed_sigma) as f32,
             link_bins: p.angle_link_bins,
             min_pixels: p.min_pixels.max(1),
-            min_fragment: fin(p.min_fragment_px, 8.0),
-            min_length: fin(p.min_length_px, 20.0),
-            min_elongation: fin(p.min_elongation, 2.5),
-            min_snr: fin(p.min_snr, 6.5),
-            trail_tol: fin(p.star_trail_tolerance_deg, 5.0).abs(),
+            min_fragment: fin(p.min_fragment_px, d.min_fragment_px),
+            min_length: fin(p.min_length_px, d.min_length_px),
+            min_elongation: fin(p.min_elongation, d.min_elongation),
+            min_snr: fin(p.min_snr, d.min_snr),
+            trail_tol: fin(p.star_trail_tolerance_deg, d.star_trail_tolerance_deg).abs(),
             trail_half: p.trail_filter_px.min(4001) / 2,
-            merge_angle: fin(p.merge_angle_deg, 5.0).abs(),
-            merge_offset: fin(p.merge_offset_px, 4.0).abs(),
-            merge_gap: fin(p.merge_gap_px, 60.0),
-            dup_dist: fin(p.duplicate_distance_px, 10.0),
-            pad_along: fin(p.box_pad_along_sigma, 1.0).max(0.0),
-            pad_across: fin(p.box_pad_across_sigma, 3.0).max(0.0),
-            snr_scale: fin(p.score_snr_scale, 10.0).max(1e-9),
-            elong_scale: fin(p.score_elongation_scale, 3.0).max(1e-9),
+            merge_angle: fin(p.merge_angle_deg, d.merge_angle_deg).abs(),
+            merge_offset: fin(p.merge_offset_px, d.merge_offset_px).abs(),
+            merge_gap: fin(p.merge_gap_px, d.merge_gap_px),
+            dup_dist: fin(p.duplicate_distance_px, d.duplicate_distance_px),
+            pad_along: fin(p.box_pad_along_sigma, d.box_pad_along_sigma).max(0.0),
+            pad_across: fin(p.box_pad_across_sigma, d.box_pad_across_sigma).max(0.0),
+            snr_scale: fin(p.score_snr_scale, d.score_snr_scale).max(1e-9),
+            elong_scale: fin(p.score_elongation_scale, d.score_elongation_scale).max(1e-9),
             class: p.class,
             max_candidates: p.max_candidates,
         }

@@ -150,28 +150,41 @@ fn fixed_image_len(
     if amp_sigma > 0.0 {
         let len = rng.random_range(lens);
         let th = rng.random_range(0.0..PI);
-        let (hx, hy) = (0.5 * len * th.cos(), 0.5 * len * th.sin());
-        let m = 12.0;
-        let cx = rng.random_range(hx.abs() + m..w as f64 - hx.abs() - m);
-        let cy = rng.random_range(hy.abs() + m..h as f64 - hy.abs() - m);
-        let mut s = vec![0.0; w * h];
-        add_segment(
-            &mut s,
-            w,
-            h,
-            cx - hx,
-            cy - hy,
-            cx + hx,
-            cy + hy,
-            amp_sigma * NOISE,
-        );
-        truth = Some(Truth {
-            boxx: truth_box(&s, w, h),
-            angle_deg: th.to_degrees(),
-        });
-        img.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+        truth = Some(add_streak(&mut img, (w, h), len, th, amp_sigma, &mut rng));
     }
     (quantise(&img, &mut rng), truth)
+}
+
+/// Adds a streak of `len` px at `th` rad (peak `amp_sigma` noise sigmas) at a random centre
+/// keeping it 12 px inside the image; returns its truth.
+fn add_streak(
+    img: &mut [f64],
+    (w, h): (usize, usize),
+    len: f64,
+    th: f64,
+    amp_sigma: f64,
+    rng: &mut ChaCha8Rng,
+) -> Truth {
+    let (hx, hy) = (0.5 * len * th.cos(), 0.5 * len * th.sin());
+    let m = 12.0;
+    let cx = rng.random_range(hx.abs() + m..w as f64 - hx.abs() - m);
+    let cy = rng.random_range(hy.abs() + m..h as f64 - hy.abs() - m);
+    let mut s = vec![0.0; w * h];
+    add_segment(
+        &mut s,
+        w,
+        h,
+        cx - hx,
+        cy - hy,
+        cx + hx,
+        cy + hy,
+        amp_sigma * NOISE,
+    );
+    img.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+    Truth {
+        boxx: truth_box(&s, w, h),
+        angle_deg: th.to_degrees().rem_euclid(180.0),
+    }
 }
 
 /// A survey-like image: `n` parallel star trails at `trail_deg` (lengths 60-200 px, various
@@ -200,26 +213,7 @@ fn survey_image(
         let len = rng.random_range(40.0..600.0);
         let off = rng.random_range(20.0..160.0);
         let th = (trail_deg + off).to_radians();
-        let (hx, hy) = (0.5 * len * th.cos(), 0.5 * len * th.sin());
-        let m = 12.0;
-        let cx = rng.random_range(hx.abs() + m..w as f64 - hx.abs() - m);
-        let cy = rng.random_range(hy.abs() + m..h as f64 - hy.abs() - m);
-        let mut s = vec![0.0; w * h];
-        add_segment(
-            &mut s,
-            w,
-            h,
-            cx - hx,
-            cy - hy,
-            cx + hx,
-            cy + hy,
-            amp_sigma * NOISE,
-        );
-        truth = Some(Truth {
-            boxx: truth_box(&s, w, h),
-            angle_deg: th.to_degrees().rem_euclid(180.0),
-        });
-        img.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+        truth = Some(add_streak(&mut img, (w, h), len, th, amp_sigma, &mut rng));
     }
     (quantise(&img, &mut rng), truth)
 }
@@ -626,5 +620,56 @@ fn timing() {
             t0.elapsed().as_secs_f64() / n * 1e3,
             (thread_cpu_s() - c0) / n * 1e3
         );
+    }
+}
+
+#[test]
+fn defaults_pass_the_check_and_bad_values_name_their_field() {
+    let d = StreakParams::default();
+    assert_eq!(d.check(), Ok(()));
+    assert!(d.is_default());
+    let json = serde_json::to_value(&d).unwrap();
+    let fields = json.as_object().unwrap();
+    for (bad, field) in [
+        (
+            StreakParams {
+                n_angles: 0,
+                ..StreakParams::default()
+            },
+            "n_angles",
+        ),
+        (
+            StreakParams {
+                psf_sigma_px: f64::NAN,
+                ..StreakParams::default()
+            },
+            "psf_sigma_px",
+        ),
+        (
+            StreakParams {
+                line_lengths_px: vec![21, 2],
+                ..StreakParams::default()
+            },
+            "line_lengths_px",
+        ),
+        (
+            StreakParams {
+                threshold_sigma: f64::INFINITY,
+                ..StreakParams::default()
+            },
+            "threshold_sigma",
+        ),
+        (
+            StreakParams {
+                max_candidates: 0,
+                ..StreakParams::default()
+            },
+            "max_candidates",
+        ),
+    ] {
+        assert!(!bad.is_default());
+        let (f, msg) = bad.check().unwrap_err();
+        assert_eq!(f, field, "{msg}");
+        assert!(fields.contains_key(f), "{f} is not a field");
     }
 }
