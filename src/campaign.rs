@@ -11,6 +11,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+use crate::detect::streak::StreakParams;
 pub use crate::geometry::FrameKind;
 pub use crate::render::RenderMethod;
 pub use crate::scene::{Body, PointingMode};
@@ -432,6 +433,10 @@ pub struct Detect {
     /// Also run the classical streak detector, the model-free baseline.
     #[serde(default = "defaults::yes")]
     pub classical: bool,
+    /// `[detect.streak]`: the classical detector's knobs, each optional (defaults and meaning in
+    /// `detect::streak::StreakParams`). Left out of the resolved campaign while all are default.
+    #[serde(default, skip_serializing_if = "StreakParams::is_default")]
+    pub streak: StreakParams,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
@@ -612,14 +617,15 @@ pub mod defaults {
     pub fn train_patience() -> u32 {
         100
     }
+    // The YOLO thresholds live with the detector, which must not depend on the campaign.
     pub fn detect_conf() -> f64 {
-        0.5
+        crate::detect::yolo::DEFAULT_CONF
     }
     pub fn detect_iou() -> f64 {
-        0.5
+        crate::detect::yolo::DEFAULT_IOU
     }
     pub fn max_det() -> u32 {
-        300
+        crate::detect::yolo::DEFAULT_MAX_DET
     }
 }
 
@@ -1166,6 +1172,9 @@ fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "must be in (0, 1]",
     )?;
     check(d.max_det >= 1, "detect.max_det", "must be >= 1")?;
+    d.streak
+        .check()
+        .map_err(|(field, msg)| (format!("detect.streak.{field}"), msg))?;
     let training = c.stages.contains(&Stage::Train);
     check(
         d.model.is_some() || training || d.classical || !c.stages.contains(&Stage::Detect),
@@ -1513,6 +1522,46 @@ mod tests {
 
         let e = load(&minimal("[stages]\n")).unwrap_err();
         assert!(e.line.is_some(), "{e}");
+    }
+
+    #[test]
+    fn streak_detector_knobs_are_optional_and_checked() {
+        let c = load(&minimal(
+            "[detect.streak]\nthreshold_sigma = 3.5\nmin_snr = 7.0\n",
+        ))
+        .unwrap();
+        let s = &c.resolved.detect.streak;
+        assert_eq!((s.threshold_sigma, s.min_snr), (3.5, 7.0));
+        assert_eq!(s.n_angles, StreakParams::default().n_angles);
+        // Left at the defaults the table is not in the resolved campaign: hashes do not move.
+        let plain = load(&minimal("")).unwrap();
+        let json = serde_json::to_value(&plain.resolved).unwrap();
+        assert!(json["detect"].get("streak").is_none(), "{json}");
+        let same = load(&minimal("[detect.streak]\nthreshold_sigma = 3.0\n")).unwrap();
+        assert_eq!(same.hash, plain.hash);
+        assert_ne!(c.hash, plain.hash);
+
+        let e = load(&minimal(
+            "[detect]\nclassical = true\n[detect.streak]\nmin_snr = 5.0\nthreshold_sigma = nan\n",
+        ))
+        .unwrap_err();
+        assert_eq!(
+            e.field.as_deref(),
+            Some("detect.streak.threshold_sigma"),
+            "{e}"
+        );
+        assert_eq!(e.line, Some(12), "{e}");
+        assert!(
+            e.to_string().starts_with(
+                "/nowhere/c.toml:12: field `detect.streak.threshold_sigma`: must be a finite number"
+            ),
+            "{e}"
+        );
+        let e = load(&minimal("[detect.streak]\nn_angles = 0\n")).unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("detect.streak.n_angles"), "{e}");
+        let e = load(&minimal("[detect.streak]\nthreshold = 3.0\n")).unwrap_err();
+        assert!(e.to_string().contains("unknown field `threshold`"), "{e}");
+        assert_eq!(e.line, Some(9), "{e}");
     }
 
     #[test]

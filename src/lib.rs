@@ -22,6 +22,7 @@ pub mod output;
 pub mod pipeline;
 pub mod plot;
 pub mod progress;
+pub mod python;
 pub mod render;
 pub mod report;
 pub mod rng;

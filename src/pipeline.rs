@@ -298,7 +298,7 @@ fn detect_and_report(
     };
     let mut runs = Vec::new();
     if c.detect.classical {
-        let params = StreakParams::default();
+        let params: &StreakParams = &c.detect.streak;
         let results: Vec<(Vec<Detection>, f64)> = images
             .par_iter()
             .zip(chosen.par_iter())

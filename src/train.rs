@@ -6,7 +6,7 @@
 //! The Python side is installed by `scripts/setup-train.sh` into `.venv-train/`.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Command;
 
 use anyhow::{Context, bail};
 
@@ -37,13 +37,7 @@ pub fn find_python(explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
         ],
     };
     for c in &candidates {
-        let ok = Command::new(c)
-            .args(["-c", "import ultralytics"])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .status()
-            .is_ok_and(|s| s.success());
-        if ok {
+        if crate::python::succeeds(c, "import ultralytics") {
             return Ok(c.clone());
         }
     }

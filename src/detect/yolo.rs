@@ -25,7 +25,6 @@
 //! so use more than one thread only when detection runs alone. Pool threads do not spin-wait.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::sync::Mutex;
 
 use ort::environment::Environment;
@@ -34,6 +33,7 @@ use ort::session::builder::GraphOptimizationLevel;
 use ort::value::{TensorElementType, TensorRef, ValueType};
 
 use super::Detection;
+use crate::python;
 
 /// Ultralytics' `max_wh`: class offset added to boxes so that NMS never mixes classes.
 const MAX_WH: f32 = 7680.0;
@@ -45,6 +45,13 @@ const PAD_VALUE: u8 = 114;
 const DEFAULT_IMGSZ: u32 = 640;
 /// YOLOv8 detection strides (P3, P4, P5).
 const STRIDES: [u32; 3] = [8, 16, 32];
+
+/// Default confidence threshold (the paper's; also the campaign's `detect.conf` default).
+pub const DEFAULT_CONF: f64 = 0.5;
+/// Default NMS IoU threshold (the paper's; also the campaign's `detect.iou` default).
+pub const DEFAULT_IOU: f64 = 0.5;
+/// Default cap on detections per image (Ultralytics'; also the campaign's `detect.max_det`).
+pub const DEFAULT_MAX_DET: u32 = 300;
 
 /// Detection settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -67,9 +74,9 @@ pub struct YoloParams {
 impl Default for YoloParams {
     fn default() -> Self {
         Self {
-            conf: 0.5,
-            iou: 0.5,
-            max_det: 300,
+            conf: DEFAULT_CONF,
+            iou: DEFAULT_IOU,
+            max_det: DEFAULT_MAX_DET as usize,
             imgsz: None,
             intra_threads: 1,
         }
@@ -759,26 +766,6 @@ fn lib_in_package(pkg: &Path) -> Option<PathBuf> {
     found.into_iter().next()
 }
 
-/// Output lines of `python -c code`, or None when the interpreter is missing or fails.
-fn python_lines(python: &Path, code: &str) -> Option<Vec<String>> {
-    let out = Command::new(python)
-        .args(["-c", code])
-        .stdin(Stdio::null())
-        .stderr(Stdio::null())
-        .output()
-        .ok()?;
-    if !out.status.success() {
-        return None;
-    }
-    Some(
-        String::from_utf8_lossy(&out.stdout)
-            .lines()
-            .map(|l| l.trim().to_string())
-            .filter(|l| !l.is_empty())
-            .collect(),
-    )
-}
-
 /// `site-packages` folders under a prefix (a venv, `~/.local`).
 fn site_packages_under(prefix: &Path) -> Vec<PathBuf> {
     let mut dirs = Vec::new();
@@ -827,13 +814,13 @@ fn locate_onnxruntime(search: &OrtSearch) -> Result<PathBuf, YoloError> {
     let mut site_dirs: Vec<PathBuf> = Vec::new();
     for py in &search.pythons {
         searched.push(format!("`{} -c 'import onnxruntime'`", py.display()));
-        if let Some(lines) = python_lines(py, IMPORT)
+        if let Some(lines) = python::lines(py, IMPORT)
             && let Some(dir) = lines.last()
             && let Some(lib) = lib_in_package(Path::new(dir))
         {
             return Ok(lib);
         }
-        if let Some(lines) = python_lines(py, SITES) {
+        if let Some(lines) = python::lines(py, SITES) {
             site_dirs.extend(lines.into_iter().map(PathBuf::from));
         }
     }

@@ -1,0 +1,120 @@
+//! Step 6, rejection and merging: collinear fragments are merged and re-refined until none
+//! merge, and a candidate near a better one must still pass on its own (explaining away).
+
+use super::refine::{Ctx, Point, Seed, Seg, point_segment_distance};
+use super::stats::{bilinear, median_of};
+
+/// Absolute difference of two axis orientations in degrees, modulo 180 (result in [0, 90]).
+pub(super) fn angle_diff_deg(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(180.0);
+    d.min(180.0 - d)
+}
+
+impl Ctx<'_> {
+    /// Whether the profile samples of `s` farther than `duplicate_distance_px` from all `others`
+    /// still make `min_length_px` samples and `min_snr` (median level times count over the
+    /// noise sd of that many samples).
+    pub(super) fn survives(&self, s: &Seg, others: &[(Point, Point)]) -> bool {
+        let (ux, uy) = s.dir();
+        let (nx, ny) = (-uy, ux);
+        let hl = 0.5 * s.length;
+        let ta = (-hl + 0.5).ceil() as i64;
+        let tb = (hl - 0.5).floor() as i64;
+        let mut vals = Vec::new();
+        for t in ta..=tb {
+            let (x, y) = (s.cx + t as f64 * ux, s.cy + t as f64 * uy);
+            if others
+                .iter()
+                .any(|&(a, b)| point_segment_distance((x, y), a, b) <= self.p.dup_dist)
+            {
+                continue;
+            }
+            vals.push(
+                (bilinear(self.z, self.w, self.h, x - nx, y - ny)
+                    + bilinear(self.z, self.w, self.h, x, y)
+                    + bilinear(self.z, self.w, self.h, x + nx, y + ny))
+                    / 3.0,
+            );
+        }
+        let n = vals.len();
+        if (n as f64) < self.p.min_length || n == 0 {
+            return false;
+        }
+        median_of(&mut vals) * n as f64 / self.profile_sum_sd(n) >= self.p.min_snr
+    }
+
+    /// Merge collinear fragments until none merge.
+    pub(super) fn merge(&self, mut segs: Vec<Seg>, aligned: &dyn Fn(&Seg) -> bool) -> Vec<Seg> {
+        let p = self.p;
+        loop {
+            let mut merged_any = false;
+            'outer: for i in 0..segs.len() {
+                for j in (i + 1)..segs.len() {
+                    if !self.collinear(&segs[i], &segs[j]) {
+                        continue;
+                    }
+                    let (a0, a1) = segs[i].ends();
+                    let (b0, b1) = segs[j].ends();
+                    // The two farthest ends span the merged segment.
+                    let pts = [a0, a1, b0, b1];
+                    let (mut bd, mut e0, mut e1) = (-1.0, a0, a1);
+                    for u in 0..4 {
+                        for v in (u + 1)..4 {
+                            let d = (pts[u].0 - pts[v].0).hypot(pts[u].1 - pts[v].1);
+                            if d > bd {
+                                (bd, e0, e1) = (d, pts[u], pts[v]);
+                            }
+                        }
+                    }
+                    let seed = Seed {
+                        cx: 0.5 * (e0.0 + e1.0),
+                        cy: 0.5 * (e0.1 + e1.1),
+                        theta: (e1.1 - e0.1).atan2(e1.0 - e0.0),
+                        half: 0.5 * bd,
+                        shrink: 0.0,
+                        ext: 4.0 * p.psf_sigma + 4.0,
+                    };
+                    if let Some(m) = self.refine(&seed)
+                        && !aligned(&m)
+                    {
+                        segs[i] = m;
+                        segs.remove(j);
+                        merged_any = true;
+                        break 'outer;
+                    }
+                }
+            }
+            if !merged_any {
+                return segs;
+            }
+        }
+    }
+
+    fn collinear(&self, a: &Seg, b: &Seg) -> bool {
+        let p = self.p;
+        if angle_diff_deg(a.theta.to_degrees(), b.theta.to_degrees()) > p.merge_angle {
+            return false;
+        }
+        let off = |s: &Seg, q: (f64, f64)| {
+            let (ux, uy) = s.dir();
+            ((q.0 - s.cx) * -uy + (q.1 - s.cy) * ux).abs()
+        };
+        let (a0, a1) = a.ends();
+        let (b0, b1) = b.ends();
+        if off(a, b0).max(off(a, b1)) > p.merge_offset
+            || off(b, a0).max(off(b, a1)) > p.merge_offset
+        {
+            return false;
+        }
+        // Gap along a's axis.
+        let (ux, uy) = a.dir();
+        let proj = |q: (f64, f64)| (q.0 - a.cx) * ux + (q.1 - a.cy) * uy;
+        let (pa0, pa1) = (-0.5 * a.length, 0.5 * a.length);
+        let (pb0, pb1) = {
+            let (u, v) = (proj(b0), proj(b1));
+            (u.min(v), u.max(v))
+        };
+        let gap = (pb0 - pa1).max(pa0 - pb1).max(0.0);
+        gap <= p.merge_gap
+    }
+}

@@ -1,0 +1,574 @@
+//! Classical (model-free) detection of debris streaks in 8-bit space-telescope images.
+//!
+//! The debris is a straight, often faint streak tens to hundreds of pixels long; stars are round
+//! dots (fixed pointing) or parallel trails along a known direction (survey pointing). The
+//! detector is a matched filter for faint linear features followed by component analysis:
+//!
+//! 1. **Background and noise.** The image is cut into a mesh of about `mesh_size` pixel cells.
+//!    In each cell the background is the sigma-clipped median and the noise the clipped MAD
+//!    (x 1.4826) of the grey levels (histogram based, values treated as uniform within their
+//!    grey level). The mesh is 3x3 median filtered and interpolated bilinearly between cell
+//!    centres. The noise is floored at `min_noise_sigma`. Residual `q = (I - bg) / sigma`.
+//! 2. **Cross-section matched filter.** `q` is smoothed by a Gaussian of `psf_sigma_px` (the
+//!    streak's cross-section profile; mirrored edges, with the edge rows and columns rescaled to
+//!    the interior noise) and divided by its robust (MAD) standard deviation, giving `z` with
+//!    unit noise. Survey images (trail direction given): structures along the trail direction
+//!    are subtracted (one-sided means over `trail_filter_px` pixels along it, see
+//!    `remove_trails`). Stars are masked: round local maxima of `z` above `star_mask_sigma`
+//!    (ring test, `star_ring_ratio`) are zeroed out to where they fade into the noise. A copy
+//!    clipped to `[-clip_sigma, clip_sigma]` limits the weight of what remains bright.
+//! 3. **Oriented line filter.** For `n_angles` orientations in [0, 180) and each length in
+//!    `line_lengths_px`, the clipped `z` is summed along a digital straight line of that length
+//!    centred on every pixel (running sums over rows of the image or of its transpose, O(1) per
+//!    pixel and filter, contiguous memory). Each sum is divided by its noise standard deviation
+//!    (white pixel noise smoothed by the Gaussian, exact for the digital line), so every filter
+//!    output is in sigma; beyond the image counts as zero (conservative near the edges). Per
+//!    pixel the maximum over filters and its orientation are kept.
+//! 4. **Components.** Pixels with response >= `threshold_sigma` are joined by 8-connectivity,
+//!    but only between pixels whose best orientations differ by at most `angle_link_bins`
+//!    steps, so that a streak crossing a star trail splits instead of merging with it.
+//!    A component is kept if it has `min_pixels` pixels and a peak >= `seed_sigma`; its
+//!    centroid and second moments give an axis and extent.
+//! 5. **Refinement.** Around each component axis the orientation and lateral offset are refined
+//!    by a coarse-to-fine grid search (+-2 filter steps, then finer) maximising `z` clipped at
+//!    4 `clip_sigma` summed along the axis. Then the profile `p(t)` along the axis (mean of `z`
+//!    at lateral offsets -1, 0, 1 px) is read, the streak level is the median of `p` in the
+//!    component's inner part, and each end is the change point maximising the cumulative sum
+//!    of `min(p, 1.5 level) - level / 2` outwards (the half-level crossing, robust to noise
+//!    dips). Measured on the refined segment: length between the ends; SNR = median of `p`
+//!    over the segment times its sample count, divided by the noise standard deviation of that
+//!    sum (white-noise model; the median keeps a bright star on the axis from making a
+//!    streak); flux = sum of background-subtracted grey levels within `3 psf_sigma_px` of the
+//!    segment; elongation = sqrt(l1 / l2) of the second moments of the pixels within
+//!    `3 psf_sigma_px` of the segment weighted by `z` clipped to `[0, clip_sigma]` (a streak of
+//!    length L: about L / (sqrt(12) 2.5); a star: about 1).
+//! 6. **Rejection and merging.** Fragments aligned with the star-trail direction (when given,
+//!    within `star_trail_tolerance_deg` + atan(4 psf_sigma / length)) or shorter than
+//!    `min_fragment_px` are dropped; collinear fragments (angle within `merge_angle_deg`,
+//!    lateral offsets within `merge_offset_px`, gap along the axis within `merge_gap_px`) are
+//!    merged and re-refined until none merge. Candidates need length >= `min_length_px`,
+//!    elongation >= `min_elongation` and SNR >= `min_snr`; the trail test is applied again.
+//!    Explaining away, best score first: the profile samples of a candidate within
+//!    `duplicate_distance_px` of a better candidate are ignored and the rest must still pass
+//!    the length and SNR tests (drops duplicates and the off-axis echoes of bright streaks).
+//! 7. **Output.** Score (monotone increasing in SNR and in elongation, in [0, 1)):
+//!    `(1 - exp(-snr / score_snr_scale)) * (1 - exp(-(elongation - 1) / score_elongation_scale))`.
+//!    Box: the refined segment padded by `box_pad_along_sigma * psf_sigma_px` along the axis and
+//!    `box_pad_across_sigma * psf_sigma_px` across it (bounding box of that ellipse-capped
+//!    segment), which matches the label convention of the generator (the box holding all but
+//!    0.25 % of the debris flux on each side), in pixel-edge coordinates (pixel `i` spans
+//!    `[i, i + 1]`), clipped to the image. Candidates are sorted by decreasing score, at most
+//!    `max_candidates`.
+//!
+//! Orientations (the output `orientation_deg` and the input `star_trail_angle_deg`) are in
+//! image axes: degrees from the +x axis (columns, rightwards) towards +y (rows, downwards),
+//! modulo 180, reported in [0, 180).
+//!
+//! Everything is single-threaded and deterministic: the same input gives the same output.
+//!
+//! One submodule per step: `background` (1), `smooth`, `trails` and `stars` (2), `lines` (3),
+//! `components` (4), `refine` and `merge` (5-6), `output` (7); `stats` holds the robust
+//! statistics and bilinear sampling they share. This file holds the parameters and the pipeline.
+
+mod background;
+mod components;
+mod lines;
+mod merge;
+mod output;
+mod refine;
+mod smooth;
+mod stars;
+mod stats;
+#[cfg(test)]
+mod tests;
+mod trails;
+
+use super::Detection;
+use background::background;
+use components::components;
+use lines::line_filter;
+use merge::angle_diff_deg;
+use output::score;
+use refine::{Ctx, Point, Seed, Seg};
+use smooth::{equalise_edge_noise, gaussian_kernel, smooth};
+use stars::mask_stars;
+use stats::robust_sigma;
+use trails::remove_trails;
+
+/// Every knob of [`detect_streaks`], with its default: all settable from a campaign's
+/// `[detect.streak]` table, each field optional (falls back to [`StreakParams::default`], the
+/// one place for the defaults). [`StreakParams::check`] says which values are allowed.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, schemars::JsonSchema, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct StreakParams {
+    /// Background mesh cell size in pixels (default 64). Images smaller than a cell use one cell.
+    pub mesh_size: usize,
+    /// Sigma-clipping factor for the background and noise statistics of each cell (default 3.0).
+    pub mesh_clip_sigma: f64,
+    /// Floor on the per-pixel noise sigma, grey levels (default 0.5, about the 8-bit quantisation).
+    pub min_noise_sigma: f64,
+    /// Gaussian sigma of the streak cross-section (the PSF), pixels (default 1.5). Sets the
+    /// smoothing kernel and the box padding.
+    pub psf_sigma_px: f64,
+    /// The smoothed image (unit noise) is clipped to +-this before line filtering (default 4.0).
+    pub clip_sigma: f64,
+    /// Stars are masked: local maxima of the smoothed image (unit noise) of at least this ...
+    /// (default 5.0) ...
+    pub star_mask_sigma: f64,
+    /// ... whose surrounding ring (radius 2 sqrt(2) psf_sigma) stays below this fraction of the
+    /// peak (default 0.5).
+    pub star_ring_ratio: f64,
+    /// Number of line-filter orientations over [0, 180) (default 24, i.e. 7.5 deg steps; 4..=180).
+    pub n_angles: usize,
+    /// Line-filter lengths in pixels, each rounded up to odd (default [21, 51]).
+    pub line_lengths_px: Vec<usize>,
+    /// Line-filter response, in sigma, for a pixel to join a component (default 3.0).
+    pub threshold_sigma: f64,
+    /// A component must reach this response, in sigma, somewhere (default 5.0).
+    pub seed_sigma: f64,
+    /// Neighbouring pixels join only if their best orientations differ by at most this many
+    /// filter steps (default 1).
+    pub angle_link_bins: usize,
+    /// Minimum number of pixels of a component (default 15).
+    pub min_pixels: usize,
+    /// Refined fragments shorter than this (pixels) are dropped before merging (default 8.0).
+    pub min_fragment_px: f64,
+    /// Minimum refined streak length, pixels (default 20.0).
+    pub min_length_px: f64,
+    /// Minimum elongation sqrt(l1 / l2) (default 2.5; a round star is about 1).
+    pub min_elongation: f64,
+    /// Minimum SNR of the whole streak (default 6.5).
+    pub min_snr: f64,
+    /// Candidates within this angle of the star-trail direction, plus atan(4 psf_sigma / length)
+    /// for the orientation uncertainty of short ones, are stars (default 5.0 deg).
+    pub star_trail_tolerance_deg: f64,
+    /// Survey images: before line filtering each pixel loses the mean along the star-trail
+    /// direction over this many pixels (rounded up to odd) just before or just after it (the
+    /// larger where significant, else their average), which removes trails longer than about
+    /// twice this (default 31; 0 = off).
+    pub trail_filter_px: usize,
+    /// Fragments merge if their orientations differ by at most this (default 5.0 deg) ...
+    pub merge_angle_deg: f64,
+    /// ... each one's ends lie within this distance of the other's axis (default 4.0 px) ...
+    pub merge_offset_px: f64,
+    /// ... and the gap between them along the axis is at most this (default 60.0 px).
+    pub merge_gap_px: f64,
+    /// Explaining away: a candidate's profile samples within this distance of a higher-scoring
+    /// candidate's segment are ignored, and what remains must still reach `min_length_px` and
+    /// `min_snr` (default 10.0 px). Drops duplicates and the off-axis echoes of bright streaks.
+    pub duplicate_distance_px: f64,
+    /// Box padding along the streak axis beyond the ends, in PSF sigmas (default 1.0).
+    pub box_pad_along_sigma: f64,
+    /// Box padding across the streak axis, in PSF sigmas (default 3.0).
+    pub box_pad_across_sigma: f64,
+    /// SNR scale of the score (default 10.0).
+    pub score_snr_scale: f64,
+    /// Elongation scale of the score (default 3.0).
+    pub score_elongation_scale: f64,
+    /// Class written into the detections (default 0).
+    pub class: u32,
+    /// At most this many candidates are returned, best first (default 16).
+    pub max_candidates: usize,
+}
+
+impl Default for StreakParams {
+    fn default() -> Self {
+        StreakParams {
+            mesh_size: 64,
+            mesh_clip_sigma: 3.0,
+            min_noise_sigma: 0.5,
+            psf_sigma_px: 1.5,
+            clip_sigma: 4.0,
+            star_mask_sigma: 5.0,
+            star_ring_ratio: 0.5,
+            n_angles: 24,
+            line_lengths_px: vec![21, 51],
+            threshold_sigma: 3.0,
+            seed_sigma: 5.0,
+            angle_link_bins: 1,
+            min_pixels: 15,
+            min_fragment_px: 8.0,
+            min_length_px: 20.0,
+            min_elongation: 2.5,
+            min_snr: 6.5,
+            star_trail_tolerance_deg: 5.0,
+            trail_filter_px: 31,
+            merge_angle_deg: 5.0,
+            merge_offset_px: 4.0,
+            merge_gap_px: 60.0,
+            duplicate_distance_px: 10.0,
+            box_pad_along_sigma: 1.0,
+            box_pad_across_sigma: 3.0,
+            score_snr_scale: 10.0,
+            score_elongation_scale: 3.0,
+            class: 0,
+            max_candidates: 16,
+        }
+    }
+}
+
+impl StreakParams {
+    /// Whether every knob is [`StreakParams::default`] (a campaign then leaves `[detect.streak]`
+    /// out of its resolved form, so its hash does not change).
+    pub fn is_default(&self) -> bool {
+        *self == StreakParams::default()
+    }
+
+    /// Checks every knob's range: the first one outside it, as (field, what is allowed).
+    /// [`detect_streaks`] itself clamps out-of-range values to something it can run; a campaign
+    /// must instead run what it says, so it refuses them.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        let at_least = |v: f64, lo: f64| v.is_finite() && v >= lo;
+        let within = |v: f64, lo: f64, hi: f64| v.is_finite() && (lo..=hi).contains(&v);
+        let fin = |v: f64| v.is_finite();
+        let nonneg = "must be a finite number >= 0";
+        let checks = [
+            (
+                "mesh_size",
+                self.mesh_size >= 8,
+                "must be at least 8 pixels",
+            ),
+            (
+                "mesh_clip_sigma",
+                at_least(self.mesh_clip_sigma, 1.0),
+                "must be a finite number >= 1",
+            ),
+            (
+                "min_noise_sigma",
+                at_least(self.min_noise_sigma, 1e-3),
+                "must be a finite number >= 0.001",
+            ),
+            (
+                "psf_sigma_px",
+                within(self.psf_sigma_px, 0.3, 20.0),
+                "must be between 0.3 and 20 pixels",
+            ),
+            (
+                "clip_sigma",
+                at_least(self.clip_sigma, 0.5),
+                "must be a finite number >= 0.5",
+            ),
+            (
+                "star_mask_sigma",
+                at_least(self.star_mask_sigma, 1.0),
+                "must be a finite number >= 1",
+            ),
+            (
+                "star_ring_ratio",
+                within(self.star_ring_ratio, 0.0, 1.0),
+                "must be in [0, 1]",
+            ),
+            (
+                "n_angles",
+                (4..=180).contains(&self.n_angles),
+                "must be between 4 and 180",
+            ),
+            (
+                "line_lengths_px",
+                !self.line_lengths_px.is_empty()
+                    && self.line_lengths_px.iter().all(|k| (3..=4001).contains(k)),
+                "give at least one length, each between 3 and 4001 pixels",
+            ),
+            (
+                "threshold_sigma",
+                fin(self.threshold_sigma),
+                "must be a finite number",
+            ),
+            (
+                "seed_sigma",
+                fin(self.seed_sigma),
+                "must be a finite number",
+            ),
+            ("min_pixels", self.min_pixels >= 1, "must be >= 1"),
+            (
+                "min_fragment_px",
+                at_least(self.min_fragment_px, 0.0),
+                nonneg,
+            ),
+            ("min_length_px", at_least(self.min_length_px, 0.0), nonneg),
+            ("min_elongation", at_least(self.min_elongation, 0.0), nonneg),
+            ("min_snr", at_least(self.min_snr, 0.0), nonneg),
+            (
+                "star_trail_tolerance_deg",
+                within(self.star_trail_tolerance_deg, 0.0, 90.0),
+                "must be between 0 and 90 degrees",
+            ),
+            (
+                "trail_filter_px",
+                self.trail_filter_px <= 4001,
+                "must be at most 4001 pixels (0 turns it off)",
+            ),
+            (
+                "merge_angle_deg",
+                within(self.merge_angle_deg, 0.0, 90.0),
+                "must be between 0 and 90 degrees",
+            ),
+            (
+                "merge_offset_px",
+                at_least(self.merge_offset_px, 0.0),
+                nonneg,
+            ),
+            ("merge_gap_px", at_least(self.merge_gap_px, 0.0), nonneg),
+            (
+                "duplicate_distance_px",
+                at_least(self.duplicate_distance_px, 0.0),
+                nonneg,
+            ),
+            (
+                "box_pad_along_sigma",
+                at_least(self.box_pad_along_sigma, 0.0),
+                nonneg,
+            ),
+            (
+                "box_pad_across_sigma",
+                at_least(self.box_pad_across_sigma, 0.0),
+                nonneg,
+            ),
+            (
+                "score_snr_scale",
+                fin(self.score_snr_scale) && self.score_snr_scale > 0.0,
+                "must be a positive finite number",
+            ),
+            (
+                "score_elongation_scale",
+                fin(self.score_elongation_scale) && self.score_elongation_scale > 0.0,
+                "must be a positive finite number",
+            ),
+            ("max_candidates", self.max_candidates >= 1, "must be >= 1"),
+        ];
+        match checks.into_iter().find(|c| !c.1) {
+            Some((field, _, msg)) => Err((field, msg.to_string())),
+            None => Ok(()),
+        }
+    }
+}
+
+/// One detected streak.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Candidate {
+    /// Box (pixel-edge coordinates), score in [0, 1) and class.
+    pub detection: Detection,
+    /// Length between the half-level ends, pixels.
+    pub length_px: f64,
+    /// Axis orientation, degrees from +x towards +y (image rows down), in [0, 180).
+    pub orientation_deg: f64,
+    /// sqrt(l1 / l2) of the z-weighted second moments around the segment.
+    pub elongation: f64,
+    /// Background-subtracted grey levels summed within 3 PSF sigmas of the segment.
+    pub flux: f64,
+    /// Matched-filter signal-to-noise ratio of the whole streak.
+    pub snr: f64,
+}
+
+/// Detect streaks in an 8-bit image (`pixels` row-major, `width * height` values).
+/// `star_trail_angle_deg`: in survey images the known direction of star trails (from the
+/// attitude), in the image-axis convention of the module docs; candidates aligned with it
+/// within the tolerance are stars, not debris. `None` for fixed pointing (stars are round,
+/// rejected by length and elongation). Panics if `pixels.len() != width * height`.
+pub fn detect_streaks(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    params: &StreakParams,
+    star_trail_angle_deg: Option<f64>,
+) -> Vec<Candidate> {
+    assert_eq!(
+        pixels.len(),
+        width * height,
+        "pixels.len() must be width * height"
+    );
+    if width < 2 || height < 2 {
+        return Vec::new();
+    }
+    let p = Sanitized::new(params);
+    let (w, h) = (width, height);
+
+    // 1. Background and noise.
+    let (bg, sigma) = background(pixels, w, h, &p);
+    let q: Vec<f32> = pixels
+        .iter()
+        .zip(bg.iter().zip(sigma.iter()))
+        .map(|(&v, (&b, &s))| (v as f32 - b) / s)
+        .collect();
+
+    // 2. Cross-section matched filter, normalised to unit noise.
+    let kernel = gaussian_kernel(p.psf_sigma);
+    let mut z = smooth(&q, w, h, &kernel);
+    drop(q);
+    equalise_edge_noise(&mut z, w, h, &kernel);
+    let kappa_white: f64 = kernel.iter().map(|&k| (k as f64) * (k as f64)).sum();
+    let kappa = robust_sigma(&z, w, h).max(0.5 * kappa_white);
+    let inv_kappa = (1.0 / kappa) as f32;
+    z.iter_mut().for_each(|v| *v *= inv_kappa);
+    if let Some(a) = star_trail_angle_deg.filter(|a| a.is_finite()) {
+        remove_trails(&mut z, w, h, a.to_radians(), &p);
+    }
+    mask_stars(&mut z, w, h, &p);
+    let clip = p.clip as f32;
+    let zc: Vec<f32> = z.iter().map(|&v| v.clamp(-clip, clip)).collect();
+
+    // 3. Oriented line filter.
+    let (best, arg) = line_filter(&zc, w, h, &p);
+
+    // 4. Components.
+    let comps = components(&best, &arg, w, h, &p);
+
+    // 5-6. Refinement, rejection, merging.
+    let ctx = Ctx {
+        w,
+        h,
+        pixels,
+        bg: &bg,
+        z: &z,
+        p: &p,
+    };
+    let trail = star_trail_angle_deg.filter(|a| a.is_finite());
+    // A short segment's orientation is uncertain by about its width over its length, so the
+    // tolerance grows by atan(4 psf_sigma / length).
+    let aligned = |s: &Seg| match trail {
+        Some(a) => {
+            let slack = (4.0 * p.psf_sigma / s.length.max(1.0)).atan().to_degrees();
+            angle_diff_deg(s.theta.to_degrees(), a) <= p.trail_tol + slack
+        }
+        None => false,
+    };
+    let kmax = p.half_lengths.iter().copied().max().unwrap_or(10) as f64 * 2.0 + 1.0;
+    let mut frags: Vec<Seg> = Vec::new();
+    for c in &comps {
+        let shrink = (kmax / 2.0).min(c.half_len / 2.0);
+        let seed = Seed {
+            cx: c.cx,
+            cy: c.cy,
+            theta: c.theta,
+            half: c.half_len,
+            shrink,
+            ext: kmax,
+        };
+        if let Some(s) = ctx.refine(&seed)
+            && s.length >= p.min_fragment
+            && !aligned(&s)
+        {
+            frags.push(s);
+        }
+    }
+    let merged = ctx.merge(frags, &aligned);
+
+    // 7. Acceptance, scoring, duplicates.
+    let mut cands: Vec<(Seg, f64)> = merged
+        .into_iter()
+        .filter(|s| {
+            s.length >= p.min_length
+                && s.elongation >= p.min_elongation
+                && s.snr >= p.min_snr
+                && !aligned(s)
+        })
+        .map(|s| {
+            let score = score(s.snr, s.elongation, &p);
+            (s, score)
+        })
+        .collect();
+    cands.sort_by(|a, b| {
+        b.1.total_cmp(&a.1)
+            .then(a.0.cx.total_cmp(&b.0.cx))
+            .then(a.0.cy.total_cmp(&b.0.cy))
+    });
+    // Explaining away: a candidate must still be long and significant enough outside the
+    // neighbourhood of every better one (drops duplicates and the off-axis responses of
+    // bright streaks).
+    let mut kept: Vec<(Seg, f64)> = Vec::new();
+    for (s, sc) in cands {
+        if kept.len() >= p.max_candidates {
+            break;
+        }
+        let others: Vec<(Point, Point)> = kept.iter().map(|(k, _)| k.ends()).collect();
+        if !others.is_empty() && !ctx.survives(&s, &others) {
+            continue;
+        }
+        kept.push((s, sc));
+    }
+    kept.into_iter()
+        .map(|(s, sc)| ctx.candidate(&s, sc))
+        .collect()
+}
+
+/// Parameters checked and converted once.
+struct Sanitized {
+    mesh: usize,
+    mesh_clip: f64,
+    min_sigma: f64,
+    psf_sigma: f64,
+    clip: f64,
+    star_z: f64,
+    star_ring_ratio: f64,
+    n_angles: usize,
+    half_lengths: Vec<usize>,
+    threshold: f32,
+    seed: f32,
+    link_bins: usize,
+    min_pixels: usize,
+    min_fragment: f64,
+    min_length: f64,
+    min_elongation: f64,
+    min_snr: f64,
+    trail_tol: f64,
+    trail_half: usize,
+    merge_angle: f64,
+    merge_offset: f64,
+    merge_gap: f64,
+    dup_dist: f64,
+    pad_along: f64,
+    pad_across: f64,
+    snr_scale: f64,
+    elong_scale: f64,
+    class: u32,
+    max_candidates: usize,
+}
+
+impl Sanitized {
+    fn new(p: &StreakParams) -> Self {
+        // Non-finite values fall back to the defaults.
+        let d = StreakParams::default();
+        let fin = |v: f64, d: f64| if v.is_finite() { v } else { d };
+        let mut half_lengths: Vec<usize> = p
+            .line_lengths_px
+            .iter()
+            .map(|&k| (k.clamp(3, 4001)) / 2)
+            .collect();
+        half_lengths.sort_unstable();
+        half_lengths.dedup();
+        if half_lengths.is_empty() {
+            half_lengths.push(10);
+        }
+        Sanitized {
+            mesh: p.mesh_size.max(8),
+            mesh_clip: fin(p.mesh_clip_sigma, d.mesh_clip_sigma).max(1.0),
+            min_sigma: fin(p.min_noise_sigma, d.min_noise_sigma).max(1e-3),
+            psf_sigma: fin(p.psf_sigma_px, d.psf_sigma_px).clamp(0.3, 20.0),
+            clip: fin(p.clip_sigma, d.clip_sigma).max(0.5),
+            star_z: fin(p.star_mask_sigma, d.star_mask_sigma).max(1.0),
+            star_ring_ratio: fin(p.star_ring_ratio, d.star_ring_ratio).clamp(0.0, 1.0),
+            n_angles: p.n_angles.clamp(4, 180),
+            half_lengths,
+            threshold: fin(p.threshold_sigma, d.threshold_sigma) as f32,
+            seed: fin(p.seed_sigma, d.seed_sigma) as f32,
+            link_bins: p.angle_link_bins,
+            min_pixels: p.min_pixels.max(1),
+            min_fragment: fin(p.min_fragment_px, d.min_fragment_px),
+            min_length: fin(p.min_length_px, d.min_length_px),
+            min_elongation: fin(p.min_elongation, d.min_elongation),
+            min_snr: fin(p.min_snr, d.min_snr),
+            trail_tol: fin(p.star_trail_tolerance_deg, d.star_trail_tolerance_deg).abs(),
+            trail_half: p.trail_filter_px.min(4001) / 2,
+            merge_angle: fin(p.merge_angle_deg, d.merge_angle_deg).abs(),
+            merge_offset: fin(p.merge_offset_px, d.merge_offset_px).abs(),
+            merge_gap: fin(p.merge_gap_px, d.merge_gap_px),
+            dup_dist: fin(p.duplicate_distance_px, d.duplicate_distance_px),
+            pad_along: fin(p.box_pad_along_sigma, d.box_pad_along_sigma).max(0.0),
+            pad_across: fin(p.box_pad_across_sigma, d.box_pad_across_sigma).max(0.0),
+            snr_scale: fin(p.score_snr_scale, d.score_snr_scale).max(1e-9),
+            elong_scale: fin(p.score_elongation_scale, d.score_elongation_scale).max(1e-9),
+            class: p.class,
+            max_candidates: p.max_candidates,
+        }
+    }
+}

@@ -1,0 +1,273 @@
+//! Step 5, refinement of a component's axis into a measured segment: orientation and lateral
+//! offset by a coarse-to-fine search, the ends as change points of the profile along the axis,
+//! then length, SNR, flux and elongation.
+
+use std::f64::consts::PI;
+
+use super::Sanitized;
+use super::smooth::corr;
+use super::stats::{bilinear, median_of};
+
+/// A starting axis for refinement: centre, orientation (rad), half extent, how much of each end
+/// to leave out when measuring the level, and how far beyond the extent to look for the ends.
+pub(super) struct Seed {
+    pub(super) cx: f64,
+    pub(super) cy: f64,
+    pub(super) theta: f64,
+    pub(super) half: f64,
+    pub(super) shrink: f64,
+    pub(super) ext: f64,
+}
+
+/// A point (x, y) in pixel-centre coordinates.
+pub(super) type Point = (f64, f64);
+
+/// A refined segment: centre, orientation (rad), length and measurements.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Seg {
+    pub(super) cx: f64,
+    pub(super) cy: f64,
+    pub(super) theta: f64,
+    pub(super) length: f64,
+    pub(super) snr: f64,
+    pub(super) flux: f64,
+    pub(super) elongation: f64,
+}
+
+impl Seg {
+    pub(super) fn dir(&self) -> (f64, f64) {
+        (self.theta.cos(), self.theta.sin())
+    }
+    pub(super) fn ends(&self) -> ((f64, f64), (f64, f64)) {
+        let (ux, uy) = self.dir();
+        let hl = 0.5 * self.length;
+        (
+            (self.cx - hl * ux, self.cy - hl * uy),
+            (self.cx + hl * ux, self.cy + hl * uy),
+        )
+    }
+}
+
+/// What refinement, merging and output read: the image, its background and the smoothed map.
+pub(super) struct Ctx<'a> {
+    pub(super) w: usize,
+    pub(super) h: usize,
+    pub(super) pixels: &'a [u8],
+    pub(super) bg: &'a [f32],
+    pub(super) z: &'a [f32],
+    pub(super) p: &'a Sanitized,
+}
+
+/// Distance from `p` to the segment `a`-`b`.
+pub(super) fn point_segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let l2 = dx * dx + dy * dy;
+    let t = if l2 > 0.0 {
+        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (ex, ey) = (a.0 + t * dx - p.0, a.1 + t * dy - p.1);
+    (ex * ex + ey * ey).sqrt()
+}
+
+impl Ctx<'_> {
+    /// Range of t for which (cx, cy) + t (ux, uy) lies inside the pixel-centre rectangle.
+    fn t_range(&self, cx: f64, cy: f64, ux: f64, uy: f64) -> (f64, f64) {
+        let mut lo = f64::NEG_INFINITY;
+        let mut hi = f64::INFINITY;
+        for (c, u, max) in [(cx, ux, (self.w - 1) as f64), (cy, uy, (self.h - 1) as f64)] {
+            if u.abs() < 1e-12 {
+                if c < 0.0 || c > max {
+                    return (1.0, 0.0);
+                }
+            } else {
+                let (a, b) = ((0.0 - c) / u, (max - c) / u);
+                lo = lo.max(a.min(b));
+                hi = hi.min(a.max(b));
+            }
+        }
+        (lo, hi)
+    }
+
+    /// z clipped to +-`clip` summed along the axis over integer t in [-half, half] inside the
+    /// image.
+    fn axis_score(&self, cx: f64, cy: f64, theta: f64, half: f64, clip: f64) -> f64 {
+        let (ux, uy) = (theta.cos(), theta.sin());
+        let (lo, hi) = self.t_range(cx, cy, ux, uy);
+        let a = (-half).max(lo).ceil() as i64;
+        let b = half.min(hi).floor() as i64;
+        let mut s = 0.0;
+        for t in a..=b {
+            let t = t as f64;
+            s += bilinear(self.z, self.w, self.h, cx + t * ux, cy + t * uy).clamp(-clip, clip);
+        }
+        s
+    }
+
+    pub(super) fn refine(&self, seed: &Seed) -> Option<Seg> {
+        let p = self.p;
+        let step = PI / p.n_angles as f64;
+        let (mut cx, mut cy, mut th) = (seed.cx, seed.cy, seed.theta);
+        let half = seed.half.max(2.0);
+        // Coarse-to-fine search of orientation and lateral offset. z is clipped at 4 times
+        // `clip_sigma` (bright stars are masked already): the core of a bright streak, not a
+        // flat clipped band, sets the axis.
+        let clip = 4.0 * p.clip;
+        for (dth, nth, du, nu) in [
+            (step / 4.0, 8i32, 0.5, 4i32),
+            (step / 16.0, 3, 0.25, 2),
+            (step / 64.0, 3, 0.125, 2),
+            (step / 256.0, 3, 0.125, 1),
+        ] {
+            let (mut bs, mut bx, mut by, mut bt) = (f64::NEG_INFINITY, cx, cy, th);
+            for i in -nth..=nth {
+                let t2 = th + i as f64 * dth;
+                let (nx, ny) = (-t2.sin(), t2.cos());
+                for k in -nu..=nu {
+                    let (x, y) = (cx + k as f64 * du * nx, cy + k as f64 * du * ny);
+                    let s = self.axis_score(x, y, t2, half, clip);
+                    if s > bs {
+                        (bs, bx, by, bt) = (s, x, y, t2);
+                    }
+                }
+            }
+            (cx, cy, th) = (bx, by, bt);
+        }
+        let (ux, uy) = (th.cos(), th.sin());
+        let (nx, ny) = (-uy, ux);
+        let (lo, hi) = self.t_range(cx, cy, ux, uy);
+        let reach = half + seed.ext;
+        let ta = (-reach).max(lo).ceil() as i64;
+        let tb = reach.min(hi).floor() as i64;
+        if ta > 0 || tb < 0 {
+            return None;
+        }
+        // Profile along the axis: mean of z at lateral offsets -1, 0, 1.
+        let prof: Vec<f64> = (ta..=tb)
+            .map(|t| {
+                let (x, y) = (cx + t as f64 * ux, cy + t as f64 * uy);
+                (bilinear(self.z, self.w, self.h, x - nx, y - ny)
+                    + bilinear(self.z, self.w, self.h, x, y)
+                    + bilinear(self.z, self.w, self.h, x + nx, y + ny))
+                    / 3.0
+            })
+            .collect();
+        let at = |t: i64| prof[(t - ta) as usize];
+        let inner = (half - seed.shrink).max(1.0);
+        let ia = (-inner).ceil().max(ta as f64) as i64;
+        let ib = inner.floor().min(tb as f64) as i64;
+        let mut vals: Vec<f64> = (ia..=ib).map(at).collect();
+        if vals.is_empty() {
+            return None;
+        }
+        let level = median_of(&mut vals);
+        if level <= 0.0 {
+            return None;
+        }
+        let cap = 1.5 * level;
+        let gain = |t: i64| at(t).min(cap) - 0.5 * level;
+        // Change points: the ends maximising the cumulative half-level excess from the centre.
+        let (mut acc, mut bacc, mut e) = (0.0, 0.0, 0i64);
+        for t in 1..=tb {
+            acc += gain(t);
+            if acc > bacc {
+                bacc = acc;
+                e = t;
+            }
+        }
+        let (mut acc, mut bacc, mut s) = (0.0, 0.0, 0i64);
+        for t in (ta..=-1).rev() {
+            acc += gain(t);
+            if acc > bacc {
+                bacc = acc;
+                s = t;
+            }
+        }
+        // Robust SNR: the median level over the segment times its sample count, so that a
+        // bright star on the axis does not make a streak.
+        let mut seg_vals: Vec<f64> = (s..=e).map(at).collect();
+        let n = seg_vals.len();
+        let snr = median_of(&mut seg_vals) * n as f64 / self.profile_sum_sd(n);
+        let (t0, t1) = (s as f64 - 0.5, e as f64 + 0.5);
+        let mid = 0.5 * (t0 + t1);
+        let mut seg = Seg {
+            cx: cx + mid * ux,
+            cy: cy + mid * uy,
+            theta: th,
+            length: t1 - t0,
+            snr,
+            flux: 0.0,
+            elongation: 1.0,
+        };
+        let (flux, elong) = self.flux_and_elongation(&seg);
+        seg.flux = flux;
+        seg.elongation = elong;
+        Some(seg)
+    }
+
+    /// Noise sd of the sum of `n` consecutive profile samples (white-noise model).
+    pub(super) fn profile_sum_sd(&self, n: usize) -> f64 {
+        let sp = self.p.psf_sigma;
+        let c = |dt: f64| {
+            let mut s = 0.0;
+            for a in -1..=1 {
+                for b in -1..=1 {
+                    let du = (a - b) as f64;
+                    s += corr(dt * dt + du * du, sp);
+                }
+            }
+            s / 9.0
+        };
+        let nf = n as f64;
+        let mut var = nf * c(0.0);
+        let dmax = ((12.0 * sp).ceil() as usize).min(n.saturating_sub(1));
+        for d in 1..=dmax {
+            var += 2.0 * (nf - d as f64) * c(d as f64);
+        }
+        var.max(1e-12).sqrt()
+    }
+
+    /// Flux (grey levels) and weighted elongation within 3 PSF sigmas of the segment.
+    fn flux_and_elongation(&self, s: &Seg) -> (f64, f64) {
+        let r = 3.0 * self.p.psf_sigma;
+        let (a, b) = s.ends();
+        let x0 = (a.0.min(b.0) - r).floor().max(0.0) as usize;
+        let x1 = (a.0.max(b.0) + r).ceil().min((self.w - 1) as f64).max(0.0) as usize;
+        let y0 = (a.1.min(b.1) - r).floor().max(0.0) as usize;
+        let y1 = (a.1.max(b.1) + r).ceil().min((self.h - 1) as f64).max(0.0) as usize;
+        let clip = self.p.clip;
+        let (mut flux, mut sw, mut sx, mut sy) = (0.0, 0.0, 0.0, 0.0);
+        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let pt = (x as f64, y as f64);
+                if point_segment_distance(pt, a, b) > r {
+                    continue;
+                }
+                let i = y * self.w + x;
+                flux += self.pixels[i] as f64 - self.bg[i] as f64;
+                let wgt = (self.z[i] as f64).clamp(0.0, clip);
+                // Moments relative to the segment centre for accuracy.
+                let (dx, dy) = (pt.0 - s.cx, pt.1 - s.cy);
+                sw += wgt;
+                sx += wgt * dx;
+                sy += wgt * dy;
+                sxx += wgt * dx * dx;
+                sxy += wgt * dx * dy;
+                syy += wgt * dy * dy;
+            }
+        }
+        if sw <= 0.0 {
+            return (flux, 1.0);
+        }
+        let (mx, my) = (sx / sw, sy / sw);
+        let cxx = sxx / sw - mx * mx + 1.0 / 12.0;
+        let cyy = syy / sw - my * my + 1.0 / 12.0;
+        let cxy = sxy / sw - mx * my;
+        let tr = 0.5 * (cxx + cyy);
+        let det = (0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy).sqrt();
+        let (l1, l2) = (tr + det, (tr - det).max(1e-9));
+        (flux, (l1 / l2).sqrt())
+    }
+}

@@ -1,0 +1,100 @@
+//! Step 2, the cross-section matched filter: Gaussian smoothing with mirrored borders, the edge
+//! rows and columns rescaled to the interior noise, and the noise correlation of the smoothed map
+//! that the line sums' noise models use.
+
+pub(super) fn gaussian_kernel(sigma: f64) -> Vec<f32> {
+    let r = (3.0 * sigma).ceil() as i64;
+    let k: Vec<f64> = (-r..=r)
+        .map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp())
+        .collect();
+    let s: f64 = k.iter().sum();
+    k.iter().map(|v| (v / s) as f32).collect()
+}
+
+/// Mirror (reflect-101) index into [0, n).
+fn reflect(i: isize, n: usize) -> usize {
+    if n == 1 {
+        return 0;
+    }
+    let period = 2 * (n as isize - 1);
+    let m = i.rem_euclid(period);
+    if m >= n as isize {
+        (period - m) as usize
+    } else {
+        m as usize
+    }
+}
+
+/// Separable convolution with mirrored borders.
+#[inline(never)]
+pub(super) fn smooth(src: &[f32], w: usize, h: usize, k: &[f32]) -> Vec<f32> {
+    let r = (k.len() / 2) as isize;
+    let ru = r as usize;
+    let mut tmp = vec![0f32; w * h];
+    for y in 0..h {
+        let row = &src[y * w..(y + 1) * w];
+        let out = &mut tmp[y * w..(y + 1) * w];
+        // Interior: one shifted slice per tap (vectorised).
+        if w > 2 * ru {
+            let n = w - 2 * ru;
+            for (kk, &kv) in k.iter().enumerate() {
+                for (o, &v) in out[ru..ru + n].iter_mut().zip(&row[kk..kk + n]) {
+                    *o += kv * v;
+                }
+            }
+        }
+        // Edges: mirrored.
+        for x in (0..ru.min(w)).chain(w.saturating_sub(ru).max(ru.min(w))..w) {
+            let xi = x as isize;
+            out[x] = k
+                .iter()
+                .enumerate()
+                .map(|(kk, &kv)| kv * row[reflect(xi + kk as isize - r, w)])
+                .sum();
+        }
+    }
+    let mut out = vec![0f32; w * h];
+    for y in 0..h {
+        let orow = &mut out[y * w..(y + 1) * w];
+        for (kk, &kv) in k.iter().enumerate() {
+            let yy = reflect(y as isize + kk as isize - r, h);
+            let irow = &tmp[yy * w..(yy + 1) * w];
+            for (o, &v) in orow.iter_mut().zip(irow) {
+                *o += kv * v;
+            }
+        }
+    }
+    out
+}
+
+/// Near the edges the mirrored smoothing counts some pixels twice, which raises the noise (up
+/// to about 1.4 times on the edge row for sigma 1.5) and would make lines along the edges.
+/// Divide by the exact noise ratio of the folded kernel, per row and per column.
+#[inline(never)]
+pub(super) fn equalise_edge_noise(z: &mut [f32], w: usize, h: usize, k: &[f32]) {
+    let ratio = |n: usize| -> Vec<f32> {
+        let r = (k.len() / 2) as isize;
+        let base: f64 = k.iter().map(|&v| (v as f64).powi(2)).sum();
+        (0..n)
+            .map(|i| {
+                let mut folded = vec![0f64; n];
+                for (kk, &kv) in k.iter().enumerate() {
+                    folded[reflect(i as isize + kk as isize - r, n)] += kv as f64;
+                }
+                let var: f64 = folded.iter().map(|v| v * v).sum();
+                (base / var).sqrt() as f32
+            })
+            .collect()
+    };
+    let (fx, fy) = (ratio(w), ratio(h));
+    for (y, row) in z.chunks_mut(w).enumerate() {
+        for (v, &f) in row.iter_mut().zip(&fx) {
+            *v *= f * fy[y];
+        }
+    }
+}
+
+/// Correlation of the smoothed unit-noise map at distance d (white noise through a Gaussian).
+pub(super) fn corr(d2: f64, psf_sigma: f64) -> f64 {
+    (-d2 / (4.0 * psf_sigma * psf_sigma)).exp()
+}

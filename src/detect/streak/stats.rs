@@ -1,0 +1,119 @@
+//! Robust statistics and bilinear sampling of the detector's maps: the histogram median and MAD
+//! of the background cells, medians of small sets, the subsampled median and MAD-sigma of a
+//! whole map, and bilinear reads of an f32 map in f32 arithmetic. The detector's own copies:
+//! their rounding (f32 vs f64, subsampling, histogram vs sort) is part of its pinned output.
+
+/// Continuous CDF and quantiles of an 8-bit histogram, each grey level spread uniformly over
+/// [v - 0.5, v + 0.5).
+pub(super) struct Hist {
+    counts: [u32; 256],
+    cum: [u64; 257],
+}
+
+impl Hist {
+    pub(super) fn new(counts: [u32; 256]) -> Self {
+        let mut cum = [0u64; 257];
+        for v in 0..256 {
+            cum[v + 1] = cum[v] + counts[v] as u64;
+        }
+        Hist { counts, cum }
+    }
+    pub(super) fn total(&self) -> u64 {
+        self.cum[256]
+    }
+    fn cdf(&self, x: f64) -> f64 {
+        let b = (x + 0.5).floor();
+        if b < 0.0 {
+            return 0.0;
+        }
+        if b > 255.0 {
+            return self.total() as f64;
+        }
+        let bi = b as usize;
+        self.cum[bi] as f64 + self.counts[bi] as f64 * (x + 0.5 - b)
+    }
+    pub(super) fn quantile(&self, q: f64) -> f64 {
+        let target = q * self.total() as f64;
+        // First bin whose cumulative count reaches the target.
+        let mut b = 0;
+        while b < 255 && (self.cum[b + 1] as f64) < target {
+            b += 1;
+        }
+        let c = self.counts[b].max(1) as f64;
+        b as f64 - 0.5 + ((target - self.cum[b] as f64) / c).clamp(0.0, 1.0)
+    }
+    /// Median absolute deviation around `m`.
+    pub(super) fn mad(&self, m: f64) -> f64 {
+        let half = 0.5 * self.total() as f64;
+        let (mut lo, mut hi) = (0.0f64, 256.0f64);
+        for _ in 0..40 {
+            let r = 0.5 * (lo + hi);
+            if self.cdf(m + r) - self.cdf(m - r) < half {
+                lo = r;
+            } else {
+                hi = r;
+            }
+        }
+        0.5 * (lo + hi)
+    }
+}
+
+/// Median of a small set (sorts it), the mean of the two middle values for an even count.
+pub(super) fn median_of(v: &mut [f64]) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// A regular subsample of a map: every pixel, or every third pixel of every third row above
+/// 40 000 pixels.
+fn subsample(v: &[f32], w: usize, h: usize) -> Vec<f32> {
+    let step = if w * h > 40_000 { 3 } else { 1 };
+    let mut s: Vec<f32> = Vec::with_capacity((w / step + 1) * (h / step + 1));
+    for y in (0..h).step_by(step) {
+        for x in (0..w).step_by(step) {
+            s.push(v[y * w + x]);
+        }
+    }
+    s
+}
+
+/// Median of a map, from a regular subsample.
+pub(super) fn robust_median(v: &[f32], w: usize, h: usize) -> f64 {
+    let mut s = subsample(v, w, h);
+    if s.is_empty() {
+        return 0.0;
+    }
+    let mid = s.len() / 2;
+    *s.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1 as f64
+}
+
+/// Robust (1.4826 MAD) standard deviation of a map, from a regular subsample.
+#[inline(never)]
+pub(super) fn robust_sigma(v: &[f32], w: usize, h: usize) -> f64 {
+    let mut s = subsample(v, w, h);
+    if s.is_empty() {
+        return 0.0;
+    }
+    let mid = s.len() / 2;
+    let med = *s.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
+    s.iter_mut().for_each(|x| *x = (*x - med).abs());
+    let mad = *s.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
+    1.4826 * mad as f64
+}
+
+/// Bilinear read of `m` at (x, y), clamped to the pixel-centre rectangle; f32 weights.
+pub(super) fn bilinear(m: &[f32], w: usize, h: usize, x: f64, y: f64) -> f64 {
+    let x = x.clamp(0.0, (w - 1) as f64);
+    let y = y.clamp(0.0, (h - 1) as f64);
+    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+    let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
+    let a = m[y0 * w + x0] * (1.0 - fx) + m[y0 * w + x1] * fx;
+    let b = m[y1 * w + x0] * (1.0 - fx) + m[y1 * w + x1] * fx;
+    (a * (1.0 - fy) + b * fy) as f64
+}
