@@ -12,6 +12,7 @@ pub mod detect;
 pub mod enhance;
 pub mod fits;
 pub mod geometry;
+pub mod hash;
 pub mod manifest;
 pub mod metrics;
 pub mod pipeline;

@@ -11,6 +11,7 @@ use std::process::{Command, Stdio};
 use anyhow::{Context, bail};
 
 use crate::campaign::{Campaign, GeometryKind, Stage};
+use crate::hash::sha256_file;
 use crate::manifest::{self, MANIFEST, Manifest};
 
 /// The training driver, shipped inside the binary so a run records exactly what trained it.
@@ -156,7 +157,7 @@ pub fn fit(campaign: &Campaign, out: &Path, python: &Path) -> anyhow::Result<Tra
                 pt.display()
             );
         }
-        let sha = manifest::sha256_file(&pt)?.0;
+        let sha = sha256_file(&pt)?.0;
         (
             pt.display().to_string(),
             Some(serde_json::json!({"path": t.model, "sha256": sha})),
@@ -233,7 +234,7 @@ pub fn fit(campaign: &Campaign, out: &Path, python: &Path) -> anyhow::Result<Tra
     Ok(Trained {
         record: serde_json::json!({
             "model": "train/model.onnx",
-            "model_sha256": manifest::sha256_file(&model)?.0,
+            "model_sha256": sha256_file(&model)?.0,
             "ultralytics": summary["ultralytics"],
             "torch": summary["torch"],
             "metrics": summary["metrics"],
