@@ -14,7 +14,7 @@ fn committed_schema_is_current() {
 }
 
 /// The resolved hash of every committed campaign, as it was before campaigns were composed with
-/// `extends` (and before the quickstarts read the repository's copy of the TLEs): a campaign's
+/// `extends` and read the repository's copy of the TLEs: a campaign's
 /// hash pins its outputs (results/*/digest.txt), so rewriting a campaign file must keep it.
 const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     (
@@ -138,8 +138,8 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
 #[test]
 fn every_campaign_in_the_repository_loads_with_its_pinned_hash() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    // The paper's and the results' campaigns read the data folder beside the repository; the
-    // tests run without it, checking the campaigns that need only the repository.
+    // The semisynthetic campaigns read their real frame from the data folder beside the
+    // repository; the tests run without it, checking the campaigns that need only the repository.
     let shared = root.join("../shared/data").is_dir();
     let mut n = 0;
     // Bases (`base/`) are not campaigns; every campaign beside them is pinned.
