@@ -7,39 +7,39 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use soig::campaign::{Campaign, RenderMethod};
+use soig::campaign::Campaign;
 use soig::detect::streak::{StreakParams, detect_streaks};
 use soig::detect::yolo::{YoloDetector, YoloParams, find_onnxruntime};
-use soig::rng::{Purpose, stream};
-use soig::{enhance, render, scene};
+use soig::enhance;
+use soig::experiment::{self, Experiment};
+use soig::render::RenderMethod;
+use soig::scene::Inputs;
+use soig::simulate;
 
-fn campaign(name: &str) -> Campaign {
+/// The experiment of a committed campaign and its inputs.
+fn load(name: &str) -> (Experiment, Inputs) {
     let path: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("campaigns")
         .join(name);
-    Campaign::load(&path).unwrap_or_else(|e| panic!("{e}"))
+    let c = Campaign::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    (Experiment::new(&c), experiment::inputs(&c).unwrap())
 }
 
-/// Scene draw and render of one image, as `soig run` does it.
-fn render_image(c: &Campaign, inputs: &scene::Inputs, i: u64) -> render::Exposure {
-    let seed = c.resolved.seed;
-    let scene = scene::draw(c, inputs, i, &mut stream(seed, i, Purpose::Scene)).unwrap();
-    render::render(
-        c,
-        &scene,
-        inputs.frame(scene.background),
-        &mut stream(seed, i, Purpose::Photons),
-        &mut stream(seed, i, Purpose::Noise),
-    )
+/// Scene draw and render of one image, as `soig run` does it (no 8-bit product).
+fn render_image(x: &Experiment, inputs: &Inputs, i: u64) -> soig::render::Exposure {
+    simulate::image(x, inputs, i).unwrap().exposure
 }
 
 fn benches(cr: &mut Criterion) {
-    let fixed = campaign("quickstart.toml");
-    let survey = campaign("survey-quickstart.toml");
-    let mut expected = campaign("quickstart.toml");
-    expected.resolved.render.method = RenderMethod::Expected;
-    let inputs = scene::Inputs::load(&fixed).unwrap();
-    let survey_inputs = scene::Inputs::load(&survey).unwrap();
+    let (fixed_png, inputs) = load("quickstart.toml");
+    let fixed = Experiment {
+        product: None,
+        ..fixed_png.clone()
+    };
+    let (mut survey, survey_inputs) = load("survey-quickstart.toml");
+    survey.product = None;
+    let mut expected = fixed.clone();
+    expected.render.method = RenderMethod::Expected;
 
     let mut g = cr.benchmark_group("render");
     g.sample_size(10).measurement_time(Duration::from_secs(8));
@@ -56,13 +56,17 @@ fn benches(cr: &mut Criterion) {
 
     let exposure = render_image(&fixed, &inputs, 0);
     let (w, h) = (exposure.width, exposure.height);
-    let settings = &fixed.resolved.enhance;
+    let settings = &fixed_png
+        .product
+        .as_ref()
+        .expect("quickstart enhances")
+        .enhance;
     let mut g = cr.benchmark_group("enhance and detect");
     g.sample_size(20);
     g.bench_function("enhance 1024px (sqrt, log, CLAHE, gamma)", |b| {
-        b.iter(|| enhance::enhance(black_box(&exposure.adu), w, h, settings, settings.sqrt))
+        b.iter(|| enhance::enhance(black_box(&exposure.adu), w, h, settings))
     });
-    let png = enhance::enhance(&exposure.adu, w, h, settings, settings.sqrt);
+    let png = enhance::enhance(&exposure.adu, w, h, settings);
     let pixels = png.pixels;
     let params = StreakParams::default();
     g.bench_function("streak detector 1024px", |b| {

@@ -19,7 +19,6 @@ use std::path::{Path, PathBuf};
 
 use fitsio::FitsFile;
 
-use crate::campaign::{Background, Campaign};
 use crate::geometry::robust_stats;
 use crate::rng::{Purpose, stream};
 use rand::RngExt;
@@ -199,16 +198,17 @@ pub enum BackgroundModel {
 }
 
 impl BackgroundModel {
-    pub fn load(campaign: &Campaign) -> Result<BackgroundModel, String> {
-        Ok(match &campaign.resolved.background {
-            Background::Uniform => BackgroundModel::Uniform,
-            Background::Frames { paths } => BackgroundModel::Frames(
-                paths
-                    .iter()
-                    .map(|p| RealFrame::load(&campaign.base_dir.join(p)))
-                    .collect::<Result<_, _>>()?,
-            ),
-        })
+    /// The uniform model without frames, else every frame loaded.
+    pub fn load(frames: &[PathBuf]) -> Result<BackgroundModel, String> {
+        if frames.is_empty() {
+            return Ok(BackgroundModel::Uniform);
+        }
+        Ok(BackgroundModel::Frames(
+            frames
+                .iter()
+                .map(|p| RealFrame::load(p))
+                .collect::<Result<_, _>>()?,
+        ))
     }
 }
 

@@ -8,12 +8,35 @@ use rand::Rng;
 use rand_distr::{Distribution, Normal};
 use serde::{Deserialize, Serialize};
 
+/// Which final frame: the original image, padded with noise, or rotated and expanded.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum FrameKind {
+    #[default]
+    Original,
+    Padded,
+    Rotated,
+}
+
+impl FrameKind {
+    /// The name a campaign file and the FITS header use.
+    pub fn name(self) -> &'static str {
+        match self {
+            FrameKind::Original => "original",
+            FrameKind::Padded => "padded",
+            FrameKind::Rotated => "rotated",
+        }
+    }
+}
+
 /// The affine map from original pixel coordinates to final ones:
 /// `x' = m[0][0] x + m[0][1] y + m[0][2]`, `y' = m[1][0] x + m[1][1] y + m[1][2]`
 /// (pixel centres at integers in both frames).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Frame {
-    pub kind: String,
+    pub kind: FrameKind,
     /// Rotation applied, degrees (the star-trail angle, undone).
     pub angle_deg: f64,
     pub width: usize,
@@ -25,9 +48,25 @@ pub struct Frame {
 const SIZE_MULTIPLE: usize = 32;
 
 impl Frame {
-    pub fn original(width: usize, height: usize) -> Frame {
+    /// The frame of a `width` x `height` image: `pad_px` is the padded frame's border, and
+    /// `trail_angle_deg` the star-trail direction that the rotated frame makes horizontal.
+    pub fn new(
+        kind: FrameKind,
+        width: usize,
+        height: usize,
+        pad_px: usize,
+        trail_angle_deg: f64,
+    ) -> Frame {
+        match kind {
+            FrameKind::Original => Frame::original(width, height),
+            FrameKind::Padded => Frame::padded(width, height, pad_px),
+            FrameKind::Rotated => Frame::rotated(width, height, trail_angle_deg),
+        }
+    }
+
+    fn original(width: usize, height: usize) -> Frame {
         Frame {
-            kind: "original".into(),
+            kind: FrameKind::Original,
             angle_deg: 0.0,
             width,
             height,
@@ -36,9 +75,9 @@ impl Frame {
     }
 
     /// `pad` pixels of noise on every side.
-    pub fn padded(width: usize, height: usize, pad: usize) -> Frame {
+    fn padded(width: usize, height: usize, pad: usize) -> Frame {
         Frame {
-            kind: "padded".into(),
+            kind: FrameKind::Padded,
             angle_deg: 0.0,
             width: width + 2 * pad,
             height: height + 2 * pad,
@@ -49,7 +88,7 @@ impl Frame {
     /// Rotate by `-trail_angle_deg` about the image centre so a trail along `trail_angle_deg`
     /// becomes horizontal, on a square canvas that holds the image at any angle (its
     /// diagonal, rounded up to a multiple of 32: 1024 -> 1472).
-    pub fn rotated(width: usize, height: usize, trail_angle_deg: f64) -> Frame {
+    fn rotated(width: usize, height: usize, trail_angle_deg: f64) -> Frame {
         let diag = (width as f64).hypot(height as f64);
         let side = (diag / SIZE_MULTIPLE as f64).ceil() as usize * SIZE_MULTIPLE;
         let (s, c) = trail_angle_deg.to_radians().sin_cos();
@@ -57,7 +96,7 @@ impl Frame {
         let co = (side as f64 - 1.0) / 2.0;
         // (x', y') = R(-a) (x - cx, y - cy) + (co, co)
         Frame {
-            kind: "rotated".into(),
+            kind: FrameKind::Rotated,
             angle_deg: trail_angle_deg,
             width: side,
             height: side,
@@ -85,7 +124,7 @@ impl Frame {
     }
 
     pub fn is_identity(&self) -> bool {
-        self.kind == "original"
+        self.kind == FrameKind::Original
     }
 }
 

@@ -5,21 +5,27 @@
 //! Data flows one way: `campaign` -> `scene` -> `render` -> `fits` / `enhance` -> `dataset`,
 //! driven by `pipeline`, recorded by `manifest`.
 
+pub mod artifacts;
 pub mod background;
 pub mod campaign;
 pub mod dataset;
 pub mod detect;
 pub mod enhance;
+pub mod experiment;
 pub mod fits;
 pub mod geometry;
 pub mod hash;
 pub mod manifest;
 pub mod metrics;
+pub mod output;
 pub mod pipeline;
+pub mod progress;
 pub mod render;
 pub mod report;
 pub mod rng;
 pub mod scene;
+pub mod sensor;
+pub mod simulate;
 pub mod sky;
 pub mod study;
 pub mod train;

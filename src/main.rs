@@ -130,7 +130,7 @@ fn main() -> ExitCode {
         } => user_errors(|| {
             let campaign = Campaign::load_with_overrides(&campaign, &set)?;
             let output = out.unwrap_or_else(|| campaign.output_dir.clone());
-            let s = soig::pipeline::run_with(&campaign, &output, !quiet, python.as_deref())?;
+            let s = soig::pipeline::run(&campaign, &output, python.as_deref(), &*progress(quiet))?;
             println!(
                 "{} images in {:.1} s ({:.2} images/s) -> {}\ndigest {}",
                 s.images,
@@ -150,7 +150,8 @@ fn main() -> ExitCode {
         } => user_errors(|| {
             let campaign = Campaign::load_with_overrides(&campaign, &set)?;
             let output = out.unwrap_or_else(|| campaign.output_dir.clone());
-            let model = soig::train::train(&campaign, &output, python.as_deref(), !quiet)?;
+            let model =
+                soig::pipeline::train(&campaign, &output, python.as_deref(), &*progress(quiet))?;
             println!("model {}", model.display());
             Ok(())
         }),
@@ -206,7 +207,7 @@ fn main() -> ExitCode {
             quick,
             set,
         } => user_errors(|| {
-            let mut campaign = Campaign::load_with_overrides(&campaign, &set)?;
+            let campaign = Campaign::load_with_overrides(&campaign, &set)?;
             let output = out.unwrap_or_else(|| {
                 let mut name = campaign.output_dir.as_os_str().to_owned();
                 name.push("-study");
@@ -217,7 +218,7 @@ fn main() -> ExitCode {
                 image,
                 quick,
             };
-            let s = soig::study::run(&mut campaign, &output, &opts)?;
+            let s = soig::study::run(&campaign, &output, &opts)?;
             println!(
                 "{} settings in {:.1} s -> {}",
                 s.rows.len(),
@@ -230,6 +231,15 @@ fn main() -> ExitCode {
             println!("{}", soig::campaign::schema_json());
             ExitCode::SUCCESS
         }
+    }
+}
+
+/// Progress bars on stderr, or nothing with `--quiet`.
+fn progress(quiet: bool) -> Box<dyn soig::progress::Progress> {
+    if quiet {
+        Box::new(soig::progress::Silent)
+    } else {
+        Box::new(soig::progress::Bars::default())
     }
 }
 

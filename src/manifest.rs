@@ -33,7 +33,12 @@ pub struct Manifest {
     /// The training run (`soig train`): model sha256, Ultralytics and torch versions, log.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub training: Option<serde_json::Value>,
-    /// sha256 of the canonical JSON of everything above.
+    /// Values the run resolved late from several fields (effective SNR gate, frame size,
+    /// training size and batch, PSF in pixels): a function of the resolved campaign and the
+    /// tool version, both hashed, so they are recorded but not part of the digest.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub effective: Option<serde_json::Value>,
+    /// sha256 of the canonical JSON of everything above but `effective`.
     pub digest: String,
 }
 
@@ -67,7 +72,9 @@ pub fn list_files(dir: &Path) -> std::io::Result<Vec<String>> {
 
 fn digest_of(m: &Manifest) -> String {
     let mut v = serde_json::to_value(m).expect("manifest serialises");
-    v.as_object_mut().expect("object").remove("digest");
+    let fields = v.as_object_mut().expect("object");
+    fields.remove("digest");
+    fields.remove("effective");
     hex(&Sha256::digest(
         serde_json::to_string(&v).expect("json").as_bytes(),
     ))
@@ -97,6 +104,7 @@ impl Manifest {
             files,
             volatile: volatile.to_vec(),
             training: None,
+            effective: None,
             digest: String::new(),
         };
         m.digest = digest_of(&m);

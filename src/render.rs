@@ -2,6 +2,7 @@
 //! draw, arrival times, Brownian jitter shared by every source (Eq. 2), a Gaussian PSF, the
 //! gnomonic projection, counting per pixel (one pixel convention, see `sky::projection`), and
 //! the detector (Eq. 11). Also the label box and the truth of the debris as rendered.
+//! It reads the sensor and its own settings, never the campaign file.
 
 use rand::RngExt;
 use rand_chacha::ChaCha12Rng;
@@ -9,10 +10,10 @@ use rand_distr::StandardNormal;
 use serde::Serialize;
 
 use crate::background::RealFrame;
-use crate::campaign::{Campaign, RenderMethod};
 use crate::geometry::{BoxPx, Frame, LABEL_SHARE, flux_box};
 use crate::rng::poisson;
 use crate::scene::{Pointing, Scene};
+use crate::sensor::Sensor;
 use crate::sky::photometry::photon_rate;
 
 pub mod expected;
@@ -24,6 +25,44 @@ pub const MAX_PACKETS_PER_SOURCE: u64 = 50_000_000;
 
 /// Spacing of the time nodes along a survey star trail, pixels.
 const SURVEY_NODE_SPACING_PX: f64 = 4.0;
+
+/// How photons reach the detector: `photon_mapping` (the paper's Monte Carlo, with the
+/// merging approximation) or `expected` (each source's expected photons per pixel, then one
+/// Poisson draw per pixel).
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, Serialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum RenderMethod {
+    #[default]
+    PhotonMapping,
+    Expected,
+}
+
+impl RenderMethod {
+    pub fn is_photon_mapping(&self) -> bool {
+        *self == RenderMethod::PhotonMapping
+    }
+
+    /// The name a campaign file uses.
+    pub fn name(&self) -> &'static str {
+        match self {
+            RenderMethod::PhotonMapping => "photon_mapping",
+            RenderMethod::Expected => "expected",
+        }
+    }
+}
+
+/// The renderer's approximation knobs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    pub method: RenderMethod,
+    /// Sources with more photons than this are traced in packets of `merge_factor` photons.
+    pub merge_threshold: u64,
+    pub merge_factor: u32,
+    /// Steps of the Brownian jitter path over the exposure.
+    pub jitter_steps: usize,
+}
 
 /// The truth of one image, written as the JSON sidecar.
 #[derive(Clone, Debug, Serialize)]
@@ -105,14 +144,18 @@ pub struct Jitter {
 
 impl Jitter {
     /// The jitter path of a scene, drawn first from the photon stream.
-    pub fn of_scene(campaign: &Campaign, scene: &Scene, rng: &mut ChaCha12Rng) -> Jitter {
-        let s = &campaign.resolved.sensor;
+    pub fn of_scene(
+        sensor: &Sensor,
+        settings: &Settings,
+        scene: &Scene,
+        rng: &mut ChaCha12Rng,
+    ) -> Jitter {
         Jitter::draw(
             rng,
-            s.jitter_deg_per_sqrt_s,
+            sensor.jitter_deg_per_sqrt_s,
             scene.exposure_s,
-            campaign.resolved.render.jitter_steps as usize,
-            scene.projection(campaign).scale_deg,
+            settings.jitter_steps,
+            scene.projection(sensor).scale_deg,
         )
     }
 
@@ -323,16 +366,16 @@ enum Photons {
 /// Every source of a scene that can put photons in the image, in a fixed order (the order
 /// in which photon mapping consumes its stream), and the stars as traced.
 fn for_each_source(
-    campaign: &Campaign,
+    sensor: &Sensor,
     scene: &Scene,
     jitter: &Jitter,
     mut add: impl FnMut(&Source),
 ) -> Vec<TracedStar> {
-    let s = &campaign.resolved.sensor;
+    let s = sensor;
     let (width, height) = (s.width_px as f64, s.height_px as f64);
-    let tan = scene.projection(campaign);
+    let tan = scene.projection(sensor);
     let scale = tan.scale_deg;
-    let psf_px = crate::scene::psf_sigma_px(campaign);
+    let psf_px = sensor.psf_sigma_px();
     let t_exp = scene.exposure_s;
     let jitter_mean = jitter.mean();
 
@@ -447,33 +490,42 @@ fn for_each_source(
 
 /// Render a scene: photons (one stream, the jitter path first), then detector noise (another).
 pub fn render(
-    campaign: &Campaign,
+    sensor: &Sensor,
+    settings: &Settings,
     scene: &Scene,
     frame: Option<&RealFrame>,
     photons_rng: &mut ChaCha12Rng,
     noise_rng: &mut ChaCha12Rng,
 ) -> Exposure {
-    let jitter = Jitter::of_scene(campaign, scene, photons_rng);
-    render_with_jitter(campaign, scene, frame, &jitter, photons_rng, noise_rng)
+    let jitter = Jitter::of_scene(sensor, settings, scene, photons_rng);
+    render_with_jitter(
+        sensor,
+        settings,
+        scene,
+        frame,
+        &jitter,
+        photons_rng,
+        noise_rng,
+    )
 }
 
-/// Render a scene for a given jitter path, with the campaign's renderer.
+/// Render a scene for a given jitter path.
 pub fn render_with_jitter(
-    campaign: &Campaign,
+    sensor: &Sensor,
+    settings: &Settings,
     scene: &Scene,
     frame: Option<&RealFrame>,
     jitter: &Jitter,
     photons_rng: &mut ChaCha12Rng,
     noise_rng: &mut ChaCha12Rng,
 ) -> Exposure {
-    let c = &campaign.resolved;
-    let s = &c.sensor;
-    let (width, height) = (s.width_px as usize, s.height_px as usize);
-    let psf_px = crate::scene::psf_sigma_px(campaign);
+    let s = sensor;
+    let (width, height) = (s.width_px, s.height_px);
+    let psf_px = sensor.psf_sigma_px();
     let t_exp = scene.exposure_s;
     let jitter_mean = jitter.mean();
-    let merge = (c.render.merge_threshold, c.render.merge_factor);
-    let mut photons = match c.render.method {
+    let merge = (settings.merge_threshold, settings.merge_factor);
+    let mut photons = match settings.method {
         RenderMethod::PhotonMapping => Photons::Mapped(Canvas {
             width,
             height,
@@ -486,7 +538,7 @@ pub fn render_with_jitter(
     // The debris' trajectory samples share one source's packet budget (2000 samples of a
     // magnitude -1 debris would otherwise trace 2e9 packets).
     let debris_packets = (MAX_PACKETS_PER_SOURCE / scene.trajectory.len().max(1) as u64).max(1);
-    let traced = for_each_source(campaign, scene, jitter, |source| match &mut photons {
+    let traced = for_each_source(sensor, scene, jitter, |source| match &mut photons {
         Photons::Mapped(canvas) => {
             let count = poisson(photons_rng, source.expected);
             let budget = if source.debris {
@@ -520,14 +572,13 @@ pub fn render_with_jitter(
 
     // Detector, Eq. 11: ADU = electrons / gain + background + bias. The background is the
     // paper's uniform one (its range scaled linearly with exposure) or a real frame's.
-    let (b_lo, b_hi) = (s.bias_min_adu, s.bias_max_adu);
+    let (b_lo, b_hi) = (s.bias.min_adu, s.bias.max_adu);
     let uniform = |r: &mut ChaCha12Rng, lo: f64, hi: f64| {
         if hi > lo { r.random_range(lo..hi) } else { lo }
     };
     let adu: Vec<f32> = match (frame, scene.background) {
         (Some(f), Some(choice)) => {
-            let level = (s.background_min_adu + s.background_max_adu) / 2.0 * t_exp
-                / s.background_exposure_s;
+            let level = s.sky_level_adu(t_exp);
             let bg = f.background(width, height, t_exp, choice.offset, level);
             canvas
                 .electrons
@@ -541,7 +592,7 @@ pub fn render_with_jitter(
         }
         _ => {
             let k = t_exp / s.background_exposure_s;
-            let (bg_lo, bg_hi) = (s.background_min_adu * k, s.background_max_adu * k);
+            let (bg_lo, bg_hi) = (s.background.min_adu * k, s.background.max_adu * k);
             canvas
                 .electrons
                 .iter()
@@ -596,7 +647,7 @@ pub fn render_with_jitter(
         snr: scene.snr,
         stars_in_cone: scene.stars.len(),
         stars_traced: traced.len(),
-        background_sigma_adu: crate::scene::background_sigma_adu(campaign, t_exp, frame),
+        background_sigma_adu: sensor.background_sigma_adu(t_exp, frame),
         background_frame: frame.map(|f| f.path.display().to_string()),
         attempts: scene.attempts,
         rejections: scene.rejections.clone(),
@@ -625,26 +676,28 @@ pub fn iso_utc(t: hifitime::Epoch) -> String {
 mod tests {
     use super::*;
     use crate::campaign::Campaign;
+    use crate::experiment::Experiment;
     use crate::rng::{Purpose, stream};
     use crate::scene::{Geometry, TrajectorySample};
     use crate::sky::stars::Star;
     use std::path::Path;
 
-    fn campaign(extra: &str) -> Campaign {
+    /// The sensor and render settings of a 128 px test campaign with `extra` TOML lines.
+    fn campaign(extra: &str) -> Experiment {
         let el = "elements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }";
         let text = format!(
             "name = \"t\"\n[observer]\nnorad = 1\n{el}\n[[debris]]\nnorad = 2\n{el}\n[sensor]\nwidth_px = 128\nheight_px = 128\nfov_radius_deg = 0.0125\n{extra}"
         );
-        Campaign::from_toml(&text, Path::new("t.toml")).unwrap()
+        Experiment::new(&Campaign::from_toml(&text, Path::new("t.toml")).unwrap())
     }
 
     /// The projection of the test scenes: centred on (10, 20), 128 px.
-    fn tan_of(c: &Campaign) -> crate::sky::projection::Tan {
-        crate::sky::projection::Tan::new(10.0, 20.0, crate::scene::pixel_scale_deg(c), 128, 128)
+    fn tan_of(c: &Experiment) -> crate::sky::projection::Tan {
+        c.sensor.projection(10.0, 20.0)
     }
 
     /// A scene centred on (10, 20) with the given stars and a debris streak along +x.
-    fn scene(c: &Campaign, stars: Vec<Star>, debris_mag: f64, exposure_s: f64) -> Scene {
+    fn scene(c: &Experiment, stars: Vec<Star>, debris_mag: f64, exposure_s: f64) -> Scene {
         let tan = tan_of(c);
         let n = 200;
         let trajectory = (0..n)
@@ -658,7 +711,7 @@ mod tests {
                     x_px: 30.0 + 60.0 * k as f64 / n as f64,
                     y_px: 40.0,
                     mag: debris_mag,
-                    expected_electrons: photon_rate(debris_mag, c.resolved.sensor.zero_point_mag)
+                    expected_electrons: photon_rate(debris_mag, c.sensor.zero_point_mag)
                         * exposure_s
                         / n as f64,
                 }
@@ -714,14 +767,15 @@ mod tests {
             debris_mag,
             exposure,
         );
-        let zp = c.resolved.sensor.zero_point_mag;
+        let zp = c.sensor.zero_point_mag;
         let star_expected = exposure * 10f64.powf(-0.4 * (star_mag - zp));
         let debris_expected = exposure * 10f64.powf(-0.4 * (debris_mag - zp));
         let runs = 200;
         let (mut star_sum, mut debris_sum) = (0.0, 0.0);
         for i in 0..runs {
             let e = render(
-                &c,
+                &c.sensor,
+                &c.render,
                 &s,
                 None,
                 &mut stream(1, i, Purpose::Photons),
@@ -751,7 +805,8 @@ mod tests {
         let c = campaign("[render]\nmerge_threshold = 1000\nmerge_factor = 5\n");
         let s = scene(&c, vec![], 10.0, 2.0);
         let e = render(
-            &c,
+            &c.sensor,
+            &c.render,
             &s,
             None,
             &mut stream(2, 0, Purpose::Photons),
@@ -795,7 +850,8 @@ mod tests {
         );
         for i in 0..5 {
             let e = render(
-                &c,
+                &c.sensor,
+                &c.render,
                 &s,
                 None,
                 &mut stream(3, i, Purpose::Photons),
@@ -819,7 +875,7 @@ mod tests {
                 st.y
             );
             let wcs = s
-                .projection(&c)
+                .projection(&c.sensor)
                 .shifted(e.truth.jitter_mean_px[0], e.truth.jitter_mean_px[1]);
             let (wx, wy) = wcs.pixel(ra, dec).unwrap();
             assert!((wx - st.x).abs() < 1e-9 && (wy - st.y).abs() < 1e-9);
@@ -878,11 +934,12 @@ mod tests {
     }
 
     /// The noise-free images of `runs` seeds, for a fixed jitter path.
-    fn noise_free(c: &Campaign, s: &Scene, jitter: &Jitter, runs: u64) -> Vec<Vec<u32>> {
+    fn noise_free(c: &Experiment, s: &Scene, jitter: &Jitter, runs: u64) -> Vec<Vec<u32>> {
         (0..runs)
             .map(|i| {
                 render_with_jitter(
-                    c,
+                    &c.sensor,
+                    &c.render,
                     s,
                     None,
                     jitter,
@@ -916,7 +973,12 @@ mod tests {
             mag: 15.5,
         };
         let s = scene(&exact, vec![star], 14.5, 2.0);
-        let jitter = Jitter::of_scene(&exact, &s, &mut stream(10, 0, Purpose::Photons));
+        let jitter = Jitter::of_scene(
+            &exact.sensor,
+            &exact.render,
+            &s,
+            &mut stream(10, 0, Purpose::Photons),
+        );
         assert!(
             jitter.max_excursion() > 0.5,
             "the jitter path moves the sources"
@@ -970,9 +1032,9 @@ mod tests {
         // P = N div F packets and S = N mod F singles, each landing in the pixel with chance p:
         // p (1 - p) (F^2 E[P] + E[S]) + p^2 lambda. Summed over the pixels with signal.
         let f = 5.0;
-        let psf_px = crate::scene::psf_sigma_px(&exact);
+        let psf_px = exact.sensor.psf_sigma_px();
         let mut predicted = vec![0.0; a.mean.len()];
-        for_each_source(&merged, &s, &jitter, |source| {
+        for_each_source(&merged.sensor, &s, &jitter, |source| {
             let mut flux = expected::Flux::new(128, 128, psf_px);
             flux.add(source, &jitter);
             let lambda = source.expected;

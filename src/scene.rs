@@ -1,7 +1,8 @@
 //! The scene draw (paper 3.2.1-3.2.3): which debris, when, how long, where the sensor points,
 //! which stars are in the field, and the visibility checks that reject a draw. A rejected draw
 //! retries with the same random stream, so the accepted scene is a pure function of
-//! (campaign, image index).
+//! (scene spec, sensor, inputs, image index). The campaign file is never seen here: the
+//! config layer (`experiment`) builds the values.
 
 use std::collections::BTreeMap;
 
@@ -12,9 +13,9 @@ use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
 use crate::background::{BackgroundModel, FrameChoice, RealFrame};
-use crate::campaign::{Campaign, LightCurve, PointingMode, Stars};
+use crate::sensor::Sensor;
 use crate::sky::ephemeris::{moon_position_km, sun_position_km};
-use crate::sky::orbit::{Mat3, mat_vec, teme_to_gcrs_matrix};
+use crate::sky::orbit::{Mat3, Propagator, mat_vec, teme_to_gcrs_matrix};
 use crate::sky::photometry::{debris_magnitude, photon_rate};
 use crate::sky::projection::Tan;
 use crate::sky::stars::{ProceduralSky, Star, StarCatalog};
@@ -25,8 +26,19 @@ use crate::sky::{
 /// WGS84 equatorial radius, km.
 pub const EARTH_RADIUS_KM: f64 = 6378.137;
 
-/// What a campaign reads before its first image: the star source and background frames.
+/// One body of the scene with its propagator, resolved from a campaign's object.
+#[derive(Clone, Debug)]
+pub struct Body {
+    pub name: String,
+    pub norad: u64,
+    pub propagator: Propagator,
+}
+
+/// What a campaign reads before its first image: the bodies, the star source and the
+/// background frames.
 pub struct Inputs {
+    pub observer: Body,
+    pub debris: Vec<Body>,
     pub stars: StarField,
     pub background: BackgroundModel,
 }
@@ -39,13 +51,6 @@ impl Inputs {
             _ => None,
         }
     }
-
-    pub fn load(campaign: &Campaign) -> Result<Inputs, String> {
-        Ok(Inputs {
-            stars: StarField::load(campaign)?,
-            background: BackgroundModel::load(campaign)?,
-        })
-    }
 }
 
 /// The source of field stars of a campaign, loaded once.
@@ -55,26 +60,68 @@ pub enum StarField {
 }
 
 impl StarField {
-    pub fn load(campaign: &Campaign) -> Result<StarField, String> {
-        Ok(match &campaign.resolved.stars {
-            Stars::Procedural { sky_seed, .. } => {
-                StarField::Procedural(ProceduralSky::new(*sky_seed))
-            }
-            Stars::Catalog {
-                path, epoch_jyear, ..
-            } => StarField::Catalog(
-                StarCatalog::from_csv_path(&campaign.base_dir.join(path), *epoch_jyear)
-                    .map_err(|e| e.to_string())?,
-            ),
-        })
-    }
-
     fn stars_in_cone(&self, ra: f64, dec: f64, radius: f64, mag_max: f64, at: Epoch) -> Vec<Star> {
         match self {
             StarField::Procedural(sky) => sky.stars_in_cone(ra, dec, radius, mag_max),
             StarField::Catalog(cat) => cat.stars_in_cone(ra, dec, radius, mag_max, julian_year(at)),
         }
     }
+}
+
+/// How the sensor points during the exposure.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, Serialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum PointingMode {
+    /// Inertially fixed on a random direction around the debris.
+    #[default]
+    Fixed,
+    /// Following the observer's nadir-pointing attitude: star trails across the image.
+    Survey,
+}
+
+/// The tumbling light curve's ranges: period uniform in [min, max], amplitude in [0, max].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TumbleRange {
+    pub period_min_s: f64,
+    pub period_max_s: f64,
+    pub amplitude_max: f64,
+}
+
+/// Scene acceptance rules (paper 3.2.2 and 3.2.6), with the effective signal-to-noise gate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gate {
+    pub earth_min_deg: f64,
+    pub sun_min_deg: f64,
+    pub moon_min_deg: f64,
+    pub earth_clearance_km: f64,
+    pub brightest_star_mag: f64,
+    pub snr_min: f64,
+    pub max_attempts: u32,
+}
+
+/// What a campaign asks of its scenes: when, how long, how the sensor points, the debris
+/// photometry and the acceptance gate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spec {
+    pub window_start: Epoch,
+    pub window_end: Epoch,
+    pub exposure_min_s: f64,
+    pub exposure_max_s: f64,
+    pub pointing: PointingMode,
+    /// The debris at mid-exposure is placed uniformly within this fraction of the half-field.
+    pub placement_fraction: f64,
+    /// Debris area |N(mean, std)| m^2 and albedo (Eq. 6-7).
+    pub area_mean_m2: f64,
+    pub area_std_m2: f64,
+    pub albedo: f64,
+    pub tumble: Option<TumbleRange>,
+    pub gate: Gate,
+    /// Star cone radius of fixed pointing (survey cones follow the drift).
+    pub star_cone_deg: f64,
+    /// Points the debris trajectory is cut into (a minimum, see `try_draw`).
+    pub trajectory_samples: usize,
 }
 
 /// Julian year (TT) of an instant, e.g. 2016.0 for the Gaia DR3 epoch.
@@ -212,10 +259,10 @@ pub struct Scene {
 
 impl Scene {
     /// The projection at mid-exposure: the one the FITS WCS describes.
-    pub fn projection(&self, campaign: &Campaign) -> Tan {
+    pub fn projection(&self, sensor: &Sensor) -> Tan {
         match self.pointing {
-            Pointing::Fixed { ra_deg, dec_deg } => tan_at(campaign, ra_deg, dec_deg),
-            Pointing::Survey(track) => tan_at(campaign, track.mid_ra_deg, track.mid_dec_deg),
+            Pointing::Fixed { ra_deg, dec_deg } => sensor.projection(ra_deg, dec_deg),
+            Pointing::Survey(track) => sensor.projection(track.mid_ra_deg, track.mid_dec_deg),
         }
     }
 
@@ -231,28 +278,6 @@ impl Scene {
     }
 }
 
-fn tan_at(campaign: &Campaign, ra_deg: f64, dec_deg: f64) -> Tan {
-    let s = &campaign.resolved.sensor;
-    Tan::new(
-        ra_deg,
-        dec_deg,
-        pixel_scale_deg(campaign),
-        s.width_px,
-        s.height_px,
-    )
-}
-
-/// Degrees per pixel: the field radius spans half the image width.
-pub fn pixel_scale_deg(campaign: &Campaign) -> f64 {
-    let s = &campaign.resolved.sensor;
-    s.fov_radius_deg / (s.width_px as f64 / 2.0)
-}
-
-/// The PSF's Gaussian sigma in pixels.
-pub fn psf_sigma_px(campaign: &Campaign) -> f64 {
-    campaign.resolved.sensor.psf_sigma_arcsec / 3600.0 / pixel_scale_deg(campaign)
-}
-
 /// Why no scene could be drawn.
 #[derive(Debug, thiserror::Error)]
 #[error("image {image}: no acceptable scene in {attempts} draws (rejections: {reasons})")]
@@ -262,40 +287,18 @@ pub struct NoScene {
     pub reasons: String,
 }
 
-/// Background plus bias noise standard deviation per pixel, ADU, for an exposure: the uniform
-/// model's, or the chosen real frame's robust sigma scaled by exposure.
-pub fn background_sigma_adu(
-    campaign: &Campaign,
-    exposure_s: f64,
-    frame: Option<&RealFrame>,
-) -> f64 {
-    let s = &campaign.resolved.sensor;
-    let bias = s.bias_max_adu - s.bias_min_adu;
-    let bias_var = bias * bias / 12.0;
-    match frame {
-        Some(f) => {
-            let bg = f.sigma * exposure_s / f.exposure_s;
-            (bg * bg + bias_var).sqrt()
-        }
-        None => {
-            let k = exposure_s / s.background_exposure_s;
-            let bg = (s.background_max_adu - s.background_min_adu) * k;
-            (bg * bg / 12.0 + bias_var).sqrt()
-        }
-    }
-}
-
 /// Draw the scene of one image, retrying rejected draws on the same stream.
 pub fn draw(
-    campaign: &Campaign,
+    spec: &Spec,
+    sensor: &Sensor,
     inputs: &Inputs,
     image: u64,
     rng: &mut ChaCha12Rng,
 ) -> Result<Scene, NoScene> {
     let mut rejections: BTreeMap<&'static str, u32> = BTreeMap::new();
-    let max = campaign.resolved.visibility.max_attempts;
+    let max = spec.gate.max_attempts;
     for attempt in 1..=max {
-        match try_draw(campaign, inputs, image, rng) {
+        match try_draw(spec, sensor, inputs, image, rng) {
             Ok(mut scene) => {
                 scene.attempts = attempt;
                 scene.rejections = rejections;
@@ -319,43 +322,40 @@ pub fn draw(
 /// The TEME -> GCRS rotation changes by far less than a milliarcsecond over an exposure, so one
 /// matrix (at mid-exposure) serves the whole exposure.
 fn positions(
-    campaign: &Campaign,
+    inputs: &Inputs,
     debris: usize,
     t: Epoch,
     teme_to_gcrs: &Mat3,
 ) -> Option<(Vec3, Vec3)> {
-    let obs = campaign.observer.propagator.position_teme_km(t).ok()?;
-    let deb = campaign.debris[debris]
-        .propagator
-        .position_teme_km(t)
-        .ok()?;
+    let obs = inputs.observer.propagator.position_teme_km(t).ok()?;
+    let deb = inputs.debris[debris].propagator.position_teme_km(t).ok()?;
     let (obs, deb) = (mat_vec(teme_to_gcrs, obs), mat_vec(teme_to_gcrs, deb));
     (obs.iter().chain(deb.iter()).all(|x| x.is_finite())).then_some((obs, deb))
 }
 
 fn try_draw(
-    campaign: &Campaign,
+    spec: &Spec,
+    sensor: &Sensor,
     inputs: &Inputs,
     image: u64,
     rng: &mut ChaCha12Rng,
 ) -> Result<Scene, &'static str> {
-    let c = &campaign.resolved;
-    let debris_index = rng.random_range(0..campaign.debris.len());
-    let span_s = (campaign.window_end - campaign.window_start).to_seconds();
-    let exposure_s = if c.exposure.max_s > c.exposure.min_s {
-        rng.random_range(c.exposure.min_s..=c.exposure.max_s)
+    let debris_index = rng.random_range(0..inputs.debris.len());
+    let span_s = (spec.window_end - spec.window_start).to_seconds();
+    let exposure_s = if spec.exposure_max_s > spec.exposure_min_s {
+        rng.random_range(spec.exposure_min_s..=spec.exposure_max_s)
     } else {
-        c.exposure.min_s
+        spec.exposure_min_s
     };
-    let start = campaign.window_start + Duration::from_seconds(rng.random_range(0.0..span_s));
+    let start = spec.window_start + Duration::from_seconds(rng.random_range(0.0..span_s));
     let mid = start + Duration::from_seconds(exposure_s / 2.0);
-    let area_m2 = Normal::new(c.photometry.rcs_mean_m2, c.photometry.rcs_std_m2)
+    let area_m2 = Normal::new(spec.area_mean_m2, spec.area_std_m2)
         .expect("validated std")
         .sample(rng)
         .abs();
     let placement = (
-        rng.random_range(-1.0..1.0) * c.pointing.placement_fraction,
-        rng.random_range(-1.0..1.0) * c.pointing.placement_fraction,
+        rng.random_range(-1.0..1.0) * spec.placement_fraction,
+        rng.random_range(-1.0..1.0) * spec.placement_fraction,
     );
     let background = match &inputs.background {
         BackgroundModel::Uniform => None,
@@ -368,30 +368,23 @@ fn try_draw(
             })
         }
     };
-    let tumble = match c.photometry.light_curve {
-        LightCurve::None => None,
-        LightCurve::Tumbling {
-            period_min_s,
-            period_max_s,
-            amplitude_max,
-        } => Some(Tumble {
-            period_s: if period_max_s > period_min_s {
-                rng.random_range(period_min_s..=period_max_s)
-            } else {
-                period_min_s
-            },
-            amplitude: rng.random_range(0.0..=amplitude_max),
-            phase_rad: rng.random_range(0.0..std::f64::consts::TAU),
-        }),
-    };
+    let tumble = spec.tumble.map(|r| Tumble {
+        period_s: if r.period_max_s > r.period_min_s {
+            rng.random_range(r.period_min_s..=r.period_max_s)
+        } else {
+            r.period_min_s
+        },
+        amplitude: rng.random_range(0.0..=r.amplitude_max),
+        phase_rad: rng.random_range(0.0..std::f64::consts::TAU),
+    });
 
     // Visibility at mid-exposure (paper 3.2.2).
     let frame = teme_to_gcrs_matrix(mid);
-    let (obs, deb) = positions(campaign, debris_index, mid, &frame).ok_or("propagation failed")?;
+    let (obs, deb) = positions(inputs, debris_index, mid, &frame).ok_or("propagation failed")?;
     let los = sub(deb, obs);
     let sun = sun_position_km(mid);
     let moon = moon_position_km(mid);
-    let v = &c.visibility;
+    let v = &spec.gate;
     let earth_angle_deg = angle_deg(los, sub([0.0; 3], obs));
     if earth_angle_deg <= v.earth_min_deg {
         return Err("earth angle");
@@ -412,43 +405,33 @@ fn try_draw(
     }
     let phase_angle_deg = angle_deg(sub(sun, deb), sub(obs, deb));
     let range_km = norm(los);
-    let magnitude = debris_magnitude(
-        area_m2,
-        c.photometry.albedo,
-        phase_angle_deg.to_radians(),
-        range_km,
-    );
-    if magnitude.is_nan() || magnitude > c.sensor.mag_limit {
+    let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km);
+    if magnitude.is_nan() || magnitude > sensor.mag_limit {
         return Err("fainter than the magnitude limit");
     }
 
     // Pointing: the debris at mid-exposure lands at a random place in the field.
     let (ra_mid, dec_mid) = radec_deg(los);
-    let scale = pixel_scale_deg(campaign);
-    let around_debris = Tan::new(
-        ra_mid,
-        dec_mid,
-        scale,
-        c.sensor.width_px,
-        c.sensor.height_px,
-    );
-    let half_w = c.sensor.width_px as f64 / 2.0;
-    let half_h = c.sensor.height_px as f64 / 2.0;
+    let scale = sensor.pixel_scale_deg();
+    let around_debris = sensor.projection(ra_mid, dec_mid);
+    let half_w = sensor.width_px as f64 / 2.0;
+    let half_h = sensor.height_px as f64 / 2.0;
     let (ra_p, dec_p) = around_debris.sky(
         around_debris.cx - placement.0 * half_w,
         around_debris.cy - placement.1 * half_h,
     );
-    let (pointing, cone) = match c.pointing.mode {
+    let (pointing, cone) = match spec.pointing {
         PointingMode::Fixed => (
             Pointing::Fixed {
                 ra_deg: ra_p,
                 dec_deg: dec_p,
             },
-            c.stars.cone_radius_deg(),
+            spec.star_cone_deg,
         ),
         PointingMode::Survey => {
             let track = survey_track(
-                campaign,
+                sensor,
+                inputs,
                 debris_index,
                 mid,
                 exposure_s,
@@ -457,8 +440,8 @@ fn try_draw(
             )
             .ok_or("propagation failed")?;
             // The star cone covers the field along the whole drift and nothing more.
-            let s = &c.sensor;
-            let half_diag_deg = scale * (s.width_px as f64).hypot(s.height_px as f64) / 2.0;
+            let half_diag_deg =
+                scale * (sensor.width_px as f64).hypot(sensor.height_px as f64) / 2.0;
             (
                 Pointing::Survey(track),
                 track.drift_deg / 2.0 + half_diag_deg + STAR_CONE_MARGIN_DEG,
@@ -469,25 +452,24 @@ fn try_draw(
     // Field stars in the cone; a star brighter than the limit spoils the image (paper 3.2.3).
     let field = inputs
         .stars
-        .stars_in_cone(ra_p, dec_p, cone, c.sensor.mag_limit, mid);
+        .stars_in_cone(ra_p, dec_p, cone, sensor.mag_limit, mid);
     if field.iter().any(|s| s.mag < v.brightest_star_mag) {
         return Err("star brighter than the limit in the field");
     }
 
     // The trajectory, cut in samples at the centres of equal time slices.
-    let mid_tan = tan_at(campaign, ra_p, dec_p);
+    let mid_tan = sensor.projection(ra_p, dec_p);
     let sample = |n: usize| -> Result<Vec<TrajectorySample>, &'static str> {
         let dt = exposure_s / n as f64;
         let mut trajectory = Vec::with_capacity(n);
         for k in 0..n {
             let t_s = (k as f64 + 0.5) * dt;
             let t = start + Duration::from_seconds(t_s);
-            let (o, d) =
-                positions(campaign, debris_index, t, &frame).ok_or("propagation failed")?;
+            let (o, d) = positions(inputs, debris_index, t, &frame).ok_or("propagation failed")?;
             let los = sub(d, o);
             let (ra_deg, dec_deg) = radec_deg(los);
             let phase = angle_deg(sub(sun, d), sub(o, d)).to_radians();
-            let mut mag = debris_magnitude(area_m2, c.photometry.albedo, phase, norm(los));
+            let mut mag = debris_magnitude(area_m2, spec.albedo, phase, norm(los));
             if let Some(tb) = tumble {
                 let factor = 1.0
                     + tb.amplitude
@@ -495,7 +477,7 @@ fn try_draw(
                 mag -= 2.5 * factor.log10();
             }
             let expected_electrons = if mag.is_finite() {
-                photon_rate(mag, c.sensor.zero_point_mag) * dt
+                photon_rate(mag, sensor.zero_point_mag) * dt
             } else {
                 0.0
             };
@@ -518,14 +500,14 @@ fn try_draw(
         }
         Ok(trajectory)
     };
-    let n = c.render.trajectory_samples as usize;
+    let n = spec.trajectory_samples;
     let mut trajectory = sample(n)?;
     // Samples farther apart in the image than two PSF sigmas render a row of dots, not a
     // streak (a 600 s exposure of LEO debris with 2000 samples: one dot per 128 px; 0.7% of the
     // quickstart draws: 4-8 px). Such a trajectory is sampled again, finer by the factor that
     // brings the spacing to two sigmas; beyond MAX_TRAJECTORY_SAMPLES the draw is rejected.
-    let psf_px = psf_sigma_px(campaign);
-    let spacing = max_sample_spacing_px(campaign, &trajectory);
+    let psf_px = sensor.psf_sigma_px();
+    let spacing = max_sample_spacing_px(sensor, &trajectory);
     if spacing > MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px {
         let factor = (spacing / (MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px)).ceil() as usize;
         let finer = n.saturating_mul(factor);
@@ -536,15 +518,15 @@ fn try_draw(
     }
 
     let snr = expected_snr(
-        campaign,
+        sensor,
         &trajectory,
-        background_sigma_adu(campaign, exposure_s, inputs.frame(background)),
+        sensor.background_sigma_adu(exposure_s, inputs.frame(background)),
     );
-    if snr < campaign.snr_min() {
+    if snr < v.snr_min {
         return Err("signal to noise below the gate");
     }
 
-    let debris = &campaign.debris[debris_index];
+    let debris = &inputs.debris[debris_index];
     Ok(Scene {
         image_index: image,
         debris_index,
@@ -576,20 +558,13 @@ fn try_draw(
 /// mean debris ADU per footprint pixel over the per-pixel standard deviation of background plus
 /// bias. The footprint is the in-image streak length times the PSF FWHM, plus one FWHM square:
 /// `(L + w) w`. Computed from expected values, before any photon is traced.
-pub fn expected_snr(
-    campaign: &Campaign,
-    trajectory: &[TrajectorySample],
-    noise_sigma_adu: f64,
-) -> f64 {
-    let s = &campaign.resolved.sensor;
-    let (w, h) = (s.width_px as f64, s.height_px as f64);
-    let inside = |x: f64, y: f64| x >= -0.5 && x < w - 0.5 && y >= -0.5 && y < h - 0.5;
+pub fn expected_snr(sensor: &Sensor, trajectory: &[TrajectorySample], noise_sigma_adu: f64) -> f64 {
     let mut electrons = 0.0;
     let mut length_px = 0.0;
     let mut last: Option<(f64, f64)> = None;
     for p in trajectory {
         let (x, y) = (p.x_px, p.y_px);
-        if inside(x, y) {
+        if sensor.contains(x, y) {
             electrons += p.expected_electrons;
             if let Some((lx, ly)) = last {
                 length_px += ((x - lx).powi(2) + (y - ly).powi(2)).sqrt();
@@ -599,9 +574,9 @@ pub fn expected_snr(
             last = None;
         }
     }
-    let fwhm_px = 2.3548 * s.psf_sigma_arcsec / 3600.0 / pixel_scale_deg(campaign);
+    let fwhm_px = sensor.psf_fwhm_px();
     let footprint = (length_px + fwhm_px) * fwhm_px;
-    let signal_adu = electrons / s.gain_e_per_adu / footprint.max(1.0);
+    let signal_adu = electrons / sensor.gain_e_per_adu / footprint.max(1.0);
     if noise_sigma_adu > 0.0 {
         signal_adu / noise_sigma_adu
     } else if signal_adu > 0.0 {
@@ -620,12 +595,8 @@ pub const MAX_TRAJECTORY_SAMPLES: usize = 1_000_000;
 
 /// Largest pixel distance between consecutive trajectory samples of which at least one lies in
 /// the image (0 when none does).
-pub fn max_sample_spacing_px(campaign: &Campaign, trajectory: &[TrajectorySample]) -> f64 {
-    let s = &campaign.resolved.sensor;
-    let (w, h) = (s.width_px as f64, s.height_px as f64);
-    let inside = |p: &TrajectorySample| {
-        p.x_px >= -0.5 && p.x_px < w - 0.5 && p.y_px >= -0.5 && p.y_px < h - 0.5
-    };
+pub fn max_sample_spacing_px(sensor: &Sensor, trajectory: &[TrajectorySample]) -> f64 {
+    let inside = |p: &TrajectorySample| sensor.contains(p.x_px, p.y_px);
     trajectory
         .windows(2)
         .filter(|pair| inside(&pair[0]) || inside(&pair[1]))
@@ -639,7 +610,8 @@ const STAR_CONE_MARGIN_DEG: f64 = 0.01;
 
 /// The survey track of the observer at mid-exposure, with the boresight `(ra, dec)` then.
 fn survey_track(
-    campaign: &Campaign,
+    sensor: &Sensor,
+    inputs: &Inputs,
     debris: usize,
     mid: Epoch,
     exposure_s: f64,
@@ -648,9 +620,9 @@ fn survey_track(
 ) -> Option<SurveyTrack> {
     // Orbit normal and rate from the observer's velocity by a central difference.
     let h = 0.5;
-    let (r0, _) = positions(campaign, debris, mid - Duration::from_seconds(h), frame)?;
-    let (r1, _) = positions(campaign, debris, mid + Duration::from_seconds(h), frame)?;
-    let (r, _) = positions(campaign, debris, mid, frame)?;
+    let (r0, _) = positions(inputs, debris, mid - Duration::from_seconds(h), frame)?;
+    let (r1, _) = positions(inputs, debris, mid + Duration::from_seconds(h), frame)?;
+    let (r, _) = positions(inputs, debris, mid, frame)?;
     let v = scale(sub(r1, r0), 1.0 / (2.0 * h));
     let n = [
         r[1] * v[2] - r[2] * v[1],
@@ -673,7 +645,7 @@ fn survey_track(
         trail_angle_deg: 0.0,
     };
     // Eq. 13 with atan2: how a star at the centre moves across the image.
-    let tan = tan_at(campaign, boresight.0, boresight.1);
+    let tan = sensor.projection(boresight.0, boresight.1);
     let (ra0, dec0) = track.to_mid_frame(0.0, boresight.0, boresight.1);
     let (ra1, dec1) = track.to_mid_frame(exposure_s, boresight.0, boresight.1);
     let (x0, y0) = tan.standard(ra0, dec0)?;

@@ -12,13 +12,14 @@ use std::time::Instant;
 use anyhow::Context;
 use serde::Serialize;
 
-use crate::campaign::{Campaign, Render, RenderMethod};
+use crate::campaign::Campaign;
+use crate::experiment::{self, Experiment};
 use crate::geometry::{BoxPx, LABEL_SHARE, flux_box};
 use crate::manifest::Manifest;
 use crate::render::expected::expected_flux;
-use crate::render::{Jitter, render_with_jitter};
+use crate::render::{Jitter, RenderMethod, render_with_jitter};
 use crate::rng::{Purpose, stream};
-use crate::scene::{self, Inputs, Scene};
+use crate::scene::{self, Inputs, MAX_TRAJECTORY_SAMPLES, Scene};
 
 /// The reference takes this many times the campaign's trajectory samples and jitter steps.
 const REFERENCE_REFINEMENT: u32 = 10;
@@ -82,16 +83,15 @@ pub struct Summary {
     pub seconds: f64,
 }
 
-/// A setting to render: its label and the campaign and jitter path it renders with.
+/// A setting to render: its label and the experiment (the campaign's, one knob changed).
 struct Setting {
     knob: &'static str,
     value: String,
-    render: Render,
+    x: Experiment,
 }
 
-/// Run the study into `out`, whole or not at all (the campaign's render settings are changed
-/// in turn, then put back).
-pub fn run(campaign: &mut Campaign, out: &Path, opts: &Options) -> anyhow::Result<Summary> {
+/// Run the study into `out`, whole or not at all.
+pub fn run(campaign: &Campaign, out: &Path, opts: &Options) -> anyhow::Result<Summary> {
     anyhow::ensure!(
         opts.seeds >= 2,
         "--seeds must be at least 2 (got {})",
@@ -103,34 +103,36 @@ pub fn run(campaign: &mut Campaign, out: &Path, opts: &Options) -> anyhow::Resul
         opts.image,
         campaign.resolved.images
     );
-    crate::pipeline::write_replacing(out, |dir| study(campaign, dir, opts))
+    crate::output::write_replacing(out, |dir| study(campaign, dir, opts))
 }
 
 /// The study itself, its files written into `dir`.
-fn study(campaign: &mut Campaign, dir: &Path, opts: &Options) -> anyhow::Result<Summary> {
+fn study(campaign: &Campaign, dir: &Path, opts: &Options) -> anyhow::Result<Summary> {
     let started = Instant::now();
-    let inputs = Inputs::load(campaign).map_err(anyhow::Error::msg)?;
-    let base = campaign.resolved.render.clone();
+    let inputs = experiment::inputs(campaign).map_err(anyhow::Error::msg)?;
+    let base = Experiment::new(campaign);
 
     // The reference: exact renderer, no merging, refined trajectory and jitter path.
     let ref_samples = base
+        .scene
         .trajectory_samples
-        .saturating_mul(REFERENCE_REFINEMENT)
-        .min(1_000_000);
-    let ref_steps = (base.jitter_steps as usize) * REFERENCE_REFINEMENT as usize;
-    campaign.resolved.render = with(&base, |r| {
-        r.method = RenderMethod::Expected;
-        r.merge_threshold = u64::MAX;
-        r.trajectory_samples = ref_samples;
-        r.jitter_steps = ref_steps as u32;
+        .saturating_mul(REFERENCE_REFINEMENT as usize)
+        .min(MAX_TRAJECTORY_SAMPLES);
+    let ref_steps = base.render.jitter_steps * REFERENCE_REFINEMENT as usize;
+    let reference = with(&base, |x| {
+        x.render.method = RenderMethod::Expected;
+        x.render.merge_threshold = u64::MAX;
+        x.scene.trajectory_samples = ref_samples;
+        x.render.jitter_steps = ref_steps;
     });
-    let (ref_scene, _) = draw(campaign, &inputs, opts.image)?;
+    let (ref_scene, _) = draw(&reference, &inputs, opts.image)?;
     let jitter = Jitter::of_scene(
-        campaign,
+        &reference.sensor,
+        &reference.render,
         &ref_scene,
-        &mut stream(campaign.resolved.seed, opts.image, Purpose::Photons),
+        &mut stream(reference.seed, opts.image, Purpose::Photons),
     );
-    let flux = expected_flux(campaign, &ref_scene, &jitter);
+    let flux = expected_flux(&reference.sensor, &ref_scene, &jitter);
     let mu: Vec<f64> = flux
         .stars
         .iter()
@@ -159,17 +161,15 @@ fn study(campaign: &mut Campaign, dir: &Path, opts: &Options) -> anyhow::Result<
 
     let mut rows = Vec::new();
     for s in settings(&base, opts.quick, ref_steps) {
-        campaign.resolved.render = s.render.clone();
-        let (scene, scene_ms) = draw(campaign, &inputs, opts.image)?;
-        let steps = s.render.jitter_steps as usize;
+        let (scene, scene_ms) = draw(&s.x, &inputs, opts.image)?;
+        let steps = s.x.render.jitter_steps;
         let path = jitter
             .coarsened(steps)
             .with_context(|| format!("jitter steps {steps} do not divide {ref_steps}"))?;
         rows.push(measure(
-            campaign, &s, &scene, &path, &truth, opts.seeds, &inputs, scene_ms,
+            &s, &scene, &path, &truth, opts.seeds, &inputs, scene_ms,
         ));
     }
-    campaign.resolved.render = base;
     write(dir, campaign, opts, &rows, ref_samples, ref_steps)?;
     Ok(Summary {
         rows,
@@ -186,25 +186,26 @@ struct Reference {
     label_box: Option<BoxPx>,
 }
 
-/// A copy of render settings, changed.
-fn with(render: &Render, change: impl FnOnce(&mut Render)) -> Render {
-    let mut r = render.clone();
-    change(&mut r);
-    r
+/// A copy of an experiment, changed.
+fn with(x: &Experiment, change: impl FnOnce(&mut Experiment)) -> Experiment {
+    let mut x = x.clone();
+    change(&mut x);
+    x
 }
 
 /// The scene of the image (with the campaign's trajectory samples), and the median time of
 /// three draws, milliseconds.
-fn draw(campaign: &Campaign, inputs: &Inputs, image: u64) -> anyhow::Result<(Scene, f64)> {
+fn draw(x: &Experiment, inputs: &Inputs, image: u64) -> anyhow::Result<(Scene, f64)> {
     let mut times = Vec::new();
     let mut scene = None;
     for _ in 0..3 {
         let t = Instant::now();
         let s = scene::draw(
-            campaign,
+            &x.scene,
+            &x.sensor,
             inputs,
             image,
-            &mut stream(campaign.resolved.seed, image, Purpose::Scene),
+            &mut stream(x.seed, image, Purpose::Scene),
         )?;
         times.push(t.elapsed().as_secs_f64() * 1e3);
         scene = Some(s);
@@ -213,26 +214,26 @@ fn draw(campaign: &Campaign, inputs: &Inputs, image: u64) -> anyhow::Result<(Sce
 }
 
 /// Each knob alone over its values (the campaign's value among them).
-fn settings(base: &Render, quick: bool, ref_steps: usize) -> Vec<Setting> {
+fn settings(base: &Experiment, quick: bool, ref_steps: usize) -> Vec<Setting> {
     let pick = |full: Vec<u64>, short: Vec<u64>| if quick { short } else { full };
     let mut out = Vec::new();
-    let mut add = |knob: &'static str, value: String, render: Render| {
-        out.push(Setting {
-            knob,
-            value,
-            render,
-        });
+    let mut add = |knob: &'static str, value: String, x: Experiment| {
+        out.push(Setting { knob, value, x });
     };
     for m in [RenderMethod::PhotonMapping, RenderMethod::Expected] {
-        add("method", m.name().into(), with(base, |r| r.method = m));
+        add(
+            "method",
+            m.name().into(),
+            with(base, |x| x.render.method = m),
+        );
     }
     // The approximations of photon mapping, studied with photon mapping.
-    let pm = with(base, |r| r.method = RenderMethod::PhotonMapping);
+    let pm = with(base, |x| x.render.method = RenderMethod::PhotonMapping);
     for f in pick(vec![1, 2, 5, 10, 20], vec![1, 5]) {
         add(
             "merge_factor",
             f.to_string(),
-            with(&pm, |r| r.merge_factor = f as u32),
+            with(&pm, |x| x.render.merge_factor = f as u32),
         );
     }
     for t in pick(
@@ -242,7 +243,7 @@ fn settings(base: &Render, quick: bool, ref_steps: usize) -> Vec<Setting> {
         add(
             "merge_threshold",
             t.to_string(),
-            with(&pm, |r| r.merge_threshold = t),
+            with(&pm, |x| x.render.merge_threshold = t),
         );
     }
     for n in pick(
@@ -252,11 +253,11 @@ fn settings(base: &Render, quick: bool, ref_steps: usize) -> Vec<Setting> {
         add(
             "trajectory_samples",
             n.to_string(),
-            with(base, |r| r.trajectory_samples = n as u32),
+            with(base, |x| x.scene.trajectory_samples = n as usize),
         );
     }
     // Coarser views of the reference path: every value must divide its steps.
-    let js = base.jitter_steps as u64;
+    let js = base.render.jitter_steps as u64;
     let steps: Vec<u64> = pick(vec![js / 100, js / 10, js, js * 10], vec![js / 10, js])
         .into_iter()
         .filter(|&n| n >= 1 && (ref_steps as u64).is_multiple_of(n))
@@ -265,16 +266,14 @@ fn settings(base: &Render, quick: bool, ref_steps: usize) -> Vec<Setting> {
         add(
             "jitter_steps",
             n.to_string(),
-            with(base, |r| r.jitter_steps = n as u32),
+            with(base, |x| x.render.jitter_steps = n as usize),
         );
     }
     out
 }
 
 /// Render a setting over the seeds and compare with the reference.
-#[allow(clippy::too_many_arguments)]
 fn measure(
-    campaign: &Campaign,
     s: &Setting,
     scene: &Scene,
     jitter: &Jitter,
@@ -288,13 +287,14 @@ fn measure(
     let (mut sq_err, mut total, mut debris_total) = (0.0, 0.0, 0.0);
     let (mut centroid_err, mut box_err) = (Vec::new(), Vec::new());
     let mut times = Vec::new();
-    let seed = campaign.resolved.seed;
+    let seed = s.x.seed;
     let frame = inputs.frame(scene.background);
     for k in 0..seeds as u64 {
         // Photon seeds apart from the campaign's images: (seed + 1 + k, image).
         let t = Instant::now();
         let e = render_with_jitter(
-            campaign,
+            &s.x.sensor,
+            &s.x.render,
             scene,
             frame,
             jitter,
@@ -393,7 +393,7 @@ fn write(
     campaign: &Campaign,
     opts: &Options,
     rows: &[Row],
-    ref_samples: u32,
+    ref_samples: usize,
     ref_steps: usize,
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -455,7 +455,7 @@ fn table(
     campaign: &Campaign,
     opts: &Options,
     rows: &[Row],
-    ref_samples: u32,
+    ref_samples: usize,
     ref_steps: usize,
 ) -> String {
     let r = &campaign.resolved.render;

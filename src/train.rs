@@ -1,5 +1,5 @@
-//! Training through Ultralytics (the tool the field uses), driven by soig: the campaign's
-//! dataset is written (or reused when it verifies), `python/train.py` (embedded in the binary)
+//! Training through Ultralytics (the tool the field uses), driven by soig: on a dataset the
+//! pipeline wrote, `python/train.py` (embedded in the binary)
 //! trains offline with the campaign's hyperparameters and exports ONNX, and the run is recorded
 //! in the manifest: the model's sha256, the Ultralytics and torch versions, the log.
 //!
@@ -10,9 +10,11 @@ use std::process::{Command, Stdio};
 
 use anyhow::{Context, bail};
 
-use crate::campaign::{Campaign, GeometryKind, Stage};
+use crate::campaign::Campaign;
+use crate::geometry::Frame;
 use crate::hash::sha256_file;
-use crate::manifest::{self, MANIFEST, Manifest};
+use crate::manifest;
+use crate::progress::Progress;
 
 /// The training driver, shipped inside the binary so a run records exactly what trained it.
 pub const TRAIN_PY: &str = include_str!("../python/train.py");
@@ -60,15 +62,14 @@ pub fn find_python(explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
 /// the 1472 px rotated frame) unless the campaign sets them.
 pub fn size_and_batch(campaign: &Campaign) -> (u32, u32) {
     let c = &campaign.resolved;
-    let width = c.sensor.width_px.max(c.sensor.height_px);
-    let frame = match c.enhance.geometry {
-        GeometryKind::Original => width,
-        GeometryKind::Padded => width + 2 * c.enhance.pad_px,
-        GeometryKind::Rotated => {
-            let diag = (c.sensor.width_px as f64).hypot(c.sensor.height_px as f64);
-            ((diag / 32.0).ceil() * 32.0) as u32
-        }
-    };
+    let f = Frame::new(
+        c.enhance.geometry,
+        c.sensor.width_px as usize,
+        c.sensor.height_px as usize,
+        c.enhance.pad_px as usize,
+        0.0,
+    );
+    let frame = f.width.max(f.height) as u32;
     let imgsz = c.train.imgsz.unwrap_or(frame.div_ceil(32) * 32);
     let batch = c.train.batch.unwrap_or(if imgsz > 1024 { 10 } else { 16 });
     (imgsz, batch)
@@ -78,41 +79,6 @@ pub fn size_and_batch(campaign: &Campaign) -> (u32, u32) {
 pub struct Trained {
     pub model: PathBuf,
     pub record: serde_json::Value,
-}
-
-/// `soig train`: train on the dataset in `out` (written first if it is missing or does not
-/// verify), then record the run in the manifest. A campaign whose stages include `train` is
-/// simply run: the pipeline trains (and detects with the new model) itself.
-pub fn train(
-    campaign: &Campaign,
-    out: &Path,
-    python: Option<&Path>,
-    progress: bool,
-) -> anyhow::Result<PathBuf> {
-    if campaign.resolved.stages.contains(&Stage::Train) {
-        // The pipeline finds (and checks) the interpreter itself.
-        crate::pipeline::run_with(campaign, out, progress, python)?;
-        return Ok(out.join(TRAIN_DIR).join("model.onnx"));
-    }
-    let python = find_python(python)?;
-    let reusable = out.join(MANIFEST).is_file()
-        && manifest::verify(out)
-            .is_ok_and(|(m, problems)| problems.is_empty() && m.campaign_hash == campaign.hash);
-    if !reusable {
-        eprintln!("soig train: writing the dataset into {}", out.display());
-        crate::pipeline::run(campaign, out, progress)?;
-    }
-    let trained = fit(campaign, out, &python)?;
-    let old = Manifest::read(out).map_err(anyhow::Error::msg)?;
-    let mut volatile = volatile_files(out)?;
-    volatile.extend(old.volatile.iter().cloned());
-    volatile.sort();
-    volatile.dedup();
-    let mut m = Manifest::build(out, &campaign.hash, old.campaign.clone(), &volatile)?;
-    m.training = Some(trained.record);
-    m.seal();
-    m.write(out)?;
-    Ok(trained.model)
 }
 
 /// Training outputs whose bytes depend on the machine (weights, plots, logs: GPU training is
@@ -130,7 +96,12 @@ pub fn volatile_files(out: &Path) -> anyhow::Result<Vec<String>> {
 
 /// Train on the dataset already in `out` (its `data.yaml`), export ONNX to
 /// `out/train/model.onnx` and check that the detector loads it.
-pub fn fit(campaign: &Campaign, out: &Path, python: &Path) -> anyhow::Result<Trained> {
+pub fn fit(
+    campaign: &Campaign,
+    out: &Path,
+    python: &Path,
+    progress: &dyn Progress,
+) -> anyhow::Result<Trained> {
     let data = out.join("data.yaml");
     if !data.is_file() {
         bail!(
@@ -195,12 +166,12 @@ pub fn fit(campaign: &Campaign, out: &Path, python: &Path) -> anyhow::Result<Tra
     }
     let log_path = tdir.join("train.log");
     let log = std::fs::File::create(&log_path)?;
-    eprintln!(
+    progress.note(&format!(
         "soig train: {} {} (log: {})",
         python.display(),
         args.join(" "),
         log_path.display()
-    );
+    ));
     let status = Command::new(python)
         .args(&args)
         .stdout(log.try_clone()?)

@@ -6,9 +6,11 @@ use std::path::Path;
 
 use hifitime::{Duration, Epoch};
 use soig::campaign::Campaign;
+use soig::experiment::{self, Experiment};
 use soig::render::{self, Exposure};
 use soig::rng::{Purpose, poisson, stream};
-use soig::scene::{self, Geometry, Inputs, Pointing, Scene, TrajectorySample};
+use soig::scene::{self, Geometry, Pointing, Scene, TrajectorySample};
+use soig::sensor::Sensor;
 use soig::sky::photometry::{debris_magnitude, diffuse_sphere_phase, photon_rate};
 use soig::sky::projection::Tan;
 use soig::sky::stars::{ProceduralSky, Star, cumulative_density_per_deg2, equatorial_to_galactic};
@@ -61,9 +63,16 @@ fn all_finite(e: &Exposure) {
     }
 }
 
+/// The sensor a campaign builds.
+fn sensor_of(c: &Campaign) -> Sensor {
+    Experiment::new(c).sensor
+}
+
 fn render_scene(c: &Campaign, s: &Scene, seed: u64) -> Exposure {
+    let x = Experiment::new(c);
     render::render(
-        c,
+        &x.sensor,
+        &x.render,
         s,
         None,
         &mut stream(seed, s.image_index, Purpose::Photons),
@@ -81,8 +90,7 @@ fn fixed_scene(
     (from, to): ((f64, f64), (f64, f64)),
     exposure_s: f64,
 ) -> Scene {
-    let s = &c.resolved.sensor;
-    let tan = Tan::new(ra, dec, scene::pixel_scale_deg(c), s.width_px, s.height_px);
+    let tan = sensor_of(c).projection(ra, dec);
     let n = 200;
     let trajectory = (0..n)
         .map(|k| {
@@ -94,7 +102,8 @@ fn fixed_scene(
                 ra_deg,
                 dec_deg,
                 mag: debris_mag,
-                expected_electrons: photon_rate(debris_mag, s.zero_point_mag) * exposure_s
+                expected_electrons: photon_rate(debris_mag, c.resolved.sensor.zero_point_mag)
+                    * exposure_s
                     / n as f64,
                 x_px: x,
                 y_px: y,
@@ -184,7 +193,7 @@ fn pole_fields_are_valid_images() {
             ((10.0, 20.0), (110.0, 100.0)),
             2.0,
         );
-        let tan = s.projection(&c);
+        let tan = s.projection(&sensor_of(&c));
         // The streak passes within a pixel of the pole (the image centre is on or near it):
         // pixel -> sky -> pixel is the identity along it, though RA jumps by up to 180 deg.
         for p in &s.trajectory {
@@ -299,7 +308,7 @@ fn ra_seam_is_continuous() {
         ((-20.0, 64.0), (150.0, 64.0)),
         2.0,
     );
-    let tan = s.projection(&c);
+    let tan = s.projection(&sensor_of(&c));
     let inside = stars_in_image(&tan, &s.stars, w);
     let e = render_scene(&c, &s, 2);
     all_finite(&e);
@@ -341,11 +350,13 @@ fn ra_seam_is_continuous() {
 
 /// Draw and render `n` images; every accepted scene is finite and its image valid.
 fn draw_and_render(c: &Campaign, n: u64) -> Vec<(Scene, Exposure)> {
-    let inputs = Inputs::load(c).unwrap();
+    let inputs = experiment::inputs(c).unwrap();
+    let x = Experiment::new(c);
     (0..n)
         .map(|i| {
             let s = scene::draw(
-                c,
+                &x.scene,
+                &x.sensor,
                 &inputs,
                 i,
                 &mut stream(c.resolved.seed, i, Purpose::Scene),
@@ -595,7 +606,7 @@ fn near_perigee_at_high_speed() {
         angle_deg(d0, r)
     );
     assert!(speed > 9.0 && norm(d0) < 6378.0 + 1600.0 && angle_deg(d0, r) < 2.0);
-    let scale = scene::pixel_scale_deg(&c);
+    let scale = sensor_of(&c).pixel_scale_deg();
     for (s, e) in draw_and_render(&c, 2) {
         let (first, last) = (s.trajectory.first().unwrap(), s.trajectory.last().unwrap());
         let moved = angle_deg(
@@ -684,8 +695,8 @@ fn exposures_of_10_ms_and_600_s() {
             let expected = 200.0 * t / 5.0 + 2.5 + (debris_adu + stars_adu) / n;
             // Consecutive in-image samples at most two PSF sigmas apart: a streak, not dots (the
             // 600 s trajectory is resampled from 2000 to ~90,000 samples).
-            let spacing_px = scene::max_sample_spacing_px(&c, &s.trajectory);
-            let psf_px = 1.0 / 3600.0 / scene::pixel_scale_deg(&c);
+            let spacing_px = scene::max_sample_spacing_px(&sensor_of(&c), &s.trajectory);
+            let psf_px = 1.0 / 3600.0 / sensor_of(&c).pixel_scale_deg();
             assert!(
                 spacing_px <= 2.2 * psf_px,
                 "{spacing_px} px between samples"
@@ -737,7 +748,7 @@ fn exposures_of_10_ms_and_600_s() {
 fn magnitudes_from_minus_1_to_25() {
     let (w, fov) = (128u32, 0.0125);
     let c = campaign(ELEMENTS_40649, &sensor(w, fov));
-    let tan = Tan::new(10.0, 20.0, scene::pixel_scale_deg(&c), w, w);
+    let tan = Tan::new(10.0, 20.0, sensor_of(&c).pixel_scale_deg(), w, w);
     let t = 0.01;
     let zp = c.resolved.sensor.zero_point_mag;
     let star_at = |x: f64, y: f64, mag: f64| {
@@ -809,7 +820,7 @@ fn magnitudes_from_minus_1_to_25() {
 fn magnitude_6_star_in_the_field() {
     let (w, fov) = (128u32, 0.0125);
     let c = campaign(ELEMENTS_40649, &sensor(w, fov));
-    let tan = Tan::new(10.0, 20.0, scene::pixel_scale_deg(&c), w, w);
+    let tan = Tan::new(10.0, 20.0, sensor_of(&c).pixel_scale_deg(), w, w);
     let (ra, dec) = tan.sky(64.0, 64.0);
     let star = Star {
         ra_deg: ra,
@@ -835,7 +846,8 @@ fn magnitude_6_star_in_the_field() {
     );
     let peak = *e.electrons.iter().max().unwrap();
     assert!(peak > 500_000 && peak < u32::MAX / 100, "peak {peak}");
-    let png = soig::enhance::enhance(&e.adu, e.width, e.height, &c.resolved.enhance, true);
+    let settings = Experiment::new(&c).product.expect("enhance stage").enhance;
+    let png = soig::enhance::enhance(&e.adu, e.width, e.height, &settings);
     let centre = png.pixels[64 * w as usize + 64];
     let median = {
         let mut p = png.pixels.clone();
@@ -862,7 +874,7 @@ fn magnitude_6_star_in_the_field() {
 fn streak_leaving_the_image() {
     let (w, fov) = (128u32, 0.0125);
     let c = campaign(ELEMENTS_40649, &sensor(w, fov));
-    let sigma = scene::background_sigma_adu(&c, 2.0, None);
+    let sigma = sensor_of(&c).background_sigma_adu(2.0, None);
     // From the centre out through the right edge: half the streak is in the image.
     let s = fixed_scene(
         &c,
@@ -892,8 +904,11 @@ fn streak_leaving_the_image() {
         .copied()
         .filter(|p| p.x_px < 127.5)
         .collect();
-    let full = scene::expected_snr(&c, &s.trajectory, sigma);
-    assert!(full > 0.0 && (full - scene::expected_snr(&c, &inside, sigma)).abs() < 1e-12 * full);
+    let full = scene::expected_snr(&sensor_of(&c), &s.trajectory, sigma);
+    assert!(
+        full > 0.0
+            && (full - scene::expected_snr(&sensor_of(&c), &inside, sigma)).abs() < 1e-12 * full
+    );
     // Wholly outside: SNR 0, below any gate; rendered anyway, no label.
     let out = fixed_scene(
         &c,
@@ -903,7 +918,10 @@ fn streak_leaving_the_image() {
         ((200.0, 64.0), (400.0, 64.0)),
         2.0,
     );
-    assert_eq!(scene::expected_snr(&c, &out.trajectory, sigma), 0.0);
+    assert_eq!(
+        scene::expected_snr(&sensor_of(&c), &out.trajectory, sigma),
+        0.0
+    );
     let e = render_scene(&c, &out, 8);
     all_finite(&e);
     assert_eq!(e.truth.label_box_px, None);
@@ -933,7 +951,7 @@ fn huge_poisson_mean() {
     // clamped its count this traced ~1e11 single photons (a hang).
     let (w, fov) = (64u32, 0.00625);
     let c = campaign(ELEMENTS_40649, &sensor(w, fov));
-    let tan = Tan::new(10.0, 20.0, scene::pixel_scale_deg(&c), w, w);
+    let tan = Tan::new(10.0, 20.0, sensor_of(&c).pixel_scale_deg(), w, w);
     let (ra, dec) = tan.sky(32.0, 32.0);
     let star = Star {
         ra_deg: ra,

@@ -2,9 +2,10 @@
 
 use rand_chacha::ChaCha12Rng;
 use soig::campaign::Campaign;
-use soig::geometry::{self, Fill, Frame, LABEL_SHARE};
+use soig::experiment::{self, Experiment};
+use soig::geometry::{self, Fill, Frame, FrameKind, LABEL_SHARE};
 use soig::rng::{Purpose, stream};
-use soig::scene::{self, Inputs, Pointing};
+use soig::scene::{self, Pointing};
 
 mod common;
 use common::{CampaignToml, neossat_frame, tle_object};
@@ -22,14 +23,22 @@ fn campaign(mode: &str) -> Campaign {
 #[test]
 fn survey_star_trails_are_parallel_and_horizontal_after_rotation() {
     let c = campaign("survey");
-    let stars = Inputs::load(&c).unwrap();
+    let x = Experiment::new(&c);
+    let inputs = experiment::inputs(&c).unwrap();
     for i in 0..4 {
-        let s = scene::draw(&c, &stars, i, &mut stream(11, i, Purpose::Scene)).unwrap();
+        let s = scene::draw(
+            &x.scene,
+            &x.sensor,
+            &inputs,
+            i,
+            &mut stream(11, i, Purpose::Scene),
+        )
+        .unwrap();
         let Pointing::Survey(track) = s.pointing else {
             panic!("survey scene expected")
         };
-        let frame = Frame::rotated(512, 512, track.trail_angle_deg);
-        let tan = s.projection(&c);
+        let frame = Frame::new(FrameKind::Rotated, 512, 512, 0, track.trail_angle_deg);
+        let tan = s.projection(&x.sensor);
         let at = |t: f64, ra: f64, dec: f64| s.pixel_at(&tan, t, ra, dec);
         let mut n = 0;
         for star in s.stars.iter().take(200) {
@@ -51,7 +60,7 @@ fn survey_star_trails_are_parallel_and_horizontal_after_rotation() {
         }
         assert!(n > 10);
         // The trail is as long as the drift says.
-        let drift_px = track.drift_deg / scene::pixel_scale_deg(&c);
+        let drift_px = track.drift_deg / x.sensor.pixel_scale_deg();
         let (ra, dec) = (s.stars[0].ra_deg, s.stars[0].dec_deg);
         let (p, q) = (
             at(0.0, ra, dec).unwrap(),
@@ -98,20 +107,38 @@ fn needed_extent(img: &[f32], w: usize, h: usize, share: f64) -> (f64, f64) {
 fn label_box_is_the_tight_box_of_the_streak_in_every_frame() {
     for mode in ["fixed", "survey"] {
         let c = campaign(mode);
-        let stars = Inputs::load(&c).unwrap();
+        let x = Experiment::new(&c);
+        let inputs = experiment::inputs(&c).unwrap();
         for i in 0..3 {
-            let s = scene::draw(&c, &stars, i, &mut stream(11, i, Purpose::Scene)).unwrap();
+            let s = scene::draw(
+                &x.scene,
+                &x.sensor,
+                &inputs,
+                i,
+                &mut stream(11, i, Purpose::Scene),
+            )
+            .unwrap();
             let e = soig::render::render(
-                &c,
+                &x.sensor,
+                &x.render,
                 &s,
                 None,
                 &mut stream(11, i, Purpose::Photons),
                 &mut stream(11, i, Purpose::Noise),
             );
             let debris: Vec<f32> = e.debris_electrons.iter().map(|&v| v as f32).collect();
-            let mut frames = vec![Frame::original(512, 512), Frame::padded(512, 512, 32)];
+            let mut frames = vec![
+                Frame::new(FrameKind::Original, 512, 512, 0, 0.0),
+                Frame::new(FrameKind::Padded, 512, 512, 32, 0.0),
+            ];
             if let Pointing::Survey(t) = s.pointing {
-                frames.push(Frame::rotated(512, 512, t.trail_angle_deg));
+                frames.push(Frame::new(
+                    FrameKind::Rotated,
+                    512,
+                    512,
+                    0,
+                    t.trail_angle_deg,
+                ));
             }
             for f in frames {
                 let img = geometry::warp::<ChaCha12Rng>(&debris, 512, 512, &f, Fill::Zero);
@@ -132,7 +159,7 @@ fn label_box_is_the_tight_box_of_the_streak_in_every_frame() {
                 assert!(
                     inside >= 0.99 * total,
                     "{mode} {}: box holds {:.4} of the flux",
-                    f.kind,
+                    f.kind.name(),
                     inside / total
                 );
                 // Needed: on each axis, the narrowest range holding 99.5% of the flux (a box that
@@ -141,7 +168,7 @@ fn label_box_is_the_tight_box_of_the_streak_in_every_frame() {
                 assert!(
                     b.x_max - b.x_min <= nw + 2.0 && b.y_max - b.y_min <= nh + 2.0,
                     "{mode} {}: box {:?} vs needed {nw} x {nh}",
-                    f.kind,
+                    f.kind.name(),
                     b
                 );
             }
@@ -160,13 +187,22 @@ fn semisynthetic_background_has_the_real_frames_noise_scaled_by_exposure() {
             frame.display()
         ))
         .load("semi.toml");
-    let inputs = Inputs::load(&c).unwrap();
+    let x = Experiment::new(&c);
+    let inputs = experiment::inputs(&c).unwrap();
     let real = soig::background::RealFrame::load(&frame).unwrap();
     for i in 0..3 {
-        let s = scene::draw(&c, &inputs, i, &mut stream(3, i, Purpose::Scene)).unwrap();
+        let s = scene::draw(
+            &x.scene,
+            &x.sensor,
+            &inputs,
+            i,
+            &mut stream(3, i, Purpose::Scene),
+        )
+        .unwrap();
         assert!(s.background.is_some());
         let e = soig::render::render(
-            &c,
+            &x.sensor,
+            &x.render,
             &s,
             inputs.frame(s.background),
             &mut stream(3, i, Purpose::Photons),

@@ -17,8 +17,14 @@ mod expected {
     include!("fixtures/yolo/expected.rs");
 }
 
-/// Agreement required with Ultralytics, in pixels and in score.
-const TOL: f64 = 1e-3;
+/// Agreement required with Ultralytics' stored figures. ONNX Runtime picks its float32 GEMM and
+/// convolution kernels by CPU (AVX2, AVX-512, ...), which sum in different orders; a box edge is
+/// the DFL expectation over 16 bins times the stride (up to 32 px) times the letterbox scale
+/// (1.6 for 1024 px), so a 1e-6 relative difference in the head's logits moves an edge by
+/// ~1e-3 px (measured: 1.4e-3 px on an AVX-512 Xeon, 4.9e-4 px elsewhere). 1e-2 px is ten times
+/// that and still a hundredth of a pixel; scores differ by < 1e-5 (measured 3e-6).
+const TOL_BOX_PX: f64 = 1e-2;
+const TOL_SCORE: f64 = 1e-4;
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -86,7 +92,7 @@ fn compare(name: &str, got: &[Detection], want: &[[f64; 6]]) -> (f64, f64) {
         }
         dscore = dscore.max((g.score - w[4]).abs());
         assert!(
-            dbox <= TOL && dscore <= TOL,
+            dbox <= TOL_BOX_PX && dscore <= TOL_SCORE,
             "{name} #{i}: got {g:?}, Ultralytics {w:?} (box diff {dbox:.2e}, score diff {dscore:.2e})"
         );
     }

@@ -4,7 +4,7 @@
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::defaults;
+use super::{FrameKind, PointingMode, RenderMethod, defaults};
 
 /// A campaign as written in TOML. Every section is optional and defaults to the paper's values.
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
@@ -133,17 +133,6 @@ pub struct Exposure {
     pub min_s: f64,
     #[serde(default = "defaults::exposure_max")]
     pub max_s: f64,
-}
-
-/// How the sensor points during the exposure.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum PointingMode {
-    /// Inertially fixed on a random direction around the debris.
-    #[default]
-    Fixed,
-    /// Following the observer's nadir-pointing attitude: star trails across the image.
-    Survey,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
@@ -343,29 +332,6 @@ pub struct Render {
     pub method: RenderMethod,
 }
 
-/// The renderer of a campaign (see `Render::method`).
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum RenderMethod {
-    #[default]
-    PhotonMapping,
-    Expected,
-}
-
-impl RenderMethod {
-    pub fn is_photon_mapping(&self) -> bool {
-        *self == RenderMethod::PhotonMapping
-    }
-
-    /// The name a campaign file uses.
-    pub fn name(&self) -> &'static str {
-        match self {
-            RenderMethod::PhotonMapping => "photon_mapping",
-            RenderMethod::Expected => "expected",
-        }
-    }
-}
-
 /// FITS -> PNG enhancement (paper 3.3).
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -384,18 +350,9 @@ pub struct Enhance {
     /// Frame of the PNGs and labels: `original`, `padded` (noise border of `pad_px` on each
     /// side: 1024 -> 1088) or `rotated` (survey only: star trails horizontal, 1024 -> 1472).
     #[serde(default)]
-    pub geometry: GeometryKind,
+    pub geometry: FrameKind,
     #[serde(default = "defaults::pad_px")]
     pub pad_px: u32,
-}
-
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum GeometryKind {
-    #[default]
-    Original,
-    Padded,
-    Rotated,
 }
 
 /// Dataset split ratios; they must sum to 1.

@@ -20,8 +20,11 @@ use hifitime::Epoch;
 pub use file::*;
 pub use resolve::{MAX_SURVEY_DRIFT_DEG, parse_epoch};
 
+pub use crate::geometry::FrameKind;
+pub use crate::render::RenderMethod;
+pub use crate::scene::{Body, PointingMode};
+
 use crate::hash::hash_json;
-use crate::sky::orbit::Propagator;
 use compose::Layers;
 
 /// A user error in a campaign: which file, where, which field, what is allowed. For a
@@ -33,14 +36,6 @@ pub struct CampaignError {
     pub line: Option<usize>,
     pub field: Option<String>,
     pub message: String,
-}
-
-/// One body of the scene with its propagator, resolved from an `ObjectSpec`.
-#[derive(Debug)]
-pub struct Body {
-    pub name: String,
-    pub norad: u64,
-    pub propagator: Propagator,
 }
 
 /// A validated campaign with every default filled in, files read, and its hash.

@@ -1,7 +1,7 @@
 //! Field-level checks of a parsed campaign that need no files: ranges, units, consistency
 //! between sections, the order of stages. Each failure names the field path it is about.
 
-use super::{CampaignFile, GeometryKind, LightCurve, PointingMode, Stage, Stars};
+use super::{CampaignFile, FrameKind, LightCurve, PointingMode, Stage, Stars};
 
 /// Field-level checks that need no files. Returns (field path, message).
 pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
@@ -207,7 +207,7 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     )?;
     let r = &c.render;
     check(
-        (2..=1_000_000).contains(&r.trajectory_samples),
+        (2..=crate::scene::MAX_TRAJECTORY_SAMPLES as u32).contains(&r.trajectory_samples),
         "render.trajectory_samples",
         "must be between 2 and 1000000",
     )?;
@@ -240,7 +240,7 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     check(pos(en.gamma), "enhance.gamma", "must be positive")?;
     check(en.pad_px <= 4096, "enhance.pad_px", "must be at most 4096")?;
     check(
-        en.geometry != GeometryKind::Rotated || c.pointing.mode == PointingMode::Survey,
+        en.geometry != FrameKind::Rotated || c.pointing.mode == PointingMode::Survey,
         "enhance.geometry",
         "`rotated` needs survey pointing (fixed images have no star trails to align)",
     )?;

@@ -9,8 +9,6 @@ use std::io::Write;
 use image::ImageEncoder;
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 
-use crate::campaign::Enhance;
-
 /// Where the log stretch puts the median (background) level, on [0, 1]. Chosen so that the
 /// background noise, and a faint streak on it, sit in the lower-middle grey levels while
 /// bright stars are compressed instead of saturating.
@@ -24,10 +22,22 @@ pub struct Gray8 {
     pub pixels: Vec<u8>,
 }
 
+/// The enhancement's knobs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// Square-root compression first (the paper applies it to fixed pointing only).
+    pub sqrt: bool,
+    /// CLAHE clip limit and tile grid, as `cv2.createCLAHE(clipLimit, tileGridSize)`.
+    pub clahe_clip_limit: f64,
+    pub clahe_tiles: [u32; 2],
+    /// Power-law correction O = I^gamma on [0, 1].
+    pub gamma: f64,
+}
+
 /// The whole enhancement chain of one ADU image.
-pub fn enhance(adu: &[f32], width: usize, height: usize, settings: &Enhance, sqrt: bool) -> Gray8 {
+pub fn enhance(adu: &[f32], width: usize, height: usize, settings: &Settings) -> Gray8 {
     // 1. Square-root compression.
-    let v: Vec<f64> = if sqrt {
+    let v: Vec<f64> = if settings.sqrt {
         adu.iter().map(|&a| (a.max(0.0) as f64).sqrt()).collect()
     } else {
         adu.iter().map(|&a| a as f64).collect()
@@ -141,7 +151,13 @@ mod tests {
         }
         adu[10 * w + 10] = 5000.0;
         adu[40 * w + 40] = 260.0;
-        let img = enhance(&adu, w, h, &Enhance::default(), true);
+        let paper = Settings {
+            sqrt: true,
+            clahe_clip_limit: 2.0,
+            clahe_tiles: [8, 8],
+            gamma: 0.7,
+        };
+        let img = enhance(&adu, w, h, &paper);
         assert_eq!(img.pixels.len(), w * h);
         let bg = img.pixels[30 * w + 5];
         assert!(img.pixels[10 * w + 10] > bg);

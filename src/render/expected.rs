@@ -98,14 +98,12 @@ impl Flux {
 /// The expected flux of a scene for a jitter path, without the Poisson draw: the noise-free
 /// image an infinite number of photon-mapped renders averages to.
 pub fn expected_flux(
-    campaign: &crate::campaign::Campaign,
+    sensor: &crate::sensor::Sensor,
     scene: &crate::scene::Scene,
     jitter: &Jitter,
 ) -> Flux {
-    let s = &campaign.resolved.sensor;
-    let psf_px = crate::scene::psf_sigma_px(campaign);
-    let mut flux = Flux::new(s.width_px as usize, s.height_px as usize, psf_px);
-    super::for_each_source(campaign, scene, jitter, |source| flux.add(source, jitter));
+    let mut flux = Flux::new(sensor.width_px, sensor.height_px, sensor.psf_sigma_px());
+    super::for_each_source(sensor, scene, jitter, |source| flux.add(source, jitter));
     flux
 }
 

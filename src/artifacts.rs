@@ -1,0 +1,238 @@
+//! The writer: one image's products as files. The noisy FITS (float32 ADU) and the
+//! noise-free one (int32 electrons), both with the WCS and provenance keywords; the truth
+//! sidecar and the star list; the PNG and its YOLO label in the dataset layout.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+
+use crate::campaign::Artifacts;
+use crate::dataset::Subset;
+use crate::enhance;
+use crate::fits::{self, Card, Cards, Pixels};
+use crate::render::Exposure;
+use crate::scene::{Pointing, Scene};
+use crate::sensor::Sensor;
+use crate::simulate::ImageProducts;
+
+/// What the FITS headers say of the run that made them.
+pub struct Provenance {
+    pub campaign: String,
+    pub campaign_hash: String,
+    pub seed: u64,
+    pub observer: String,
+}
+
+/// File stem of image i.
+pub fn stem(i: u64) -> String {
+    format!("img_{i:06}")
+}
+
+/// Where an image's PNG went: its path, size and label box in pixel-edge coordinates.
+pub struct WrittenPng {
+    pub path: PathBuf,
+    pub width: usize,
+    pub height: usize,
+    pub label: Option<[f64; 4]>,
+    /// PNG encoding and writing time, seconds.
+    pub seconds: f64,
+}
+
+/// Write the files of image `index` into `dir` (the PNG and label into `subset`'s folders
+/// when there is a split).
+pub fn write_image(
+    dir: &Path,
+    index: u64,
+    products: &ImageProducts,
+    subset: Option<Subset>,
+    artifacts: &Artifacts,
+    provenance: &Provenance,
+    sensor: &Sensor,
+) -> anyhow::Result<Option<WrittenPng>> {
+    let stem = stem(index);
+    let exposure = &products.exposure;
+    let (w, h) = (exposure.width, exposure.height);
+    let cards = provenance_cards(provenance, sensor, &products.scene, exposure);
+    if artifacts.fits {
+        let mut cards = cards.clone();
+        cards.push((
+            "BUNIT".into(),
+            Card::Str("adu".into()),
+            "Eq. 11: e-/gain + background + bias".into(),
+        ));
+        let path = dir.join("fits").join(format!("{stem}.fits"));
+        fits::write_image(&path, w, h, Pixels::F32(&exposure.adu), &cards)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if artifacts.noise_free_fits {
+        let mut cards = cards;
+        cards.push((
+            "BUNIT".into(),
+            Card::Str("electron".into()),
+            "noise-free photo-electrons".into(),
+        ));
+        let path = dir.join("fits").join(format!("{stem}_clean.fits"));
+        let e: Vec<i32> = exposure
+            .electrons
+            .iter()
+            .map(|&v| v.min(i32::MAX as u32) as i32)
+            .collect();
+        fits::write_image(&path, w, h, Pixels::I32(&e), &cards)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if artifacts.star_list {
+        let path = dir.join("truth").join(format!("{stem}_stars.csv"));
+        let mut w =
+            csv::Writer::from_path(&path).with_context(|| format!("writing {}", path.display()))?;
+        for s in &exposure.stars {
+            w.serialize(s)?;
+        }
+        w.flush()?;
+    }
+    let truth_path = dir.join("truth").join(format!("{stem}.json"));
+    std::fs::write(
+        &truth_path,
+        serde_json::to_string_pretty(&exposure.truth)? + "\n",
+    )?;
+
+    let Some(product) = &products.product else {
+        return Ok(None);
+    };
+    let started = Instant::now();
+    let frame = &product.frame;
+    let label_line = product
+        .label
+        .map(|b| b.yolo_line(frame.width, frame.height))
+        .unwrap_or_default();
+    let (img_dir, lbl_dir) = match subset {
+        Some(s) => (
+            dir.join("images").join(s.name()),
+            dir.join("labels").join(s.name()),
+        ),
+        None => (dir.join("images"), dir.join("labels")),
+    };
+    let png_path = img_dir.join(format!("{stem}.png"));
+    enhance::write_png(&png_path, &product.png)?;
+    std::fs::write(lbl_dir.join(format!("{stem}.txt")), label_line)?;
+    // Pixel-edge coordinates: pixel i spans [i, i + 1).
+    let edges = product
+        .label
+        .map(|b| [b.x_min + 0.5, b.y_min + 0.5, b.x_max + 0.5, b.y_max + 0.5]);
+    Ok(Some(WrittenPng {
+        path: png_path,
+        width: frame.width,
+        height: frame.height,
+        label: edges,
+        seconds: started.elapsed().as_secs_f64(),
+    }))
+}
+
+/// WCS and provenance keywords of an image.
+fn provenance_cards(p: &Provenance, sensor: &Sensor, scene: &Scene, exposure: &Exposure) -> Cards {
+    let t = &exposure.truth;
+    let [jx, jy] = t.jitter_mean_px;
+    let mut cards = fits::wcs_cards(&scene.projection(sensor).shifted(jx, jy));
+    let mut push =
+        |k: &str, v: Card, comment: &str| cards.push((k.to_string(), v, comment.to_string()));
+    push(
+        "ORIGIN",
+        Card::Str("soig".into()),
+        "space optical image generator",
+    );
+    push(
+        "SOIGVER",
+        Card::Str(env!("CARGO_PKG_VERSION").into()),
+        "soig version",
+    );
+    push("CAMPAIGN", Card::Str(p.campaign.clone()), "campaign name");
+    push(
+        "CAMPHASH",
+        Card::Str(p.campaign_hash.clone()),
+        "sha256 of the resolved campaign",
+    );
+    push("SEED", Card::Int(p.seed as i64), "campaign seed");
+    push(
+        "IMGINDEX",
+        Card::Int(scene.image_index as i64),
+        "image index in the campaign",
+    );
+    push("OBJECT", Card::Str(t.object.clone()), "debris in the field");
+    push(
+        "NORAD",
+        Card::Int(t.norad as i64),
+        "NORAD catalogue number of the debris",
+    );
+    push(
+        "OBSERVER",
+        Card::Str(p.observer.clone()),
+        "observing satellite",
+    );
+    push(
+        "DATE-OBS",
+        Card::Str(t.start_utc.clone()),
+        "UTC start of exposure",
+    );
+    push("TIMESYS", Card::Str("UTC".into()), "");
+    push(
+        "MJD-OBS",
+        Card::Real(scene.start.to_mjd_utc_days()),
+        "[d] UTC start of exposure",
+    );
+    push("EXPTIME", Card::Real(t.exposure_s), "[s] exposure time");
+    push("GAIN", Card::Real(sensor.gain_e_per_adu), "[e-/ADU]");
+    match scene.pointing {
+        Pointing::Fixed { .. } => push("POINTING", Card::Str("fixed".into()), "fixed or survey"),
+        Pointing::Survey(track) => {
+            push(
+                "POINTING",
+                Card::Str("survey".into()),
+                "fixed or survey; WCS at mid-exposure",
+            );
+            push(
+                "DRIFTANG",
+                Card::Real(track.trail_angle_deg),
+                "[deg] star-trail direction from +x to +y (Eq. 13)",
+            );
+            push(
+                "DRIFT",
+                Card::Real(track.drift_deg),
+                "[deg] boresight drift over the exposure",
+            );
+        }
+    }
+    if let Some(f) = &t.frame {
+        push(
+            "GEOMETRY",
+            Card::Str(f.kind.name().into()),
+            "frame of the PNG and its label",
+        );
+        push(
+            "GEOANGLE",
+            Card::Real(f.angle_deg),
+            "[deg] rotation undone in the PNG",
+        );
+        push("GEONAX1", Card::Int(f.width as i64), "PNG width");
+        push("GEONAX2", Card::Int(f.height as i64), "PNG height");
+        for (r, row) in f.matrix.iter().enumerate() {
+            for (k, v) in row.iter().enumerate() {
+                push(
+                    &format!("GEOA{}{}", r + 1, k + 1),
+                    Card::Real(*v),
+                    "PNG pixel = A (x, y, 1), 0-based",
+                );
+            }
+        }
+    }
+    push(
+        "MAGZERO",
+        Card::Real(sensor.zero_point_mag),
+        "magnitude of 1 e-/s",
+    );
+    push(
+        "DEBMAG",
+        Card::Real(t.magnitude),
+        "debris magnitude at mid-exposure (Eq. 6)",
+    );
+    cards
+}

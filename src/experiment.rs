@@ -1,0 +1,195 @@
+//! The config layer: a resolved campaign becomes the values the core works on, built once
+//! (GalSim's split: profiles, images and noise never see the config). The sensor, the scene
+//! spec, the render and enhancement settings and the final frame are plain values; the
+//! pipeline, `soig study`, the benchmarks and an embedding program all render through
+//! [`crate::simulate::image`] with them, and vary a clone when they vary a knob.
+
+use std::path::PathBuf;
+
+use serde::Serialize;
+
+use crate::background::BackgroundModel;
+use crate::campaign::{Background, Campaign, LightCurve, Stars};
+use crate::enhance;
+use crate::geometry::FrameKind;
+use crate::render;
+use crate::scene::{self, Gate, Inputs, PointingMode, StarField, TumbleRange};
+use crate::sensor::{AduRange, Sensor};
+use crate::sky::stars::{ProceduralSky, StarCatalog};
+
+/// Everything one image needs besides its inputs and index.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Experiment {
+    /// The campaign seed: every random stream of image i is `rng::stream(seed, i, purpose)`.
+    pub seed: u64,
+    pub sensor: Sensor,
+    pub scene: scene::Spec,
+    pub render: render::Settings,
+    /// The final frame of the PNGs and labels, and the enhancement; None when the campaign
+    /// stops at the FITS (no `enhance` stage).
+    pub product: Option<Product>,
+}
+
+/// The 8-bit product of an image: its frame and enhancement.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Product {
+    pub frame: FrameKind,
+    /// Border of the padded frame, pixels.
+    pub pad_px: usize,
+    pub enhance: enhance::Settings,
+}
+
+/// Values resolved late from several campaign fields (or from none): recorded in the manifest
+/// so a run says what it used.
+#[derive(Clone, Debug, Serialize)]
+pub struct Effective {
+    pub pixel_scale_arcsec: f64,
+    pub psf_sigma_px: f64,
+    pub psf_fwhm_px: f64,
+    /// The signal-to-noise gate of the pointing mode (`visibility.snr_min` or its default).
+    pub snr_min: f64,
+    /// Square-root compression as applied (the paper's: fixed pointing only).
+    pub sqrt: Option<bool>,
+    /// Size of the final PNG frame, pixels.
+    pub frame_px: Option<[usize; 2]>,
+    /// Training image size and batch (`train.imgsz` / `train.batch` or the paper's).
+    pub train_imgsz: u32,
+    pub train_batch: u32,
+}
+
+impl Experiment {
+    pub fn new(campaign: &Campaign) -> Experiment {
+        let c = &campaign.resolved;
+        let s = &c.sensor;
+        let sensor = Sensor {
+            width_px: s.width_px as usize,
+            height_px: s.height_px as usize,
+            fov_radius_deg: s.fov_radius_deg,
+            psf_sigma_arcsec: s.psf_sigma_arcsec,
+            zero_point_mag: s.zero_point_mag,
+            mag_limit: s.mag_limit,
+            jitter_deg_per_sqrt_s: s.jitter_deg_per_sqrt_s,
+            gain_e_per_adu: s.gain_e_per_adu,
+            bias: AduRange {
+                min_adu: s.bias_min_adu,
+                max_adu: s.bias_max_adu,
+            },
+            background: AduRange {
+                min_adu: s.background_min_adu,
+                max_adu: s.background_max_adu,
+            },
+            background_exposure_s: s.background_exposure_s,
+        };
+        let v = &c.visibility;
+        let scene = scene::Spec {
+            window_start: campaign.window_start,
+            window_end: campaign.window_end,
+            exposure_min_s: c.exposure.min_s,
+            exposure_max_s: c.exposure.max_s,
+            pointing: c.pointing.mode,
+            placement_fraction: c.pointing.placement_fraction,
+            area_mean_m2: c.photometry.rcs_mean_m2,
+            area_std_m2: c.photometry.rcs_std_m2,
+            albedo: c.photometry.albedo,
+            tumble: match c.photometry.light_curve {
+                LightCurve::None => None,
+                LightCurve::Tumbling {
+                    period_min_s,
+                    period_max_s,
+                    amplitude_max,
+                } => Some(TumbleRange {
+                    period_min_s,
+                    period_max_s,
+                    amplitude_max,
+                }),
+            },
+            gate: Gate {
+                earth_min_deg: v.earth_min_deg,
+                sun_min_deg: v.sun_min_deg,
+                moon_min_deg: v.moon_min_deg,
+                earth_clearance_km: v.earth_clearance_km,
+                brightest_star_mag: v.brightest_star_mag,
+                snr_min: campaign.snr_min(),
+                max_attempts: v.max_attempts,
+            },
+            star_cone_deg: c.stars.cone_radius_deg(),
+            trajectory_samples: c.render.trajectory_samples as usize,
+        };
+        let render = render::Settings {
+            method: c.render.method,
+            merge_threshold: c.render.merge_threshold,
+            merge_factor: c.render.merge_factor,
+            jitter_steps: c.render.jitter_steps as usize,
+        };
+        let e = &c.enhance;
+        let product = c
+            .stages
+            .contains(&crate::campaign::Stage::Enhance)
+            .then(|| Product {
+                frame: e.geometry,
+                pad_px: e.pad_px as usize,
+                enhance: enhance::Settings {
+                    sqrt: e.sqrt && c.pointing.mode == PointingMode::Fixed,
+                    clahe_clip_limit: e.clahe_clip_limit,
+                    clahe_tiles: e.clahe_tiles,
+                    gamma: e.gamma,
+                },
+            });
+        Experiment {
+            seed: c.seed,
+            sensor,
+            scene,
+            render,
+            product,
+        }
+    }
+
+    /// The values resolved late, for the manifest.
+    pub fn effective(&self, campaign: &Campaign) -> Effective {
+        let (train_imgsz, train_batch) = crate::train::size_and_batch(campaign);
+        let frame = self.product.as_ref().map(|p| {
+            let f = crate::geometry::Frame::new(
+                p.frame,
+                self.sensor.width_px,
+                self.sensor.height_px,
+                p.pad_px,
+                0.0,
+            );
+            [f.width, f.height]
+        });
+        Effective {
+            pixel_scale_arcsec: self.sensor.pixel_scale_deg() * 3600.0,
+            psf_sigma_px: self.sensor.psf_sigma_px(),
+            psf_fwhm_px: self.sensor.psf_fwhm_px(),
+            snr_min: self.scene.gate.snr_min,
+            sqrt: self.product.as_ref().map(|p| p.enhance.sqrt),
+            frame_px: frame,
+            train_imgsz,
+            train_batch,
+        }
+    }
+}
+
+/// Read what a campaign needs before its first image: bodies, stars and background frames.
+pub fn inputs(campaign: &Campaign) -> Result<Inputs, String> {
+    let c = &campaign.resolved;
+    let stars = match &c.stars {
+        Stars::Procedural { sky_seed, .. } => StarField::Procedural(ProceduralSky::new(*sky_seed)),
+        Stars::Catalog {
+            path, epoch_jyear, ..
+        } => StarField::Catalog(
+            StarCatalog::from_csv_path(&campaign.base_dir.join(path), *epoch_jyear)
+                .map_err(|e| e.to_string())?,
+        ),
+    };
+    let frames: Vec<PathBuf> = match &c.background {
+        Background::Uniform => Vec::new(),
+        Background::Frames { paths } => paths.iter().map(|p| campaign.base_dir.join(p)).collect(),
+    };
+    Ok(Inputs {
+        observer: campaign.observer.clone(),
+        debris: campaign.debris.clone(),
+        stars,
+        background: BackgroundModel::load(&frames)?,
+    })
+}

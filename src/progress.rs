@@ -1,0 +1,61 @@
+//! Progress of long work, reported through a callback so the library never draws or prints
+//! by itself: the command line passes [`Bars`] (indicatif bars with rate and ETA, and notes on
+//! stderr), an embedding program its own [`Progress`], or [`Silent`].
+
+use std::sync::Mutex;
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// What long work reports. Every method has a default that ignores it.
+pub trait Progress: Sync {
+    /// A stage of `total` items begins (e.g. "render", "yolo").
+    fn start(&self, _stage: &str, _total: u64) {}
+    /// One more item of the current stage is done (called from any thread).
+    fn advance(&self) {}
+    /// The current stage is over.
+    fn finish(&self) {}
+    /// Something the user should know (e.g. which interpreter trains).
+    fn note(&self, _message: &str) {}
+}
+
+/// Reports nothing.
+pub struct Silent;
+
+impl Progress for Silent {}
+
+/// Progress bars on stderr with rate and ETA, and notes printed there.
+#[derive(Default)]
+pub struct Bars {
+    bar: Mutex<Option<ProgressBar>>,
+}
+
+impl Progress for Bars {
+    fn start(&self, stage: &str, total: u64) {
+        let bar = ProgressBar::new(total);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{msg} [{bar:30}] {pos}/{len} images, {per_sec}, ETA {eta}",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        );
+        bar.set_message(stage.to_string());
+        *self.bar.lock().expect("bar lock") = Some(bar);
+    }
+
+    fn advance(&self) {
+        if let Some(bar) = &*self.bar.lock().expect("bar lock") {
+            bar.inc(1);
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = self.bar.lock().expect("bar lock").take() {
+            bar.finish_and_clear();
+        }
+    }
+
+    fn note(&self, message: &str) {
+        eprintln!("{message}");
+    }
+}

@@ -1,0 +1,97 @@
+//! The sensor model: the optics (image size, pixel scale, PSF, zero point and limiting
+//! magnitude), the pointing stability (Brownian jitter) and the detector with its noise
+//! (gain, bias, the paper's uniform sky background). A value built once from the campaign;
+//! the scene draw and the renderers read it and never the campaign file.
+
+use crate::background::RealFrame;
+use crate::sky::projection::Tan;
+
+/// A uniform range of ADU per pixel, drawn uniformly (the paper's background and bias).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AduRange {
+    pub min_adu: f64,
+    pub max_adu: f64,
+}
+
+/// The camera and detector of a campaign.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sensor {
+    pub width_px: usize,
+    pub height_px: usize,
+    /// Half the field of view along the image width.
+    pub fov_radius_deg: f64,
+    /// Gaussian PSF standard deviation on the sky.
+    pub psf_sigma_arcsec: f64,
+    /// The magnitude that gives 1 photo-electron per second.
+    pub zero_point_mag: f64,
+    /// Faintest magnitude the sensor detects.
+    pub mag_limit: f64,
+    /// Brownian pointing jitter (Eq. 2), degrees per sqrt(second).
+    pub jitter_deg_per_sqrt_s: f64,
+    /// Photo-electrons per ADU.
+    pub gain_e_per_adu: f64,
+    pub bias: AduRange,
+    /// The paper's sky background for `background_exposure_s`, scaled linearly with exposure.
+    pub background: AduRange,
+    pub background_exposure_s: f64,
+}
+
+impl Sensor {
+    /// Degrees per pixel: the field radius spans half the image width.
+    pub fn pixel_scale_deg(&self) -> f64 {
+        self.fov_radius_deg / (self.width_px as f64 / 2.0)
+    }
+
+    /// The PSF's Gaussian sigma in pixels.
+    pub fn psf_sigma_px(&self) -> f64 {
+        self.psf_sigma_arcsec / 3600.0 / self.pixel_scale_deg()
+    }
+
+    /// The PSF's full width at half maximum in pixels (written out as the scene gate has
+    /// always computed it, so its rounding, and so scene acceptance, stays the same).
+    pub fn psf_fwhm_px(&self) -> f64 {
+        2.3548 * self.psf_sigma_arcsec / 3600.0 / self.pixel_scale_deg()
+    }
+
+    /// The gnomonic projection of the image pointed at (ra, dec).
+    pub fn projection(&self, ra_deg: f64, dec_deg: f64) -> Tan {
+        Tan::new(
+            ra_deg,
+            dec_deg,
+            self.pixel_scale_deg(),
+            self.width_px as u32,
+            self.height_px as u32,
+        )
+    }
+
+    /// Whether pixel coordinates fall in the image (pixel centres at integers).
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        let (w, h) = (self.width_px as f64, self.height_px as f64);
+        x >= -0.5 && x < w - 0.5 && y >= -0.5 && y < h - 0.5
+    }
+
+    /// The mean sky level of the uniform background for an exposure, ADU: where a real
+    /// frame's fluctuations are put.
+    pub fn sky_level_adu(&self, exposure_s: f64) -> f64 {
+        (self.background.min_adu + self.background.max_adu) / 2.0 * exposure_s
+            / self.background_exposure_s
+    }
+
+    /// Background plus bias noise standard deviation per pixel, ADU, for an exposure: the
+    /// uniform model's, or the real frame's robust sigma scaled by exposure.
+    pub fn background_sigma_adu(&self, exposure_s: f64, frame: Option<&RealFrame>) -> f64 {
+        let bias = self.bias.max_adu - self.bias.min_adu;
+        let bias_var = bias * bias / 12.0;
+        match frame {
+            Some(f) => {
+                let bg = f.sigma * exposure_s / f.exposure_s;
+                (bg * bg + bias_var).sqrt()
+            }
+            None => {
+                let k = exposure_s / self.background_exposure_s;
+                let bg = (self.background.max_adu - self.background.min_adu) * k;
+                (bg * bg / 12.0 + bias_var).sqrt()
+            }
+        }
+    }
+}

@@ -1,0 +1,90 @@
+//! One image, in memory: the scene draw, photon mapping and detector, and (when the
+//! experiment has an 8-bit product) the final frame, the label box in it and the enhanced
+//! image. A pure function of (experiment, inputs, image index): every random draw comes from
+//! the image's own streams (`rng::stream(seed, index, purpose)`), so images can be made in
+//! any order, on any number of threads or machines. Nothing here touches the disk; the
+//! pipeline's writer does.
+
+use std::time::Instant;
+
+use rand_chacha::ChaCha12Rng;
+
+use crate::enhance::{self, Gray8};
+use crate::experiment::Experiment;
+use crate::geometry::{self, BoxPx, Fill, Frame, LABEL_SHARE};
+use crate::render::{self, Exposure};
+use crate::rng::{Purpose, stream};
+use crate::scene::{self, Inputs, NoScene, Pointing, Scene};
+
+/// Everything one image produces.
+pub struct ImageProducts {
+    pub scene: Scene,
+    /// The rendered exposure; its truth holds the final frame and label box when there is a
+    /// product.
+    pub exposure: Exposure,
+    pub product: Option<FinalImage>,
+}
+
+/// The 8-bit image for the detector, in its final frame, with its label.
+pub struct FinalImage {
+    pub frame: Frame,
+    pub png: Gray8,
+    /// The label box in the final frame (None when no debris photon landed).
+    pub label: Option<BoxPx>,
+    /// Frame and enhancement time, seconds (the report's FITS -> PNG conversion time).
+    pub seconds: f64,
+}
+
+/// Draw, render and (with a product) frame and enhance image `index`.
+pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProducts, NoScene> {
+    let seed = x.seed;
+    let scene = scene::draw(
+        &x.scene,
+        &x.sensor,
+        inputs,
+        index,
+        &mut stream(seed, index, Purpose::Scene),
+    )?;
+    let mut exposure = render::render(
+        &x.sensor,
+        &x.render,
+        &scene,
+        inputs.frame(scene.background),
+        &mut stream(seed, index, Purpose::Photons),
+        &mut stream(seed, index, Purpose::Noise),
+    );
+    let product = x.product.as_ref().map(|p| {
+        let started = Instant::now();
+        let (w, h) = (exposure.width, exposure.height);
+        let trail_angle_deg = match scene.pointing {
+            Pointing::Survey(track) => track.trail_angle_deg,
+            Pointing::Fixed { .. } => 0.0,
+        };
+        let frame = Frame::new(p.frame, w, h, p.pad_px, trail_angle_deg);
+        // The debris alone is warped like the image, so the label is the tight box of the
+        // rendered streak in the final frame.
+        let mut rng = stream(seed, index, Purpose::Enhance);
+        let adu = geometry::warp(&exposure.adu, w, h, &frame, Fill::SkyNoise(&mut rng));
+        let debris: Vec<f32> = exposure
+            .debris_electrons
+            .iter()
+            .map(|&v| v as f32)
+            .collect();
+        let debris = geometry::warp::<ChaCha12Rng>(&debris, w, h, &frame, Fill::Zero);
+        let label = geometry::flux_box(&debris, frame.width, frame.height, LABEL_SHARE);
+        exposure.truth.frame = Some(frame.clone());
+        exposure.truth.label_box_final_px = label;
+        let png = enhance::enhance(&adu, frame.width, frame.height, &p.enhance);
+        FinalImage {
+            frame,
+            png,
+            label,
+            seconds: started.elapsed().as_secs_f64(),
+        }
+    });
+    Ok(ImageProducts {
+        scene,
+        exposure,
+        product,
+    })
+}
