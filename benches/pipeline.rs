@@ -1,6 +1,6 @@
 //! Benchmarks of the per-image pipeline on the quickstart scenes (`cargo bench`; criterion
-//! reports the median and its confidence interval). They read the shared TLE catalogue beside
-//! the repository, like the campaigns, and skip YOLO when ONNX Runtime is not installed.
+//! reports the median and its confidence interval). They read the repository's copy of the TLE
+//! catalogue, like the quickstart campaigns, and skip YOLO when ONNX Runtime is not installed.
 
 use std::hint::black_box;
 use std::path::{Path, PathBuf};

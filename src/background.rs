@@ -259,7 +259,7 @@ mod tests {
     #[test]
     fn loads_the_neossat_frame() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../shared/data/neossat/NEOS_SCI_2024239174545_cord.fits");
+            .join("tests/fixtures/neossat/NEOS_SCI_2024239174545_cord.fits");
         let f = RealFrame::load(&path).unwrap();
         assert_eq!((f.width, f.height), (512, 512));
         assert!((f.exposure_s - 10.0026).abs() < 1e-4, "{}", f.exposure_s);

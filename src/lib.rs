@@ -15,6 +15,7 @@ pub mod error;
 pub mod experiment;
 pub mod fits;
 pub mod geometry;
+pub mod hash;
 pub mod imaging;
 pub mod manifest;
 pub mod metrics;

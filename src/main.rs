@@ -33,6 +33,10 @@ enum Command {
         /// Python with Ultralytics, for a `train` stage (default: .venv-train/bin/python3).
         #[arg(long)]
         python: Option<PathBuf>,
+        /// Override a campaign setting, after `extends`: `key.path=value`, the value a TOML
+        /// value (`512`, `true`, `[8, 8]`) or else a string. Repeatable.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Train a YOLOv8 model on the campaign's dataset through Ultralytics, export ONNX, and
     /// record the run in the manifest (needs `scripts/setup-train.sh`).
@@ -45,6 +49,10 @@ enum Command {
         python: Option<PathBuf>,
         #[arg(long, short)]
         quiet: bool,
+        /// Override a campaign setting, after `extends`: `key.path=value`, the value a TOML
+        /// value (`512`, `true`, `[8, 8]`) or else a string. Repeatable.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Recompute every hash of an output directory against its manifest.
     Verify {
@@ -68,6 +76,10 @@ enum Command {
         /// Fewer values per knob (a smoke test).
         #[arg(long)]
         quick: bool,
+        /// Override a campaign setting, after `extends`: `key.path=value`, the value a TOML
+        /// value (`512`, `true`, `[8, 8]`) or else a string. Repeatable.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Print the JSON Schema of the campaign format.
     Schema,
@@ -114,8 +126,9 @@ fn main() -> ExitCode {
             out,
             quiet,
             python,
+            set,
         } => user_errors(|| {
-            let campaign = Campaign::load(&campaign)?;
+            let campaign = Campaign::load_with_overrides(&campaign, &set)?;
             let output = out.unwrap_or_else(|| campaign.output_dir.clone());
             let s = soig::pipeline::run(&campaign, &output, python.as_deref(), &*progress(quiet))?;
             println!(
@@ -133,8 +146,9 @@ fn main() -> ExitCode {
             out,
             python,
             quiet,
+            set,
         } => user_errors(|| {
-            let campaign = Campaign::load(&campaign)?;
+            let campaign = Campaign::load_with_overrides(&campaign, &set)?;
             let output = out.unwrap_or_else(|| campaign.output_dir.clone());
             let model =
                 soig::pipeline::train(&campaign, &output, python.as_deref(), &*progress(quiet))?;
@@ -191,8 +205,9 @@ fn main() -> ExitCode {
             seeds,
             image,
             quick,
+            set,
         } => user_errors(|| {
-            let campaign = Campaign::load(&campaign)?;
+            let campaign = Campaign::load_with_overrides(&campaign, &set)?;
             let output = out.unwrap_or_else(|| {
                 let mut name = campaign.output_dir.as_os_str().to_owned();
                 name.push("-study");

@@ -8,8 +8,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use crate::error::Error;
-
-use crate::campaign::hex;
+use crate::hash::{hex, sha256_file};
 
 pub const MANIFEST: &str = "manifest.json";
 
@@ -42,13 +41,6 @@ pub struct Manifest {
     pub effective: Option<serde_json::Value>,
     /// sha256 of the canonical JSON of everything above but `effective`.
     pub digest: String,
-}
-
-pub fn sha256_file(path: &Path) -> std::io::Result<(String, u64)> {
-    let mut f = std::fs::File::open(path)?;
-    let mut h = Sha256::new();
-    let bytes = std::io::copy(&mut f, &mut h)?;
-    Ok((hex(&h.finalize()), bytes))
 }
 
 /// All files under `dir` except the manifest, as sorted relative paths.

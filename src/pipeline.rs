@@ -354,7 +354,7 @@ fn detect_and_report(
             ),
             model_sha256: match &c.detect.model_sha256 {
                 Some(sha) => Some(sha.clone()),
-                None => Some(crate::manifest::sha256_file(path)?.0),
+                None => Some(crate::hash::sha256_file(path)?.0),
             },
             detections,
             seconds,

@@ -12,6 +12,7 @@ use anyhow::{Context, bail};
 
 use crate::campaign::Campaign;
 use crate::geometry::Frame;
+use crate::hash::sha256_file;
 use crate::manifest;
 use crate::progress::Progress;
 
@@ -121,7 +122,7 @@ pub fn fit(
                 pt.display()
             );
         }
-        let sha = manifest::sha256_file(&pt)?.0;
+        let sha = sha256_file(&pt)?.0;
         (
             pt.display().to_string(),
             Some(serde_json::json!({"path": t.model, "sha256": sha})),
@@ -198,7 +199,7 @@ pub fn fit(
     Ok(Trained {
         record: serde_json::json!({
             "model": "train/model.onnx",
-            "model_sha256": manifest::sha256_file(&model)?.0,
+            "model_sha256": sha256_file(&model)?.0,
             "ultralytics": summary["ultralytics"],
             "torch": summary["torch"],
             "metrics": summary["metrics"],

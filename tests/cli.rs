@@ -12,42 +12,24 @@ fn soig(args: &[&str], threads: Option<usize>) -> Output {
     cmd.output().expect("soig runs")
 }
 
-fn tle_file() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/tle/catalog-2022-01-22.tle")
-}
+mod common;
+use common::{CampaignToml, ELEMENTS_40649, tle_file, tle_object};
 
 /// A small, fast campaign: 256 px images, few samples.
+fn small() -> CampaignToml {
+    small_with(7, 6)
+}
+
+fn small_with(seed: u64, images: u32) -> CampaignToml {
+    CampaignToml::new("small", seed, images)
+        .debris(&tle_object(37476))
+        .debris(ELEMENTS_40649)
+        .tables("[sensor]\nwidth_px = 256\nheight_px = 256\nfov_radius_deg = 0.025\n[render]\ntrajectory_samples = 500\n[artifacts]\nnoise_free_fits = true\n")
+}
+
+/// `small()` with `extra` tables, written as `dir/small.toml`.
 fn small_campaign(dir: &Path, extra: &str) -> PathBuf {
-    let tle = tle_file();
-    let text = format!(
-        r#"
-name = "small"
-seed = 7
-images = 6
-[observer]
-tle_file = "{tle}"
-norad = 41335
-[[debris]]
-tle_file = "{tle}"
-norad = 37476
-[[debris]]
-norad = 40649
-elements = {{ period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }}
-[sensor]
-width_px = 256
-height_px = 256
-fov_radius_deg = 0.025
-[render]
-trajectory_samples = 500
-[artifacts]
-noise_free_fits = true
-{extra}
-"#,
-        tle = tle.display()
-    );
-    let path = dir.join("small.toml");
-    std::fs::write(&path, text).unwrap();
-    path
+    small().tables(extra).write(&dir.join("small.toml"))
 }
 
 fn digest_of(out: &Output) -> String {
@@ -180,17 +162,20 @@ fn bad_campaigns_fail_with_a_clear_message_and_no_output() {
     let l2 = tle.lines().find(|l| l.starts_with("2 37476")).unwrap();
     let bad_digit = if l1.ends_with('0') { '1' } else { '0' };
     let bad_l1 = format!("{}{}", &l1[..68], bad_digit);
-    let text = format!(
-        "name = \"bad\"\nimages = 1\n[observer]\ntle = [\"{}\", \"{}\"]\n[[debris]]\ntle = [\"{bad_l1}\", \"{l2}\"]\n",
-        tle.lines().find(|l| l.starts_with("1 41335")).unwrap(),
-        tle.lines().find(|l| l.starts_with("2 41335")).unwrap(),
-    );
-    let c = tmp.path().join("bad.toml");
-    std::fs::write(&c, text).unwrap();
+    let c = CampaignToml::new("bad", 0, 1)
+        .observer(&format!(
+            "tle = [\"{}\", \"{}\"]",
+            tle.lines().find(|l| l.starts_with("1 41335")).unwrap(),
+            tle.lines().find(|l| l.starts_with("2 41335")).unwrap(),
+        ))
+        .debris(&format!("tle = [\"{bad_l1}\", \"{l2}\"]"))
+        .write(&tmp.path().join("bad.toml"));
     assert_clean_failure(&c, &out, &["bad.toml:", "debris[0]", "checksum"]);
     // A missing TLE file.
-    let c = small_campaign(tmp.path(), "").with_file_name("missing.toml");
-    std::fs::write(&c, "name = \"m\"\n[observer]\ntle_file = \"nope.tle\"\nnorad = 1\n[[debris]]\ntle_file = \"nope.tle\"\nnorad = 2\n").unwrap();
+    let c = CampaignToml::new("m", 0, 4000)
+        .observer("tle_file = \"nope.tle\"\nnorad = 1")
+        .debris("tle_file = \"nope.tle\"\nnorad = 2")
+        .write(&tmp.path().join("missing.toml"));
     assert_clean_failure(
         &c,
         &out,
@@ -202,6 +187,46 @@ fn bad_campaigns_fail_with_a_clear_message_and_no_output() {
         &out,
         &["absent.toml", "cannot read"],
     );
+}
+
+/// A campaign built from a base (`extends`) and `--set` overrides runs exactly as the same
+/// settings written in one file; an override's error names the `--set`.
+#[test]
+fn extends_and_set_run_like_one_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    small().write(&tmp.path().join("small.toml"));
+    let child = tmp.path().join("child.toml");
+    std::fs::write(&child, "extends = \"small.toml\"\nimages = 3\n").unwrap();
+    let flat = small_with(8, 3).write(&tmp.path().join("flat.toml"));
+    let run = |campaign: &Path, out: &str, sets: &[&str]| {
+        let out = tmp.path().join(out);
+        let mut args = vec![
+            "run",
+            campaign.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        soig(&args, None)
+    };
+    let composed = run(&child, "composed", &["seed=8"]);
+    assert!(
+        composed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&composed.stderr)
+    );
+    assert_eq!(
+        digest_of(&composed),
+        run_ok(&flat, &tmp.path().join("flat"), None)
+    );
+    let bad = run(&child, "bad", &["images=0"]);
+    assert_eq!(bad.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("--set images=0: field `images`"), "{err}");
+    assert!(!tmp.path().join("bad").exists());
 }
 
 #[test]
@@ -265,15 +290,13 @@ fn detect_stage_writes_a_reproducible_report_with_both_detectors() {
         return;
     }
     let tmp = tempfile::tempdir().unwrap();
-    let extra = format!(
-        "stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n[detect]\nmodel = \"{}\"\n",
-        fixture("tiny.onnx")
-    );
-    // `stages` is a top-level key: put it before the first table.
-    let c = small_campaign(tmp.path(), "");
-    let text = std::fs::read_to_string(&c).unwrap();
-    let (top, rest) = extra.split_once("[split]").unwrap();
-    std::fs::write(&c, format!("{top}{text}[split]{rest}")).unwrap();
+    let c = small()
+        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
+        .tables(&format!(
+            "[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n[detect]\nmodel = \"{}\"\n",
+            fixture("tiny.onnx")
+        ))
+        .write(&tmp.path().join("small.toml"));
     let mut digests = Vec::new();
     for threads in [1, 2] {
         let out = tmp.path().join(format!("det{threads}"));
@@ -315,9 +338,10 @@ fn bad_models_fail_cleanly() {
         ("/nonexistent/model.onnx", "/nonexistent/model.onnx"),
         (fixture("not_onnx.onnx").as_str(), "not_onnx.onnx"),
     ] {
-        let c = small_campaign(tmp.path(), "");
-        let text = std::fs::read_to_string(&c).unwrap();
-        std::fs::write(&c, format!("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n{text}[detect]\nmodel = \"{model}\"\n")).unwrap();
+        let c = small()
+            .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
+            .tables(&format!("[detect]\nmodel = \"{model}\"\n"))
+            .write(&tmp.path().join("small.toml"));
         assert_clean_failure(&c, &out, &["error", expect]);
     }
 }
@@ -360,13 +384,9 @@ fn committed_model_detects_the_quickstart_debris() {
 #[test]
 fn train_stage_without_ultralytics_fails_cleanly() {
     let tmp = tempfile::tempdir().unwrap();
-    let c = small_campaign(tmp.path(), "");
-    let text = std::fs::read_to_string(&c).unwrap();
-    std::fs::write(
-        &c,
-        format!("stages = [\"render\", \"enhance\", \"dataset\", \"train\"]\n{text}"),
-    )
-    .unwrap();
+    let c = small()
+        .top("stages = [\"render\", \"enhance\", \"dataset\", \"train\"]\n")
+        .write(&tmp.path().join("small.toml"));
     let out = tmp.path().join("out");
     let missing = tmp.path().join("no-such-python");
     let r = soig(

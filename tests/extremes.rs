@@ -2,7 +2,7 @@
 //! (finite, non-negative, photons where Eq. 3 says) or a clear rejection naming the file, line
 //! and field. The README's "Extreme cases" table lists every case with its outcome and test.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use hifitime::{Duration, Epoch};
 use soig::campaign::Campaign;
@@ -15,31 +15,23 @@ use soig::sky::photometry::{debris_magnitude, diffuse_sphere_phase, photon_rate}
 use soig::sky::projection::Tan;
 use soig::sky::stars::{ProceduralSky, Star, cumulative_density_per_deg2, equatorial_to_galactic};
 
-fn tle_file() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/tle/catalog-2022-01-22.tle")
-}
+mod common;
+use common::{CampaignToml, ELEMENTS_40649, tle_file, tle_object};
 
 /// A small campaign (128 px at the paper's pixel scale unless `extra` says otherwise) observed
 /// from SENTINEL-3A; `debris` is the body of one `[[debris]]` table.
 fn campaign(debris: &str, extra: &str) -> Campaign {
-    let text = campaign_text(debris, extra);
-    Campaign::from_toml(&text, Path::new("extremes.toml")).unwrap_or_else(|e| panic!("{e}"))
+    extremes(debris, extra).load("extremes.toml")
 }
 
 fn campaign_text(debris: &str, extra: &str) -> String {
-    format!(
-        r#"name = "extremes"
-seed = 3
-images = 2
-[observer]
-tle_file = "{tle}"
-norad = 41335
-[[debris]]
-{debris}
-{extra}
-"#,
-        tle = tle_file().display()
-    )
+    extremes(debris, extra).text()
+}
+
+fn extremes(debris: &str, extra: &str) -> CampaignToml {
+    CampaignToml::new("extremes", 3, 2)
+        .debris(debris)
+        .tables(extra)
 }
 
 fn sensor(width: u32, fov: f64) -> String {
@@ -147,8 +139,6 @@ fn fixed_scene(
         rejections: Default::default(),
     }
 }
-
-const ELEMENTS_40649: &str = "norad = 40649\nelements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }";
 
 /// A star and its pixel.
 type Placed = (Star, (f64, f64));
@@ -388,25 +378,18 @@ fn draw_and_render(c: &Campaign, n: u64) -> Vec<(Scene, Exposure)> {
 /// physical ranges.
 #[test]
 fn geo_and_highly_eccentric_debris() {
-    let tle = tle_file();
     let extra = format!(
         "{}[render]\ntrajectory_samples = 200\n",
         sensor(128, 0.0125)
     );
     // GEO: range from a 800 km LEO observer to the geostationary ring.
-    let geo = campaign(
-        &format!("tle_file = \"{}\"\nnorad = 40989", tle.display()),
-        &extra,
-    );
+    let geo = campaign(&tle_object(40989), &extra);
     for (s, _) in draw_and_render(&geo, 2) {
         let r = s.geometry.range_km;
         assert!((28_000.0..50_000.0).contains(&r), "GEO range {r} km");
     }
     // GTO-like: perigee ~220 km, apogee ~14,000 km altitude.
-    let gto = campaign(
-        &format!("tle_file = \"{}\"\nnorad = 40386", tle.display()),
-        &extra,
-    );
+    let gto = campaign(&tle_object(40386), &extra);
     for (s, _) in draw_and_render(&gto, 2) {
         assert!(s.geometry.range_km < 30_000.0, "{}", s.geometry.range_km);
     }
@@ -695,7 +678,7 @@ fn phase_angles_near_0_and_180_stay_finite() {
 fn exposures_of_10_ms_and_600_s() {
     for t in [0.01, 600.0] {
         let c = campaign(
-            &format!("tle_file = \"{}\"\nnorad = 37476", tle_file().display()),
+            &tle_object(37476),
             &format!(
                 "{}[exposure]\nmin_s = {t}\nmax_s = {t}\n",
                 sensor(128, 0.0125)

@@ -1,7 +1,5 @@
 //! Survey pointing, rotation and padding: star trails, label boxes and frames (issue #3).
 
-use std::path::Path;
-
 use rand_chacha::ChaCha12Rng;
 use soig::campaign::Campaign;
 use soig::experiment::{self, Experiment};
@@ -9,35 +7,17 @@ use soig::geometry::{self, Fill, Frame, FrameKind, LABEL_SHARE};
 use soig::rng::{Purpose, stream};
 use soig::scene::{self, Pointing};
 
+mod common;
+use common::{CampaignToml, neossat_frame, tle_object};
+
 fn campaign(mode: &str) -> Campaign {
-    let tle =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/tle/catalog-2022-01-22.tle");
-    let text = format!(
-        r#"
-name = "geom"
-seed = 11
-images = 4
-[observer]
-tle_file = "{tle}"
-norad = 41335
-[[debris]]
-tle_file = "{tle}"
-norad = 37476
-[[debris]]
-tle_file = "{tle}"
-norad = 40989
-[pointing]
-mode = "{mode}"
-[sensor]
-width_px = 512
-height_px = 512
-fov_radius_deg = 0.05
-[render]
-trajectory_samples = 800
-"#,
-        tle = tle.display()
-    );
-    Campaign::from_toml(&text, Path::new("geom.toml")).unwrap()
+    CampaignToml::new("geom", 11, 4)
+        .debris(&tle_object(37476))
+        .debris(&tle_object(40989))
+        .tables(&format!(
+            "[pointing]\nmode = \"{mode}\"\n[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n[render]\ntrajectory_samples = 800\n"
+        ))
+        .load("geom.toml")
 }
 
 #[test]
@@ -198,16 +178,15 @@ fn label_box_is_the_tight_box_of_the_streak_in_every_frame() {
 
 #[test]
 fn semisynthetic_background_has_the_real_frames_noise_scaled_by_exposure() {
-    let frame = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data/neossat/NEOS_SCI_2024239174545_cord.fits");
-    let tle =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/tle/catalog-2022-01-22.tle");
-    let text = format!(
-        "name = \"semi\"\nseed = 3\nimages = 3\n[observer]\ntle_file = \"{t}\"\nnorad = 37216\n[[debris]]\ntle_file = \"{t}\"\nnorad = 40989\n[background]\nkind = \"frames\"\npaths = [\"{f}\"]\n",
-        t = tle.display(),
-        f = frame.display()
-    );
-    let c = Campaign::from_toml(&text, Path::new("semi.toml")).unwrap();
+    let frame = neossat_frame();
+    let c = CampaignToml::new("semi", 3, 3)
+        .observer(&tle_object(37216))
+        .debris(&tle_object(40989))
+        .tables(&format!(
+            "[background]\nkind = \"frames\"\npaths = [\"{}\"]\n",
+            frame.display()
+        ))
+        .load("semi.toml");
     let x = Experiment::new(&c);
     let inputs = experiment::inputs(&c).unwrap();
     let real = soig::background::RealFrame::load(&frame).unwrap();

@@ -7,15 +7,13 @@ use hifitime::{Epoch, Unit};
 use super::orbit::{Tle, parse_tles};
 use super::{ARCSEC, Vec3, cross, dot, norm};
 
-/// Kept out of the repository: the shared data folder next to the project, else its absolute path.
+/// The repository's copy of the shared catalogue (campaigns/data/README.md).
 pub fn catalog_text() -> String {
-    let rel = concat!(
+    std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../shared/data/tle/catalog-2022-01-22.tle"
-    );
-    std::fs::read_to_string(rel)
-        .or_else(|_| std::fs::read_to_string("/work/shared/data/tle/catalog-2022-01-22.tle"))
-        .expect("catalog-2022-01-22.tle in the shared data folder")
+        "/campaigns/data/catalog-2022-01-22.tle"
+    ))
+    .expect("campaigns/data/catalog-2022-01-22.tle")
 }
 
 pub fn catalog() -> Vec<Tle> {

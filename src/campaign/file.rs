@@ -1,0 +1,485 @@
+//! The campaign file as written in TOML: one type per section, every field with its paper
+//! default (`defaults`), and the JSON Schema derived from them (`soig schema`).
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::{FrameKind, PointingMode, RenderMethod, defaults};
+use crate::detect::streak::StreakParams;
+
+/// A campaign as written in TOML. Every section is optional and defaults to the paper's values.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[schemars(transform = schema_with_extends)]
+pub struct CampaignFile {
+    /// Short name of the campaign, used in reports and as the default output folder name.
+    pub name: String,
+    /// Master seed: every image draws its own random stream from (seed, image index).
+    #[serde(default)]
+    pub seed: u64,
+    /// Number of images to generate (the paper uses 4000 per scenario).
+    #[serde(default = "defaults::images")]
+    pub images: u32,
+    /// Output directory, relative to the campaign file (default `runs/<name>` beside it).
+    /// Not part of the campaign hash.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output: Option<String>,
+    /// The observing satellite (the paper: SENTINEL-3A, NORAD 41335).
+    pub observer: ObjectSpec,
+    /// The debris set; each image shows one of them, drawn uniformly.
+    pub debris: Vec<ObjectSpec>,
+    #[serde(default)]
+    pub window: Window,
+    #[serde(default)]
+    pub exposure: Exposure,
+    #[serde(default)]
+    pub pointing: Pointing,
+    #[serde(default)]
+    pub sensor: Sensor,
+    #[serde(default)]
+    pub stars: Stars,
+    #[serde(default)]
+    pub background: Background,
+    #[serde(default)]
+    pub photometry: Photometry,
+    #[serde(default)]
+    pub visibility: Visibility,
+    #[serde(default)]
+    pub render: Render,
+    #[serde(default)]
+    pub enhance: Enhance,
+    #[serde(default)]
+    pub split: Split,
+    #[serde(default)]
+    pub artifacts: Artifacts,
+    #[serde(default)]
+    pub detect: Detect,
+    #[serde(default)]
+    pub train: Train,
+    /// Pipeline stages to run, in order; each needs the ones before it.
+    #[serde(default = "defaults::stages")]
+    pub stages: Vec<Stage>,
+}
+
+/// `extends` is read before the campaign is parsed (see `compose`) and is no field of it; the
+/// schema lists it so that editors accept it.
+fn schema_with_extends(schema: &mut schemars::Schema) {
+    if let Some(properties) = schema.get_mut("properties").and_then(|p| p.as_object_mut()) {
+        properties.insert(
+            "extends".into(),
+            serde_json::json!({
+                "description": "A campaign file this one builds on, relative to this file: its settings apply, tables merged key by key, unless this file sets them (arrays are replaced whole). Bases may extend others.",
+                "type": "string"
+            }),
+        );
+    }
+}
+
+/// A satellite or debris object: give exactly one of `tle`, `tle_file` (with `norad`) or `elements`.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    /// Display name (default: the TLE name line, or `NORAD <id>`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// NORAD catalogue number; selects the object in `tle_file`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub norad: Option<u64>,
+    /// The two TLE lines.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tle: Option<[String; 2]>,
+    /// A file of 2- or 3-line TLE sets, relative to the campaign file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tle_file: Option<String>,
+    /// Mean orbital elements, for objects with no public TLE (the paper's NORAD 40649).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub elements: Option<ElementsSpec>,
+}
+
+/// Orbital elements as in the paper's Table 1.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ElementsSpec {
+    pub period_min: f64,
+    pub inclination_deg: f64,
+    pub apogee_km: f64,
+    pub perigee_km: f64,
+    #[serde(default)]
+    pub raan_deg: f64,
+    #[serde(default)]
+    pub arg_perigee_deg: f64,
+    #[serde(default)]
+    pub mean_anomaly_deg: f64,
+    /// Epoch of the elements, UTC, e.g. `2022-01-01T00:00:00 UTC` (default: start of the window).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub epoch: Option<String>,
+}
+
+/// UTC window in which each image's start time is drawn uniformly.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Window {
+    /// e.g. `2022-01-01T00:00:00 UTC`
+    #[serde(default = "defaults::window_start")]
+    pub start: String,
+    #[serde(default = "defaults::window_end")]
+    pub end: String,
+}
+
+/// Exposure time, drawn uniformly per image.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Exposure {
+    #[serde(default = "defaults::exposure_min")]
+    pub min_s: f64,
+    #[serde(default = "defaults::exposure_max")]
+    pub max_s: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Pointing {
+    #[serde(default)]
+    pub mode: PointingMode,
+    /// The debris position at mid-exposure is placed uniformly within this fraction of the
+    /// field radius (in each axis) from the image centre.
+    #[serde(default = "defaults::placement_fraction")]
+    pub placement_fraction: f64,
+}
+
+/// The camera and detector.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Sensor {
+    #[serde(default = "defaults::image_px")]
+    pub width_px: u32,
+    #[serde(default = "defaults::image_px")]
+    pub height_px: u32,
+    /// Half the field of view along the image width; the pixel scale is fov_radius / (width/2).
+    #[serde(default = "defaults::fov_radius")]
+    pub fov_radius_deg: f64,
+    /// Instrumental zero point: the magnitude that gives 1 photo-electron per second.
+    /// The paper's "ZP = 2.74" in SPIMT's convention `10^(-0.4 (m - 25 + ZP))` is 25 - 2.74 = 22.26.
+    #[serde(default = "defaults::zero_point")]
+    pub zero_point_mag: f64,
+    /// Photo-electrons per ADU (TELEDYNE CCD47-20: 1.6).
+    #[serde(default = "defaults::gain")]
+    pub gain_e_per_adu: f64,
+    /// Sky background per pixel, uniform in [min, max] ADU for `background_exposure_s`,
+    /// scaled linearly with exposure.
+    #[serde(default = "defaults::background_min")]
+    pub background_min_adu: f64,
+    #[serde(default = "defaults::background_max")]
+    pub background_max_adu: f64,
+    #[serde(default = "defaults::background_exposure")]
+    pub background_exposure_s: f64,
+    /// Bias per pixel, uniform in [min, max] ADU.
+    #[serde(default = "defaults::bias_min")]
+    pub bias_min_adu: f64,
+    #[serde(default = "defaults::bias_max")]
+    pub bias_max_adu: f64,
+    /// Faintest magnitude the sensor detects (debris and catalogue stars).
+    #[serde(default = "defaults::mag_limit")]
+    pub mag_limit: f64,
+    /// Gaussian PSF standard deviation on the sky.
+    #[serde(default = "defaults::psf_sigma")]
+    pub psf_sigma_arcsec: f64,
+    /// Brownian pointing jitter sigma_A = sigma_D (Eq. 2), degrees per sqrt(second).
+    #[serde(default = "defaults::jitter")]
+    pub jitter_deg_per_sqrt_s: f64,
+}
+
+/// Where field stars come from, and the cone loaded around the pointing.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(tag = "source", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Stars {
+    /// A procedural sky, deterministic per region: the same sky in every image and campaign
+    /// with the same `sky_seed`.
+    Procedural {
+        #[serde(default)]
+        sky_seed: u64,
+        /// Radius of the cone of stars loaded around the pointing (fixed pointing: 0.15 deg).
+        #[serde(default = "defaults::star_cone")]
+        cone_radius_deg: f64,
+    },
+    /// A CSV catalogue (Gaia archive, VizieR or plain ra,dec,pmra,pmdec,mag columns).
+    Catalog {
+        /// Path relative to the campaign file.
+        path: String,
+        /// Epoch of the catalogue positions, Julian year (Gaia DR3: 2016.0).
+        #[serde(default = "defaults::catalog_epoch")]
+        epoch_jyear: f64,
+        #[serde(default = "defaults::star_cone")]
+        cone_radius_deg: f64,
+    },
+}
+
+impl Stars {
+    pub fn cone_radius_deg(&self) -> f64 {
+        match self {
+            Stars::Procedural {
+                cone_radius_deg, ..
+            }
+            | Stars::Catalog {
+                cone_radius_deg, ..
+            } => *cone_radius_deg,
+        }
+    }
+}
+
+/// The sky background: the paper's uniform synthetic background (parameters in `sensor`), or
+/// real frames whose noise replaces it (semisynthetic images, paper 3.4).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Default)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Background {
+    #[default]
+    Uniform,
+    /// FITS frames (with EXPTIME or EXPOSURE), relative to the campaign file; each image takes one at
+    /// random, normalised by its exposure, scaled to the image's and tiled (see `background`).
+    Frames { paths: Vec<String> },
+}
+
+/// Debris photometry (Eq. 6-7) and light-curve modulation.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Photometry {
+    /// Effective area A = |N(mean, std)| m^2, drawn per image.
+    #[serde(default = "defaults::rcs_mean")]
+    pub rcs_mean_m2: f64,
+    #[serde(default = "defaults::rcs_std")]
+    pub rcs_std_m2: f64,
+    /// Reflection coefficient rho.
+    #[serde(default = "defaults::albedo")]
+    pub albedo: f64,
+    #[serde(default)]
+    pub light_curve: LightCurve,
+}
+
+/// Brightness modulation over the exposure.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum LightCurve {
+    /// Constant brightness.
+    None,
+    /// A tumbling object: flux times (1 + a sin(2 pi t / P + phase)), with P uniform in
+    /// [period_min_s, period_max_s], a uniform in [0, amplitude_max] and a uniform phase.
+    Tumbling {
+        #[serde(default = "defaults::tumble_period_min")]
+        period_min_s: f64,
+        #[serde(default = "defaults::tumble_period_max")]
+        period_max_s: f64,
+        #[serde(default = "defaults::tumble_amplitude")]
+        amplitude_max: f64,
+    },
+}
+
+impl Default for LightCurve {
+    fn default() -> Self {
+        LightCurve::Tumbling {
+            period_min_s: defaults::tumble_period_min(),
+            period_max_s: defaults::tumble_period_max(),
+            amplitude_max: defaults::tumble_amplitude(),
+        }
+    }
+}
+
+/// Scene acceptance rules (paper 3.2.2 and 3.2.6).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Visibility {
+    /// Minimum angle between the line of sight and the direction to the Earth's centre.
+    #[serde(default = "defaults::earth_min")]
+    pub earth_min_deg: f64,
+    #[serde(default = "defaults::sun_min")]
+    pub sun_min_deg: f64,
+    #[serde(default = "defaults::moon_min")]
+    pub moon_min_deg: f64,
+    /// The line of sight must clear the Earth's surface by this height (atmosphere).
+    #[serde(default = "defaults::clearance")]
+    pub earth_clearance_km: f64,
+    /// An image is rejected when a star brighter than this is in the star cone.
+    #[serde(default = "defaults::brightest_star")]
+    pub brightest_star_mag: f64,
+    /// Minimum debris signal / background noise (see `scene::snr`); default 0.15 for fixed
+    /// pointing, 0.035 for survey.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub snr_min: Option<f64>,
+    /// Scene draws tried per image before the campaign fails.
+    #[serde(default = "defaults::max_attempts")]
+    pub max_attempts: u32,
+}
+
+/// Photon-mapping settings (each an approximation knob).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Render {
+    /// Points the debris trajectory is cut into over the exposure.
+    #[serde(default = "defaults::trajectory_samples")]
+    pub trajectory_samples: u32,
+    /// Sources with more photons than this are traced in packets of `merge_factor` photons.
+    #[serde(default = "defaults::merge_threshold")]
+    pub merge_threshold: u64,
+    #[serde(default = "defaults::merge_factor")]
+    pub merge_factor: u32,
+    /// Steps of the Brownian jitter path over the exposure.
+    #[serde(default = "defaults::jitter_steps")]
+    pub jitter_steps: u32,
+    /// How photons reach the detector: `photon_mapping` (the paper's Monte Carlo, with the
+    /// merging approximation) or `expected` (each source's expected photons per pixel, the PSF
+    /// integrated over pixels along its path, then one Poisson draw per pixel: the same
+    /// distribution as photon mapping without merging). Omitted from the resolved campaign
+    /// when it is the default, so existing campaign hashes stay.
+    #[serde(default, skip_serializing_if = "RenderMethod::is_photon_mapping")]
+    pub method: RenderMethod,
+}
+
+/// FITS -> PNG enhancement (paper 3.3).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Enhance {
+    /// Square-root compression first (the paper applies it to fixed pointing only).
+    #[serde(default = "defaults::yes")]
+    pub sqrt: bool,
+    /// CLAHE clip limit and tile grid, as `cv2.createCLAHE(clipLimit, tileGridSize)`.
+    #[serde(default = "defaults::clahe_clip")]
+    pub clahe_clip_limit: f64,
+    #[serde(default = "defaults::clahe_tiles")]
+    pub clahe_tiles: [u32; 2],
+    /// Power-law correction O = I^gamma on [0, 1].
+    #[serde(default = "defaults::gamma")]
+    pub gamma: f64,
+    /// Frame of the PNGs and labels: `original`, `padded` (noise border of `pad_px` on each
+    /// side: 1024 -> 1088) or `rotated` (survey only: star trails horizontal, 1024 -> 1472).
+    #[serde(default)]
+    pub geometry: FrameKind,
+    #[serde(default = "defaults::pad_px")]
+    pub pad_px: u32,
+}
+
+/// Dataset split ratios; they must sum to 1.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Split {
+    #[serde(default = "defaults::split_train")]
+    pub train: f64,
+    #[serde(default = "defaults::split_val")]
+    pub val: f64,
+    #[serde(default = "defaults::split_test")]
+    pub test: f64,
+}
+
+/// Optional artifacts.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Artifacts {
+    /// The noisy image as FITS (float32 ADU) with WCS.
+    #[serde(default = "defaults::yes")]
+    pub fits: bool,
+    /// The noise-free image (photon counts) as FITS.
+    #[serde(default)]
+    pub noise_free_fits: bool,
+    /// The stars traced in each image (ra, dec, mag, pixel x, y) as `truth/<image>_stars.csv`,
+    /// for astrometric checks.
+    #[serde(default)]
+    pub star_list: bool,
+}
+
+/// Training through Ultralytics (`soig train`); the paper's hyperparameters by default.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Train {
+    /// Ultralytics model: a YAML trains from scratch (no download needed); a .pt (relative to
+    /// the campaign file) fine-tunes those weights.
+    #[serde(default = "defaults::train_model")]
+    pub model: String,
+    #[serde(default = "defaults::train_epochs")]
+    pub epochs: u32,
+    /// Batch size (the paper: 16, and 10 for the 1472 px rotated images); default by frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub batch: Option<u32>,
+    /// Training image size; default: the PNG frame's width (1024, 1088 or 1472).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub imgsz: Option<u32>,
+    #[serde(default = "defaults::train_optimizer")]
+    pub optimizer: String,
+    /// `auto` (a CUDA GPU when present), `cpu`, or a GPU index such as `0`.
+    #[serde(default = "defaults::train_device")]
+    pub device: String,
+    #[serde(default)]
+    pub seed: u64,
+    #[serde(default = "defaults::train_workers")]
+    pub workers: u32,
+    #[serde(default = "defaults::train_patience")]
+    pub patience: u32,
+    /// Stop after this many hours (Ultralytics' `time`), keeping the best weights so far.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_hours: Option<f64>,
+}
+
+/// Detection and evaluation on the test split (stage `detect`).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Detect {
+    /// A YOLOv8 ONNX model (Ultralytics export), relative to the campaign file. Without one,
+    /// only the classical streak detector runs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// sha256 of the model, filled in when the campaign is resolved (so the campaign hash
+    /// pins the model); if given, it must match.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_sha256: Option<String>,
+    /// Confidence and NMS IoU thresholds (the paper: 0.5 and 0.5).
+    #[serde(default = "defaults::detect_conf")]
+    pub conf: f64,
+    #[serde(default = "defaults::detect_iou")]
+    pub iou: f64,
+    #[serde(default = "defaults::max_det")]
+    pub max_det: u32,
+    /// Also run the classical streak detector, the model-free baseline.
+    #[serde(default = "defaults::yes")]
+    pub classical: bool,
+    /// `[detect.streak]`: the classical detector's knobs, each optional (defaults and meaning in
+    /// `detect::streak::StreakParams`). Left out of the resolved campaign while all are default.
+    #[serde(default, skip_serializing_if = "StreakParams::is_default")]
+    pub streak: StreakParams,
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Stage {
+    /// Scene draw and photon mapping: FITS, truth sidecars.
+    Render,
+    /// FITS -> enhanced 8-bit PNG and YOLO labels.
+    Enhance,
+    /// Split into the Ultralytics layout with data.yaml.
+    Dataset,
+    /// Train a YOLOv8 on the dataset through Ultralytics (`[train]`); the detect stage then
+    /// uses the new model. Optional; needs `scripts/setup-train.sh`.
+    Train,
+    /// Run the detectors on the test split, evaluate, write the report.
+    Detect,
+}
+
+macro_rules! default_from_serde {
+    ($($t:ty),*) => {$(
+        impl Default for $t {
+            fn default() -> Self {
+                // Every field has a serde default, so an empty table gives the paper's values.
+                toml::from_str("").expect("all fields have defaults")
+            }
+        }
+    )*};
+}
+default_from_serde!(
+    Window, Exposure, Pointing, Sensor, Photometry, Visibility, Render, Enhance, Split, Artifacts,
+    Detect, Train
+);
+
+impl Default for Stars {
+    fn default() -> Self {
+        Stars::Procedural {
+            sky_seed: 0,
+            cone_radius_deg: defaults::star_cone(),
+        }
+    }
+}

@@ -1,0 +1,317 @@
+//! The campaign: its TOML file (`file`, with the paper's `defaults`), composed from a chain of
+//! `extends` and `--set` overrides (`compose`), checked (`validate`) with errors that name file,
+//! line (`lines`) and field, and resolved (`resolve`) into the campaign whose hash pins every
+//! output.
+//!
+//! All paths inside a campaign are relative to the directory of the campaign file that is
+//! loaded, also those a base file supplies (`extends` itself is relative to the file writing it).
+
+mod compose;
+pub mod defaults;
+mod file;
+mod lines;
+mod resolve;
+mod validate;
+
+use std::path::{Path, PathBuf};
+
+use hifitime::Epoch;
+
+pub use file::*;
+pub use resolve::{MAX_SURVEY_DRIFT_DEG, parse_epoch};
+
+pub use crate::geometry::FrameKind;
+pub use crate::render::RenderMethod;
+pub use crate::scene::{Body, PointingMode};
+
+use crate::hash::hash_json;
+use compose::Layers;
+
+/// A user error in a campaign: which file, where, which field, what is allowed. For a
+/// command-line override the "file" is the `--set key=value` itself.
+#[derive(Debug, thiserror::Error)]
+#[error("{}{}: {}{}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default(), field.as_ref().map(|f| format!("field `{f}`: ")).unwrap_or_default(), message)]
+pub struct CampaignError {
+    pub file: PathBuf,
+    pub line: Option<usize>,
+    pub field: Option<String>,
+    pub message: String,
+}
+
+/// A validated campaign with every default filled in, files read, and its hash.
+#[derive(Debug)]
+pub struct Campaign {
+    /// The campaign with defaults filled and TLE files replaced by their lines: what the hash covers.
+    pub resolved: CampaignFile,
+    /// sha256 of the canonical JSON of `resolved` (without `output`).
+    pub hash: String,
+    pub observer: Body,
+    pub debris: Vec<Body>,
+    pub window_start: Epoch,
+    pub window_end: Epoch,
+    /// Where outputs go.
+    pub output_dir: PathBuf,
+    /// Directory of the campaign file, for relative paths.
+    pub base_dir: PathBuf,
+}
+
+impl Campaign {
+    /// Read, parse, validate and resolve a campaign file (and the files it `extends`).
+    pub fn load(path: &Path) -> Result<Campaign, CampaignError> {
+        Campaign::load_with_overrides(path, &[])
+    }
+
+    /// `load`, with `key.path=value` overrides applied on top, in order (`soig run --set`).
+    pub fn load_with_overrides(
+        path: &Path,
+        overrides: &[String],
+    ) -> Result<Campaign, CampaignError> {
+        let text = std::fs::read_to_string(path).map_err(|e| CampaignError {
+            file: path.to_path_buf(),
+            line: None,
+            field: None,
+            message: format!("cannot read campaign file: {e}"),
+        })?;
+        Campaign::compose(&text, path, overrides)
+    }
+
+    /// Parse and validate campaign text, e.g. built in code; `path` names it in messages, and
+    /// its directory is where relative paths (`extends`, TLE files, frames) are read from.
+    ///
+    /// ```
+    /// use std::path::Path;
+    /// use soig::campaign::Campaign;
+    ///
+    /// let orbit = "elements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }";
+    /// let text = format!(
+    ///     "name = \"demo\"\nimages = 10\n[observer]\nnorad = 1\n{orbit}\n[[debris]]\nnorad = 40649\n{orbit}\n"
+    /// );
+    /// let c = Campaign::from_toml(&text, Path::new("demo.toml")).unwrap();
+    /// assert_eq!(c.resolved.images, 10);
+    /// assert_eq!(c.resolved.sensor.width_px, 1024); // the paper's value
+    /// assert_eq!(c.debris[0].name, "NORAD 40649");
+    /// ```
+    pub fn from_toml(text: &str, path: &Path) -> Result<Campaign, CampaignError> {
+        Campaign::compose(text, path, &[])
+    }
+
+    fn compose(text: &str, path: &Path, overrides: &[String]) -> Result<Campaign, CampaignError> {
+        let layers = Layers::read(text, path, overrides)?;
+        let file = layers.parse()?;
+        let base_dir = dir_of(path);
+        validate::validate(&file).map_err(|(field, msg)| layers.error(&field, msg))?;
+        let r =
+            resolve::resolve(&file, &base_dir).map_err(|(field, msg)| layers.error(&field, msg))?;
+        let mut resolved = r.file;
+        let output_dir = match &file.output {
+            Some(o) => base_dir.join(o),
+            None => base_dir.join("runs").join(&file.name),
+        };
+        resolved.output = None;
+        let hash = hash_json(&resolved);
+        Ok(Campaign {
+            resolved,
+            hash,
+            observer: r.observer,
+            debris: r.debris,
+            window_start: r.window_start,
+            window_end: r.window_end,
+            output_dir,
+            base_dir,
+        })
+    }
+
+    /// The signal-to-noise gate for this campaign's pointing mode.
+    pub fn snr_min(&self) -> f64 {
+        self.resolved
+            .visibility
+            .snr_min
+            .unwrap_or(match self.resolved.pointing.mode {
+                PointingMode::Fixed => defaults::snr_fixed(),
+                PointingMode::Survey => defaults::snr_survey(),
+            })
+    }
+}
+
+/// The directory of a campaign file (`.` for a bare file name).
+fn dir_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// The JSON Schema of the campaign format, generated from the Rust types.
+pub fn schema_json() -> String {
+    let schema = schemars::schema_for!(CampaignFile);
+    serde_json::to_string_pretty(&schema).expect("schema serialises")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load(text: &str) -> Result<Campaign, CampaignError> {
+        Campaign::from_toml(text, Path::new("/nowhere/c.toml"))
+    }
+
+    const ELEMENTS: &str = "elements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }";
+
+    fn minimal(extra: &str) -> String {
+        format!(
+            "name = \"t\"\n[observer]\nnorad = 1\n{ELEMENTS}\n[[debris]]\nnorad = 40649\n{ELEMENTS}\n{extra}"
+        )
+    }
+
+    #[test]
+    fn defaults_are_the_papers() {
+        let c = load(&minimal("")).unwrap();
+        let r = &c.resolved;
+        assert_eq!(r.images, 4000);
+        assert_eq!((r.sensor.width_px, r.sensor.height_px), (1024, 1024));
+        assert_eq!(r.sensor.fov_radius_deg, 0.1);
+        assert_eq!(r.sensor.zero_point_mag, 22.26);
+        assert_eq!(r.sensor.gain_e_per_adu, 1.6);
+        assert_eq!((r.exposure.min_s, r.exposure.max_s), (2.0, 8.0));
+        assert_eq!(r.stars.cone_radius_deg(), 0.15);
+        assert_eq!(r.render.trajectory_samples, 2000);
+        assert_eq!((r.split.train, r.split.val, r.split.test), (0.7, 0.2, 0.1));
+        assert_eq!(c.snr_min(), 0.15);
+        assert_eq!(
+            c.resolved.debris[0]
+                .elements
+                .as_ref()
+                .unwrap()
+                .epoch
+                .as_deref(),
+            Some("2022-01-01T00:00:00 UTC")
+        );
+        // The hash ignores the output directory but not the physics.
+        let other_out = load(&minimal("")).unwrap();
+        assert_eq!(c.hash, other_out.hash);
+        let with_out = load(&format!("output = \"x\"\n{}", minimal(""))).unwrap();
+        assert_eq!(c.hash, with_out.hash);
+        let other = load(&minimal("[sensor]\ngain_e_per_adu = 2.0\n")).unwrap();
+        assert_ne!(c.hash, other.hash);
+    }
+
+    #[test]
+    fn errors_name_file_line_and_field() {
+        let e = load(&minimal("[exposure]\nmin_s = 2.0\nmax_s = -3.0\n")).unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.starts_with("/nowhere/c.toml:"), "{msg}");
+        assert_eq!(e.field.as_deref(), Some("exposure.max_s"));
+        assert_eq!(e.line, Some(10), "{msg}");
+
+        let e = load(&minimal("[sensor]\nwidth = 3\n")).unwrap_err();
+        assert_eq!(e.line, Some(9), "{e}");
+        assert!(e.to_string().contains("unknown field `width`"), "{e}");
+
+        let e = load(&minimal("[split]\ntest = 0.3\n")).unwrap_err();
+        assert!(e.to_string().contains("sum to 1"), "{e}");
+        assert_eq!(e.line, Some(8), "{e}");
+
+        let e = load(&minimal("[window]\nstart = \"2022-13-01T00:00:00 UTC\"\n")).unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("window.start"));
+
+        let e = load(&minimal("[enhance]\ngeometry = \"rotated\"\n")).unwrap_err();
+        assert!(e.to_string().contains("needs survey pointing"), "{e}");
+        assert!(
+            load(&minimal(
+                "[pointing]\nmode = \"survey\"\n[enhance]\ngeometry = \"rotated\"\n"
+            ))
+            .is_ok()
+        );
+
+        let e = load("name = \"t\"\n[observer]\nnorad = 1\n[[debris]]\nnorad = 2\n").unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("observer"));
+        assert!(e.to_string().contains("exactly one of"), "{e}");
+
+        // A survey exposure so long that the camera would turn by degrees is refused.
+        let e = load(&minimal(
+            "[pointing]\nmode = \"survey\"\n[exposure]\nmax_s = 600.0\n",
+        ))
+        .unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("exposure.max_s"), "{e}");
+        assert!(e.to_string().contains("drift"), "{e}");
+
+        let e = load(&minimal("[stages]\n")).unwrap_err();
+        assert!(e.line.is_some(), "{e}");
+    }
+
+    #[test]
+    fn streak_detector_knobs_are_optional_and_checked() {
+        let c = load(&minimal(
+            "[detect.streak]\nthreshold_sigma = 3.5\nmin_snr = 7.0\n",
+        ))
+        .unwrap();
+        let s = &c.resolved.detect.streak;
+        assert_eq!((s.threshold_sigma, s.min_snr), (3.5, 7.0));
+        assert_eq!(
+            s.n_angles,
+            crate::detect::streak::StreakParams::default().n_angles
+        );
+        // Left at the defaults the table is not in the resolved campaign: hashes do not move.
+        let plain = load(&minimal("")).unwrap();
+        let json = serde_json::to_value(&plain.resolved).unwrap();
+        assert!(json["detect"].get("streak").is_none(), "{json}");
+        let same = load(&minimal("[detect.streak]\nthreshold_sigma = 3.0\n")).unwrap();
+        assert_eq!(same.hash, plain.hash);
+        assert_ne!(c.hash, plain.hash);
+
+        let e = load(&minimal(
+            "[detect]\nclassical = true\n[detect.streak]\nmin_snr = 5.0\nthreshold_sigma = nan\n",
+        ))
+        .unwrap_err();
+        assert_eq!(
+            e.field.as_deref(),
+            Some("detect.streak.threshold_sigma"),
+            "{e}"
+        );
+        assert_eq!(e.line, Some(12), "{e}");
+        assert!(
+            e.to_string().starts_with(
+                "/nowhere/c.toml:12: field `detect.streak.threshold_sigma`: must be a finite number"
+            ),
+            "{e}"
+        );
+        let e = load(&minimal("[detect.streak]\nn_angles = 0\n")).unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("detect.streak.n_angles"), "{e}");
+        let e = load(&minimal("[detect.streak]\nthreshold = 3.0\n")).unwrap_err();
+        assert!(e.to_string().contains("unknown field `threshold`"), "{e}");
+        assert_eq!(e.line, Some(9), "{e}");
+    }
+
+    #[test]
+    fn stages_are_a_prefix_with_an_optional_train_stage() {
+        let with =
+            |stages: &str, extra: &str| load(&format!("stages = [{stages}]\n{}", minimal(extra)));
+        let classical = "[detect]\nclassical = true\n";
+        for ok in [
+            r#""render""#,
+            r#""render", "enhance", "dataset""#,
+            r#""render", "enhance", "dataset", "train""#,
+            r#""render", "enhance", "dataset", "train", "detect""#,
+        ] {
+            assert!(with(ok, "").is_ok(), "{ok}: {:?}", with(ok, "").err());
+        }
+        assert!(with(r#""render", "enhance", "dataset", "detect""#, classical).is_ok());
+        for bad in [
+            r#""enhance""#,
+            r#""render", "render""#,
+            r#""render", "enhance", "train""#,
+            r#""render", "enhance", "dataset", "detect", "train""#,
+            r#""render", "enhance", "dataset", "train", "train""#,
+        ] {
+            let e = with(bad, classical).unwrap_err();
+            assert_eq!(e.field.as_deref(), Some("stages"), "{bad}: {e}");
+        }
+        // A train stage detects with the model it trains, not a second one.
+        let e = with(
+            r#""render", "enhance", "dataset", "train", "detect""#,
+            "[detect]\nmodel = \"m.onnx\"\n",
+        )
+        .unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("detect.model"), "{e}");
+    }
+}

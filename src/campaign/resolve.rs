@@ -1,0 +1,331 @@
+//! Resolution of a validated campaign: the window's instants, each object's propagator (a
+//! `tle_file` replaced by the TLE lines it holds, so the hash covers the orbit, not a path),
+//! objects that cannot propagate refused, frames, catalogue and model checked (the model's
+//! sha256 recorded, so the hash pins it), and the survey drift bounded.
+
+use std::path::Path;
+
+use hifitime::Epoch;
+
+use super::{Background, Body, CampaignFile, ObjectSpec, PointingMode, Stars};
+use crate::hash::sha256_file;
+use crate::sky::orbit::{self, OrbitalElements, Propagator, Tle};
+
+/// Largest boresight drift over one survey exposure (the paper's is about 0.5 deg).
+pub const MAX_SURVEY_DRIFT_DEG: f64 = 2.0;
+
+/// A resolved campaign: what its hash covers, and the bodies and window the scenes use.
+pub(super) struct Resolved {
+    pub file: CampaignFile,
+    pub observer: Body,
+    pub debris: Vec<Body>,
+    pub window_start: Epoch,
+    pub window_end: Epoch,
+}
+
+/// Resolve `file`, reading its files relative to `base_dir`. Errors: (field path, message).
+pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, (String, String)> {
+    let fail = |field: &str, message: String| (field.to_string(), message);
+    let window_start = parse_epoch(&file.window.start).map_err(|m| fail("window.start", m))?;
+    let window_end = parse_epoch(&file.window.end).map_err(|m| fail("window.end", m))?;
+    if window_end <= window_start {
+        return Err(fail(
+            "window.end",
+            format!("must be after window.start ({})", file.window.start),
+        ));
+    }
+
+    let mut resolved = file.clone();
+    let observer = resolve_object(&mut resolved.observer, base_dir, window_start)
+        .map_err(|(f, m)| fail(&format!("observer{f}"), m))?;
+    let mut debris = Vec::new();
+    for (i, spec) in resolved.debris.iter_mut().enumerate() {
+        debris.push(
+            resolve_object(spec, base_dir, window_start)
+                .map_err(|(f, m)| fail(&format!("debris[{i}]{f}"), m))?,
+        );
+    }
+    // An object SGP4 cannot propagate anywhere in the window (decayed before it opens,
+    // or diverged) would fail every scene draw, ending in "no acceptable scene" after
+    // max_attempts draws: refuse it here, naming its field and its TLE.
+    let specs = std::iter::once(("observer".to_string(), &file.observer, &observer)).chain(
+        file.debris
+            .iter()
+            .zip(&debris)
+            .enumerate()
+            .map(|(i, (spec, body))| (format!("debris[{i}]"), spec, body)),
+    );
+    for (field, spec, body) in specs {
+        if let Err(e) = check_propagates(body, window_start, window_end) {
+            let (suffix, source) = match (&spec.tle_file, &spec.tle, &spec.elements) {
+                (Some(f), _, _) => {
+                    let full = base_dir.join(f);
+                    let line = std::fs::read_to_string(&full).ok().and_then(|t| {
+                        let [l1, _] = resolved_tle(&resolved, &field)?;
+                        t.lines().position(|l| l.trim_end() == l1).map(|n| n + 1)
+                    });
+                    let at = line.map(|n| format!("line {n} of ")).unwrap_or_default();
+                    (".tle_file", format!(" (the TLE at {at}{})", full.display()))
+                }
+                (_, Some(_), _) => (".tle", String::new()),
+                _ => (".elements", String::new()),
+            };
+            return Err(fail(
+                &format!("{field}{suffix}"),
+                format!(
+                    "{e}{source}: the object cannot be propagated anywhere in the window {} .. {}",
+                    file.window.start, file.window.end
+                ),
+            ));
+        }
+    }
+    if let Background::Frames { paths } = &resolved.background {
+        if paths.is_empty() {
+            return Err(fail("background.paths", "name at least one frame".into()));
+        }
+        for (i, p) in paths.iter().enumerate() {
+            let full = base_dir.join(p);
+            if !full.is_file() {
+                return Err(fail(
+                    &format!("background.paths[{i}]"),
+                    format!("background frame {} does not exist", full.display()),
+                ));
+            }
+        }
+    }
+    if let Some(model) = &resolved.detect.model {
+        let full = base_dir.join(model);
+        let sha = sha256_file(&full)
+            .map_err(|e| {
+                fail(
+                    "detect.model",
+                    format!("cannot read model {}: {e}", full.display()),
+                )
+            })?
+            .0;
+        if let Some(given) = &resolved.detect.model_sha256
+            && *given != sha
+        {
+            return Err(fail(
+                "detect.model_sha256",
+                format!("is {given} but {} has sha256 {sha}", full.display()),
+            ));
+        }
+        resolved.detect.model_sha256 = Some(sha);
+    }
+    if let Stars::Catalog { path: p, .. } = &resolved.stars {
+        let full = base_dir.join(p);
+        if !full.is_file() {
+            return Err(fail(
+                "stars.path",
+                format!("star catalogue {} does not exist", full.display()),
+            ));
+        }
+    }
+    if resolved.pointing.mode == PointingMode::Survey {
+        // The boresight turns at the observer's orbital rate: beyond a few degrees of drift
+        // the star cone and the trails grow without bound, so refuse it up front.
+        let p = &observer.propagator;
+        let t1 = window_start + hifitime::Duration::from_seconds(1.0);
+        if let (Ok(a), Ok(b)) = (p.position_teme_km(window_start), p.position_teme_km(t1)) {
+            let drift = crate::sky::angle_deg(a, b) * resolved.exposure.max_s;
+            if drift > MAX_SURVEY_DRIFT_DEG {
+                return Err(fail(
+                    "exposure.max_s",
+                    format!(
+                        "survey pointing would drift {drift:.1} deg in {} s (the observer turns {:.3} deg/s); \
+                         at most {MAX_SURVEY_DRIFT_DEG} deg is supported: shorten the exposure",
+                        resolved.exposure.max_s,
+                        drift / resolved.exposure.max_s
+                    ),
+                ));
+            }
+        }
+    }
+
+    Ok(Resolved {
+        file: resolved,
+        observer,
+        debris,
+        window_start,
+        window_end,
+    })
+}
+
+/// Parse a UTC instant such as `2022-01-01T00:00:00 UTC` or `2022-01-01T00:00:00Z`.
+pub fn parse_epoch(s: &str) -> Result<Epoch, String> {
+    let t = s.trim();
+    let normalized = if let Some(stripped) = t.strip_suffix('Z') {
+        format!("{stripped} UTC")
+    } else if t.ends_with("UTC") {
+        t.to_string()
+    } else {
+        return Err(format!(
+            "`{s}` is not a UTC instant: write it like `2022-01-01T00:00:00 UTC` or `2022-01-01T00:00:00Z`"
+        ));
+    };
+    normalized
+        .parse::<Epoch>()
+        .map_err(|e| format!("`{s}` is not a valid UTC instant ({e})"))
+}
+
+/// Turn an `ObjectSpec` into a body, replacing a `tle_file` by the TLE lines it holds (so the
+/// campaign hash covers the orbit, not a path). Errors: (field suffix, message).
+fn resolve_object(
+    spec: &mut ObjectSpec,
+    base_dir: &Path,
+    default_epoch: Epoch,
+) -> Result<Body, (String, String)> {
+    let given = [
+        spec.tle.is_some(),
+        spec.tle_file.is_some(),
+        spec.elements.is_some(),
+    ]
+    .iter()
+    .filter(|&&b| b)
+    .count();
+    if given != 1 {
+        return Err((
+            String::new(),
+            "give exactly one of `tle`, `tle_file` (with `norad`) or `elements`".into(),
+        ));
+    }
+    if let Some(file) = spec.tle_file.take() {
+        let norad = spec.norad.ok_or_else(|| {
+            (
+                ".norad".to_string(),
+                "`tle_file` needs `norad` to pick the object".to_string(),
+            )
+        })?;
+        let full = base_dir.join(&file);
+        let text = std::fs::read_to_string(&full).map_err(|e| {
+            (
+                ".tle_file".to_string(),
+                format!("cannot read {}: {e}", full.display()),
+            )
+        })?;
+        let tles = orbit::parse_tles(&text)
+            .map_err(|e| (".tle_file".to_string(), format!("{}: {e}", full.display())))?;
+        let tle = tles
+            .into_iter()
+            .find(|t| t.norad_id == norad)
+            .ok_or_else(|| {
+                (
+                    ".norad".to_string(),
+                    format!("NORAD {norad} is not in {}", full.display()),
+                )
+            })?;
+        if spec.name.is_none() {
+            spec.name = tle.name.clone();
+        }
+        spec.tle = Some([tle.line1.clone(), tle.line2.clone()]);
+    }
+    if let Some([l1, l2]) = &spec.tle {
+        let text = format!("{l1}\n{l2}\n");
+        let tle: Tle = orbit::parse_tles(&text)
+            .map_err(|e| (".tle".to_string(), e.to_string()))?
+            .into_iter()
+            .next()
+            .ok_or_else(|| (".tle".to_string(), "no TLE found".to_string()))?;
+        if let Some(n) = spec.norad
+            && n != tle.norad_id
+        {
+            return Err((
+                ".norad".into(),
+                format!("is {n} but the TLE is for NORAD {}", tle.norad_id),
+            ));
+        }
+        spec.norad = Some(tle.norad_id);
+        let propagator =
+            Propagator::from_tle(&tle).map_err(|e| (".tle".to_string(), e.to_string()))?;
+        let name = spec
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("NORAD {}", tle.norad_id));
+        spec.name = Some(name.clone());
+        return Ok(Body {
+            name,
+            norad: tle.norad_id,
+            propagator,
+        });
+    }
+    let el = spec.elements.as_mut().expect("counted above");
+    let norad = spec.norad.ok_or_else(|| {
+        (
+            ".norad".to_string(),
+            "objects given by `elements` need a `norad` number".to_string(),
+        )
+    })?;
+    let epoch = match &el.epoch {
+        Some(s) => parse_epoch(s).map_err(|m| (".elements.epoch".to_string(), m))?,
+        None => default_epoch,
+    };
+    el.epoch = Some(format!("{epoch}"));
+    let elements = OrbitalElements {
+        period_min: el.period_min,
+        inclination_deg: el.inclination_deg,
+        apogee_km: el.apogee_km,
+        perigee_km: el.perigee_km,
+        raan_deg: el.raan_deg,
+        arg_perigee_deg: el.arg_perigee_deg,
+        mean_anomaly_deg: el.mean_anomaly_deg,
+        epoch,
+    };
+    let propagator = Propagator::from_elements(&elements, norad)
+        .map_err(|e| (".elements".to_string(), e.to_string()))?;
+    let name = spec
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("NORAD {norad}"));
+    spec.name = Some(name.clone());
+    Ok(Body {
+        name,
+        norad,
+        propagator,
+    })
+}
+
+/// Instants at which `check_propagates` tries an object, evenly over the window.
+const PROPAGATION_CHECKS: u32 = 65;
+
+/// Ok if the body propagates at one of `PROPAGATION_CHECKS` instants of the window; else the
+/// first failure (at the window start). An object that decays inside the window is kept:
+/// draws after its decay are rejected as "propagation failed".
+fn check_propagates(body: &Body, start: Epoch, end: Epoch) -> Result<(), orbit::OrbitError> {
+    let span = (end - start).to_seconds();
+    let mut first = None;
+    for k in 0..PROPAGATION_CHECKS {
+        let f = k as f64 / (PROPAGATION_CHECKS - 1) as f64;
+        let t = start + hifitime::Duration::from_seconds(span * f);
+        match body.propagator.position_teme_km(t) {
+            Ok(_) => return Ok(()),
+            Err(e) => {
+                first.get_or_insert(e);
+            }
+        }
+    }
+    Err(first.expect("at least one check"))
+}
+
+/// The resolved TLE lines of `observer` or `debris[i]`.
+fn resolved_tle<'a>(resolved: &'a CampaignFile, field: &str) -> Option<&'a [String; 2]> {
+    let spec = match field.strip_prefix("debris[") {
+        Some(rest) => resolved
+            .debris
+            .get(rest.trim_end_matches(']').parse::<usize>().ok()?)?,
+        None => &resolved.observer,
+    };
+    spec.tle.as_ref()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn epochs_parse() {
+        assert!(parse_epoch("2022-01-01T00:00:00Z").is_ok());
+        assert!(parse_epoch("2022-01-01T00:00:00 UTC").is_ok());
+        assert!(parse_epoch("2022-01-01").is_err());
+    }
+}

@@ -1,0 +1,339 @@
+//! Field-level checks of a parsed campaign that need no files: ranges, units, consistency
+//! between sections, the order of stages. Each failure names the field path it is about.
+
+use super::{CampaignFile, FrameKind, LightCurve, PointingMode, Stage, Stars};
+
+/// Field-level checks that need no files. Returns (field path, message).
+pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
+    fn check(ok: bool, field: &str, msg: &str) -> Result<(), (String, String)> {
+        if ok {
+            Ok(())
+        } else {
+            Err((field.to_string(), msg.to_string()))
+        }
+    }
+    let pos = |x: f64| x.is_finite() && x > 0.0;
+    let nonneg = |x: f64| x.is_finite() && x >= 0.0;
+    check(!c.name.trim().is_empty(), "name", "must not be empty")?;
+    check(
+        c.name
+            .chars()
+            .all(|ch| ch.is_ascii_alphanumeric() || "-_.".contains(ch)),
+        "name",
+        "use only letters, digits, '-', '_' and '.' (it names folders)",
+    )?;
+    check(
+        (1..=10_000_000).contains(&c.images),
+        "images",
+        "must be between 1 and 10000000",
+    )?;
+    check(
+        !c.debris.is_empty(),
+        "debris",
+        "name at least one debris object",
+    )?;
+    let e = &c.exposure;
+    check(
+        pos(e.min_s),
+        "exposure.min_s",
+        "must be a positive number of seconds",
+    )?;
+    check(
+        pos(e.max_s),
+        "exposure.max_s",
+        "must be a positive number of seconds",
+    )?;
+    check(
+        e.max_s >= e.min_s,
+        "exposure.max_s",
+        "must be >= exposure.min_s",
+    )?;
+    check(
+        e.max_s <= 3600.0,
+        "exposure.max_s",
+        "must be at most 3600 s",
+    )?;
+    check(
+        c.pointing.placement_fraction > 0.0 && c.pointing.placement_fraction <= 1.0,
+        "pointing.placement_fraction",
+        "must be in (0, 1]",
+    )?;
+    let s = &c.sensor;
+    check(
+        (16..=16384).contains(&s.width_px),
+        "sensor.width_px",
+        "must be between 16 and 16384",
+    )?;
+    check(
+        (16..=16384).contains(&s.height_px),
+        "sensor.height_px",
+        "must be between 16 and 16384",
+    )?;
+    check(
+        pos(s.fov_radius_deg) && s.fov_radius_deg <= 10.0,
+        "sensor.fov_radius_deg",
+        "must be in (0, 10] degrees (the gnomonic projection is used)",
+    )?;
+    check(
+        s.zero_point_mag.is_finite(),
+        "sensor.zero_point_mag",
+        "must be finite",
+    )?;
+    check(
+        pos(s.gain_e_per_adu),
+        "sensor.gain_e_per_adu",
+        "must be positive",
+    )?;
+    check(
+        nonneg(s.background_min_adu),
+        "sensor.background_min_adu",
+        "must be >= 0",
+    )?;
+    check(
+        nonneg(s.background_max_adu) && s.background_max_adu >= s.background_min_adu,
+        "sensor.background_max_adu",
+        "must be >= sensor.background_min_adu",
+    )?;
+    check(
+        pos(s.background_exposure_s),
+        "sensor.background_exposure_s",
+        "must be positive",
+    )?;
+    check(
+        nonneg(s.bias_min_adu),
+        "sensor.bias_min_adu",
+        "must be >= 0",
+    )?;
+    check(
+        nonneg(s.bias_max_adu) && s.bias_max_adu >= s.bias_min_adu,
+        "sensor.bias_max_adu",
+        "must be >= sensor.bias_min_adu",
+    )?;
+    check(
+        s.mag_limit.is_finite() && s.mag_limit <= 30.0,
+        "sensor.mag_limit",
+        "must be a magnitude <= 30",
+    )?;
+    check(
+        pos(s.psf_sigma_arcsec),
+        "sensor.psf_sigma_arcsec",
+        "must be positive",
+    )?;
+    check(
+        nonneg(s.jitter_deg_per_sqrt_s),
+        "sensor.jitter_deg_per_sqrt_s",
+        "must be >= 0",
+    )?;
+    check(
+        pos(c.stars.cone_radius_deg()) && c.stars.cone_radius_deg() <= 10.0,
+        "stars.cone_radius_deg",
+        "must be in (0, 10] degrees",
+    )?;
+    if let Stars::Catalog { epoch_jyear, .. } = c.stars {
+        check(
+            (1000.0..=3000.0).contains(&epoch_jyear),
+            "stars.epoch_jyear",
+            "must be a Julian year such as 2016.0",
+        )?;
+    }
+    let p = &c.photometry;
+    check(
+        p.rcs_mean_m2.is_finite(),
+        "photometry.rcs_mean_m2",
+        "must be finite",
+    )?;
+    check(
+        nonneg(p.rcs_std_m2),
+        "photometry.rcs_std_m2",
+        "must be >= 0",
+    )?;
+    check(
+        p.rcs_mean_m2 != 0.0 || p.rcs_std_m2 > 0.0,
+        "photometry.rcs_std_m2",
+        "with rcs_mean_m2 = 0 the area is always 0: give a positive std",
+    )?;
+    check(pos(p.albedo), "photometry.albedo", "must be positive")?;
+    if let LightCurve::Tumbling {
+        period_min_s,
+        period_max_s,
+        amplitude_max,
+    } = p.light_curve
+    {
+        check(
+            pos(period_min_s),
+            "photometry.light_curve.period_min_s",
+            "must be positive",
+        )?;
+        check(
+            pos(period_max_s) && period_max_s >= period_min_s,
+            "photometry.light_curve.period_max_s",
+            "must be >= period_min_s",
+        )?;
+        check(
+            (0.0..1.0).contains(&amplitude_max),
+            "photometry.light_curve.amplitude_max",
+            "must be in [0, 1): the flux factor 1 + a sin(..) must stay positive",
+        )?;
+    }
+    let v = &c.visibility;
+    for (f, x) in [
+        ("visibility.earth_min_deg", v.earth_min_deg),
+        ("visibility.sun_min_deg", v.sun_min_deg),
+        ("visibility.moon_min_deg", v.moon_min_deg),
+    ] {
+        check(
+            (0.0..=180.0).contains(&x),
+            f,
+            "must be an angle in [0, 180] degrees",
+        )?;
+    }
+    check(
+        nonneg(v.earth_clearance_km),
+        "visibility.earth_clearance_km",
+        "must be >= 0",
+    )?;
+    check(
+        v.brightest_star_mag.is_finite(),
+        "visibility.brightest_star_mag",
+        "must be finite",
+    )?;
+    if let Some(snr) = v.snr_min {
+        check(nonneg(snr), "visibility.snr_min", "must be >= 0")?;
+    }
+    check(
+        v.max_attempts >= 1,
+        "visibility.max_attempts",
+        "must be >= 1",
+    )?;
+    let r = &c.render;
+    check(
+        (2..=crate::scene::MAX_TRAJECTORY_SAMPLES as u32).contains(&r.trajectory_samples),
+        "render.trajectory_samples",
+        "must be between 2 and 1000000",
+    )?;
+    check(
+        r.merge_threshold >= 1,
+        "render.merge_threshold",
+        "must be >= 1",
+    )?;
+    check(
+        (1..=1000).contains(&r.merge_factor),
+        "render.merge_factor",
+        "must be between 1 and 1000",
+    )?;
+    check(
+        (1..=1_000_000).contains(&r.jitter_steps),
+        "render.jitter_steps",
+        "must be between 1 and 1000000",
+    )?;
+    let en = &c.enhance;
+    check(
+        nonneg(en.clahe_clip_limit),
+        "enhance.clahe_clip_limit",
+        "must be >= 0",
+    )?;
+    check(
+        en.clahe_tiles.iter().all(|&t| (1..=64).contains(&t)),
+        "enhance.clahe_tiles",
+        "each must be between 1 and 64",
+    )?;
+    check(pos(en.gamma), "enhance.gamma", "must be positive")?;
+    check(en.pad_px <= 4096, "enhance.pad_px", "must be at most 4096")?;
+    check(
+        en.geometry != FrameKind::Rotated || c.pointing.mode == PointingMode::Survey,
+        "enhance.geometry",
+        "`rotated` needs survey pointing (fixed images have no star trails to align)",
+    )?;
+    let t = &c.train;
+    check(
+        (1..=100_000).contains(&t.epochs),
+        "train.epochs",
+        "must be between 1 and 100000",
+    )?;
+    check(
+        t.batch.is_none_or(|b| b >= 1),
+        "train.batch",
+        "must be >= 1",
+    )?;
+    check(
+        t.imgsz
+            .is_none_or(|s| (32..=8192).contains(&s) && s % 32 == 0),
+        "train.imgsz",
+        "must be a multiple of 32 between 32 and 8192",
+    )?;
+    check(
+        t.time_hours.is_none_or(|h| h > 0.0),
+        "train.time_hours",
+        "must be positive",
+    )?;
+    let d = &c.detect;
+    check(
+        d.conf > 0.0 && d.conf <= 1.0,
+        "detect.conf",
+        "must be in (0, 1]",
+    )?;
+    check(
+        d.iou > 0.0 && d.iou <= 1.0,
+        "detect.iou",
+        "must be in (0, 1]",
+    )?;
+    check(d.max_det >= 1, "detect.max_det", "must be >= 1")?;
+    d.streak
+        .check()
+        .map_err(|(field, msg)| (format!("detect.streak.{field}"), msg))?;
+    let training = c.stages.contains(&Stage::Train);
+    check(
+        d.model.is_some() || training || d.classical || !c.stages.contains(&Stage::Detect),
+        "detect",
+        "the detect stage needs a `model`, a `train` stage or `classical = true`",
+    )?;
+    check(
+        !(training && d.model.is_some()),
+        "detect.model",
+        "a campaign with a `train` stage detects with the model it trains: remove `detect.model`",
+    )?;
+    let sp = &c.split;
+    for (f, x) in [
+        ("split.train", sp.train),
+        ("split.val", sp.val),
+        ("split.test", sp.test),
+    ] {
+        check(nonneg(x) && x <= 1.0, f, "must be in [0, 1]")?;
+    }
+    let sum = sp.train + sp.val + sp.test;
+    check(
+        (sum - 1.0).abs() < 1e-9,
+        "split",
+        &format!("train + val + test must sum to 1 (they sum to {sum})"),
+    )?;
+    // `train` is optional, between dataset and detect; the others form a prefix.
+    let order = [
+        Stage::Render,
+        Stage::Enhance,
+        Stage::Dataset,
+        Stage::Train,
+        Stage::Detect,
+    ];
+    let in_order = c.stages.windows(2).all(|w| {
+        let pos = |s: &Stage| order.iter().position(|o| o == s);
+        pos(&w[0]) < pos(&w[1])
+    });
+    let core: Vec<Stage> = c
+        .stages
+        .iter()
+        .copied()
+        .filter(|s| *s != Stage::Train)
+        .collect();
+    check(
+        !c.stages.is_empty()
+            && in_order
+            && core
+                .iter()
+                .zip(order.iter().filter(|s| **s != Stage::Train))
+                .all(|(a, b)| a == b)
+            && (!training || core.contains(&Stage::Dataset)),
+        "stages",
+        "must be a prefix of [\"render\", \"enhance\", \"dataset\", \"train\", \"detect\"], `train` optional (each stage needs the ones before it)",
+    )?;
+    Ok(())
+}

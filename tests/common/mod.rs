@@ -1,0 +1,102 @@
+//! What the integration tests share: the repository's copies of the data they read (see
+//! campaigns/data/README.md and tests/fixtures/neossat/README.md) and one builder of campaign
+//! TOML.
+
+// Each test crate compiles this module and uses its own part of it.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use soig::campaign::Campaign;
+
+fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+/// The TLE catalogue of 2022-01-22 (the paper's objects and both observers).
+pub fn tle_file() -> PathBuf {
+    repo("campaigns/data/catalog-2022-01-22.tle")
+}
+
+/// A real NEOSSat frame, 512 x 512, 10 s.
+pub fn neossat_frame() -> PathBuf {
+    repo("tests/fixtures/neossat/NEOS_SCI_2024239174545_cord.fits")
+}
+
+/// The body of an object table for NORAD `norad` of `tle_file()`.
+pub fn tle_object(norad: u64) -> String {
+    format!("tle_file = \"{}\"\nnorad = {norad}", tle_file().display())
+}
+
+/// The paper's NORAD 40649, which has no public TLE: the orbit of its Table 1.
+pub const ELEMENTS_40649: &str = "norad = 40649\nelements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }";
+
+/// A campaign's TOML text, written in this order (tests count lines): `name`, `seed`, `images`,
+/// further top-level keys, `[observer]` (SENTINEL 3A unless set), each `[[debris]]`, then
+/// further tables.
+pub struct CampaignToml {
+    head: String,
+    top: String,
+    observer: String,
+    debris: Vec<String>,
+    tables: String,
+}
+
+impl CampaignToml {
+    pub fn new(name: &str, seed: u64, images: u32) -> CampaignToml {
+        CampaignToml {
+            head: format!("name = \"{name}\"\nseed = {seed}\nimages = {images}\n"),
+            top: String::new(),
+            observer: tle_object(41335),
+            debris: Vec::new(),
+            tables: String::new(),
+        }
+    }
+
+    /// Top-level keys (e.g. `stages = [...]`), which TOML wants before the first table.
+    pub fn top(mut self, keys: &str) -> CampaignToml {
+        self.top.push_str(keys);
+        self
+    }
+
+    /// The body of the `[observer]` table.
+    pub fn observer(mut self, body: &str) -> CampaignToml {
+        self.observer = body.to_string();
+        self
+    }
+
+    /// One more `[[debris]]` table with this body.
+    pub fn debris(mut self, body: &str) -> CampaignToml {
+        self.debris.push(body.to_string());
+        self
+    }
+
+    /// Tables after the objects, e.g. `[sensor]\nwidth_px = 256\n`.
+    pub fn tables(mut self, toml: &str) -> CampaignToml {
+        self.tables.push_str(toml);
+        self
+    }
+
+    pub fn text(&self) -> String {
+        let debris: String = self
+            .debris
+            .iter()
+            .map(|d| format!("[[debris]]\n{d}\n"))
+            .collect();
+        format!(
+            "{}{}[observer]\n{}\n{debris}{}\n",
+            self.head, self.top, self.observer, self.tables
+        )
+    }
+
+    /// The campaign, named `name` in messages; panics with the error.
+    pub fn load(&self, name: &str) -> Campaign {
+        Campaign::from_toml(&self.text(), Path::new(name)).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// Write the text to `path` and return it.
+    pub fn write(&self, path: &Path) -> PathBuf {
+        std::fs::write(path, self.text()).unwrap();
+        path.to_path_buf()
+    }
+}
