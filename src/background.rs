@@ -19,10 +19,17 @@ use std::path::{Path, PathBuf};
 
 use fitsio::FitsFile;
 
-use crate::error::Error;
 use crate::imaging::robust_stats;
 use crate::rng::{Purpose, stream};
 use rand::RngExt;
+
+/// A background frame that cannot be used, with its path.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {message}", path.display())]
+pub struct FrameError {
+    pub path: PathBuf,
+    pub message: String,
+}
 
 /// A real background frame, loaded once per campaign.
 #[derive(Debug)]
@@ -47,8 +54,11 @@ const MASK_GROW_PX: usize = 2;
 impl RealFrame {
     /// Read a 2-D FITS frame and its exposure in seconds (`EXPTIME`, else `EXPOSURE` as NEOSSat
     /// writes it, else `AEXPTIME`). Non-finite pixels become the frame median.
-    pub fn load(path: &Path) -> Result<RealFrame, Error> {
-        let err = |e: &dyn std::fmt::Display| Error::input(path, e);
+    pub fn load(path: &Path) -> Result<RealFrame, FrameError> {
+        let err = |e: &dyn std::fmt::Display| FrameError {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        };
         let (mut pixels, rows, cols) = crate::fits::read_f32(path).map_err(|e| err(&e))?;
         let mut f = FitsFile::open(path).map_err(|e| err(&e))?;
         let hdu = f.primary_hdu().map_err(|e| err(&e))?;
@@ -200,7 +210,7 @@ pub enum BackgroundModel {
 
 impl BackgroundModel {
     /// The uniform model without frames, else every frame loaded.
-    pub fn load(frames: &[PathBuf]) -> Result<BackgroundModel, Error> {
+    pub fn load(frames: &[PathBuf]) -> Result<BackgroundModel, FrameError> {
         if frames.is_empty() {
             return Ok(BackgroundModel::Uniform);
         }

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use crate::background::FrameError;
 use crate::campaign::CampaignError;
 use crate::scene::NoScene;
 use crate::sky::stars::CatalogError;
@@ -12,8 +13,11 @@ pub enum Error {
     /// A campaign that does not parse or validate: file, line, field and what is allowed.
     #[error(transparent)]
     Campaign(#[from] CampaignError),
-    /// An input file that cannot be read or is not what it must be (a background frame, a
-    /// manifest), named with its path.
+    /// A background frame that cannot be read or used, named with its path.
+    #[error(transparent)]
+    Frame(#[from] FrameError),
+    /// An input file that cannot be read or is not what it must be (a manifest), named with
+    /// its path.
     #[error("{}: {message}", path.display())]
     Input { path: PathBuf, message: String },
     /// A star catalogue that cannot be read or parsed (path and line).

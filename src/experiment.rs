@@ -1,8 +1,8 @@
 //! The config layer: a resolved campaign becomes the values the core works on, built once
 //! (GalSim's split: profiles, images and noise never see the config). The sensor, the scene
-//! spec, the render and enhancement settings and the final frame are plain values; the
-//! pipeline, `soig study`, the benchmarks and an embedding program all render through
-//! [`crate::simulate::image`] with them, and vary a clone when they vary a knob.
+//! spec, the render and enhancement settings and the final frame are plain values gathered in
+//! an [`Experiment`]; the pipeline, `soig study`, the benchmarks and an embedding program all
+//! render through `simulate::image` with them, and vary a clone when they vary a knob.
 
 use std::path::PathBuf;
 
@@ -12,33 +12,12 @@ use crate::background::BackgroundModel;
 use crate::campaign::{Background, Campaign, LightCurve, Stars};
 use crate::enhance;
 use crate::error::Error;
-use crate::geometry::FrameKind;
+use crate::geometry::Frame;
 use crate::render;
 use crate::scene::{self, Gate, Inputs, PointingMode, StarField, TumbleRange};
 use crate::sensor::{AduRange, Sensor};
+pub use crate::simulate::{Experiment, Product};
 use crate::sky::stars::{ProceduralSky, StarCatalog};
-
-/// Everything one image needs besides its inputs and index.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Experiment {
-    /// The campaign seed: every random stream of image i is `rng::stream(seed, i, purpose)`.
-    pub seed: u64,
-    pub sensor: Sensor,
-    pub scene: scene::Spec,
-    pub render: render::Settings,
-    /// The final frame of the PNGs and labels, and the enhancement; None when the campaign
-    /// stops at the FITS (no `enhance` stage).
-    pub product: Option<Product>,
-}
-
-/// The 8-bit product of an image: its frame and enhancement.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Product {
-    pub frame: FrameKind,
-    /// Border of the padded frame, pixels.
-    pub pad_px: usize,
-    pub enhance: enhance::Settings,
-}
 
 /// Values resolved late from several campaign fields (or from none): recorded in the manifest
 /// so a run says what it used.
@@ -147,9 +126,9 @@ impl Experiment {
 
     /// The values resolved late, for the manifest.
     pub fn effective(&self, campaign: &Campaign) -> Effective {
-        let (train_imgsz, train_batch) = crate::train::size_and_batch(campaign);
+        let (train_imgsz, train_batch) = train_size_and_batch(campaign);
         let frame = self.product.as_ref().map(|p| {
-            let f = crate::geometry::Frame::new(
+            let f = Frame::new(
                 p.frame,
                 self.sensor.width_px,
                 self.sensor.height_px,
@@ -169,6 +148,23 @@ impl Experiment {
             train_batch,
         }
     }
+}
+
+/// Image size and batch of a campaign's training: the paper's (frame width; batch 16, 10 for
+/// the 1472 px rotated frame) unless the campaign sets them.
+pub fn train_size_and_batch(campaign: &Campaign) -> (u32, u32) {
+    let c = &campaign.resolved;
+    let f = Frame::new(
+        c.enhance.geometry,
+        c.sensor.width_px as usize,
+        c.sensor.height_px as usize,
+        c.enhance.pad_px as usize,
+        0.0,
+    );
+    let frame = f.width.max(f.height) as u32;
+    let imgsz = c.train.imgsz.unwrap_or(frame.div_ceil(32) * 32);
+    let batch = c.train.batch.unwrap_or(if imgsz > 1024 { 10 } else { 16 });
+    (imgsz, batch)
 }
 
 /// Read what a campaign needs before its first image: bodies, stars and background frames.

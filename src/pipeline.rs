@@ -133,7 +133,7 @@ fn write_all(
     let stages = &c.stages;
     let enhance_stage = stages.contains(&Stage::Enhance);
     let dataset_stage = stages.contains(&Stage::Dataset);
-    let subsets = dataset::assign(c.seed, n, &c.split);
+    let subsets = dataset::assign(c.seed, n, c.split.train, c.split.val);
 
     let mut dirs = vec![dir.join("truth")];
     if c.artifacts.fits || c.artifacts.noise_free_fits {

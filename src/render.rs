@@ -675,83 +675,64 @@ pub fn iso_utc(t: hifitime::Epoch) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::Campaign;
-    use crate::experiment::Experiment;
     use crate::rng::{Purpose, stream};
-    use crate::scene::{Geometry, TrajectorySample};
+    use crate::sensor::AduRange;
     use crate::sky::stars::Star;
-    use std::path::Path;
 
-    /// The sensor and render settings of a 128 px test campaign with `extra` TOML lines.
-    fn campaign(extra: &str) -> Experiment {
-        let el = "elements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }";
-        let text = format!(
-            "name = \"t\"\n[observer]\nnorad = 1\n{el}\n[[debris]]\nnorad = 2\n{el}\n[sensor]\nwidth_px = 128\nheight_px = 128\nfov_radius_deg = 0.0125\n{extra}"
-        );
-        Experiment::new(&Campaign::from_toml(&text, Path::new("t.toml")).unwrap())
+    /// The sensor and render settings of the tests.
+    struct Fixture {
+        sensor: Sensor,
+        render: Settings,
+    }
+
+    /// The paper's detector, optics and render settings on a 128 px image with a 0.0125 deg
+    /// field radius, and the given jitter (the paper's: 2e-4 deg per sqrt(s)).
+    fn fixture(jitter_deg_per_sqrt_s: f64) -> Fixture {
+        Fixture {
+            sensor: Sensor {
+                width_px: 128,
+                height_px: 128,
+                fov_radius_deg: 0.0125,
+                psf_sigma_arcsec: 1.0,
+                zero_point_mag: 22.26,
+                mag_limit: 16.5,
+                jitter_deg_per_sqrt_s,
+                gain_e_per_adu: 1.6,
+                bias: AduRange {
+                    min_adu: 2.0,
+                    max_adu: 3.0,
+                },
+                background: AduRange {
+                    min_adu: 190.0,
+                    max_adu: 210.0,
+                },
+                background_exposure_s: 5.0,
+            },
+            render: Settings {
+                method: RenderMethod::PhotonMapping,
+                merge_threshold: 100_000,
+                merge_factor: 5,
+                jitter_steps: 2000,
+            },
+        }
     }
 
     /// The projection of the test scenes: centred on (10, 20), 128 px.
-    fn tan_of(c: &Experiment) -> crate::sky::projection::Tan {
+    fn tan_of(c: &Fixture) -> crate::sky::projection::Tan {
         c.sensor.projection(10.0, 20.0)
     }
 
     /// A scene centred on (10, 20) with the given stars and a debris streak along +x.
-    fn scene(c: &Experiment, stars: Vec<Star>, debris_mag: f64, exposure_s: f64) -> Scene {
-        let tan = tan_of(c);
-        let n = 200;
-        let trajectory = (0..n)
-            .map(|k| {
-                let t_s = (k as f64 + 0.5) * exposure_s / n as f64;
-                let (ra_deg, dec_deg) = tan.sky(30.0 + 60.0 * k as f64 / n as f64, 40.0);
-                TrajectorySample {
-                    t_s,
-                    ra_deg,
-                    dec_deg,
-                    x_px: 30.0 + 60.0 * k as f64 / n as f64,
-                    y_px: 40.0,
-                    mag: debris_mag,
-                    expected_electrons: photon_rate(debris_mag, c.sensor.zero_point_mag)
-                        * exposure_s
-                        / n as f64,
-                }
-            })
-            .collect();
-        Scene {
-            image_index: 0,
-            debris_index: 0,
-            debris_name: "d".into(),
-            norad: 2,
-            start: hifitime::Epoch::from_gregorian_utc_at_midnight(2022, 1, 1),
-            exposure_s,
-            pointing: Pointing::Fixed {
-                ra_deg: 10.0,
-                dec_deg: 20.0,
-            },
-            area_m2: 1.0,
-            tumble: None,
-            geometry: Geometry {
-                range_km: 1000.0,
-                phase_angle_deg: 90.0,
-                earth_angle_deg: 120.0,
-                sun_angle_deg: 90.0,
-                moon_angle_deg: 90.0,
-                magnitude: debris_mag,
-            },
-            trajectory,
-            stars,
-            background: None,
-            snr: 1.0,
-            attempts: 1,
-            rejections: Default::default(),
-        }
+    fn scene(c: &Fixture, stars: Vec<Star>, debris_mag: f64, exposure_s: f64) -> Scene {
+        let ends = ((30.0, 40.0), (90.0, 40.0));
+        Scene::fixed_streak(&c.sensor, (10.0, 20.0), stars, debris_mag, ends, exposure_s)
     }
 
     #[test]
     fn mean_photons_match_eq3_within_poisson_error() {
         // One star in the middle, far from the edges, and a debris streak: over many seeds the
         // mean of the rendered photo-electrons matches t 10^(-0.4 (m - ZP)) within Poisson error.
-        let c = campaign("");
+        let c = fixture(2e-4);
         let tan = tan_of(&c);
         let (ra, dec) = tan.sky(90.0, 90.0);
         let star_mag = 15.0;
@@ -802,7 +783,9 @@ mod tests {
     #[test]
     fn merged_packets_keep_the_total_and_the_label_holds_the_streak() {
         // A source above the merge threshold is traced in packets; the count stays exact.
-        let c = campaign("[render]\nmerge_threshold = 1000\nmerge_factor = 5\n");
+        let mut c = fixture(2e-4);
+        c.render.merge_threshold = 1000;
+        c.render.merge_factor = 5;
         let s = scene(&c, vec![], 10.0, 2.0);
         let e = render(
             &c.sensor,
@@ -835,7 +818,7 @@ mod tests {
     fn star_centroid_lands_where_the_wcs_says() {
         // With the pointing jitter on, a bright star's flux centroid is the traced position
         // (nominal + mean jitter), which is where the FITS WCS (CRPIX shifted) puts it.
-        let c = campaign("jitter_deg_per_sqrt_s = 0.0003\n");
+        let c = fixture(3e-4);
         let tan = tan_of(&c);
         let (ra, dec) = tan.sky(64.3, 70.8);
         let s = scene(
@@ -934,7 +917,7 @@ mod tests {
     }
 
     /// The noise-free images of `runs` seeds, for a fixed jitter path.
-    fn noise_free(c: &Experiment, s: &Scene, jitter: &Jitter, runs: u64) -> Vec<Vec<u32>> {
+    fn noise_free(c: &Fixture, s: &Scene, jitter: &Jitter, runs: u64) -> Vec<Vec<u32>> {
         (0..runs)
             .map(|i| {
                 render_with_jitter(
@@ -959,12 +942,17 @@ mod tests {
         // packet inflates the variance about 5 times (packets of F land like N / F photons of
         // weight F: variance ~ F x mean, less where one pixel holds much of a source and for the
         // remainder traced singly) as the exact formula below predicts, without biasing the mean.
-        let knobs = "jitter_deg_per_sqrt_s = 0.0004\n[render]\njitter_steps = 50\ntrajectory_samples = 100\n";
-        let exact = campaign(&format!("{knobs}merge_threshold = 1000000000000\n"));
-        let expected = campaign(&format!(
-            "{knobs}merge_threshold = 1000000000000\nmethod = \"expected\"\n"
-        ));
-        let merged = campaign(&format!("{knobs}merge_threshold = 1\nmerge_factor = 5\n"));
+        let mut exact = fixture(4e-4);
+        exact.render.jitter_steps = 50;
+        exact.render.merge_threshold = 1_000_000_000_000;
+        let mut expected = fixture(4e-4);
+        expected.render.jitter_steps = 50;
+        expected.render.merge_threshold = 1_000_000_000_000;
+        expected.render.method = RenderMethod::Expected;
+        let mut merged = fixture(4e-4);
+        merged.render.jitter_steps = 50;
+        merged.render.merge_threshold = 1;
+        merged.render.merge_factor = 5;
         let tan = tan_of(&exact);
         let (ra, dec) = tan.sky(80.3, 70.6);
         let star = Star {

@@ -255,6 +255,67 @@ impl Scene {
         }
     }
 
+    /// A hand-made fixed-pointing scene (for tests, or to inject a known streak): the sensor
+    /// pointed at (ra, dec) from 2022-01-01T00:00 UTC, the given stars, and debris of constant
+    /// magnitude moving uniformly from pixel `from` to pixel `to` over the exposure, cut into
+    /// 200 trajectory samples at the centres of equal time slices.
+    pub fn fixed_streak(
+        sensor: &Sensor,
+        (ra, dec): (f64, f64),
+        stars: Vec<Star>,
+        debris_mag: f64,
+        (from, to): ((f64, f64), (f64, f64)),
+        exposure_s: f64,
+    ) -> Scene {
+        let tan = sensor.projection(ra, dec);
+        let n = 200;
+        let trajectory = (0..n)
+            .map(|k| {
+                let f = (k as f64 + 0.5) / n as f64;
+                let (x, y) = (from.0 + f * (to.0 - from.0), from.1 + f * (to.1 - from.1));
+                let (ra_deg, dec_deg) = tan.sky(x, y);
+                TrajectorySample {
+                    t_s: f * exposure_s,
+                    ra_deg,
+                    dec_deg,
+                    mag: debris_mag,
+                    expected_electrons: photon_rate(debris_mag, sensor.zero_point_mag) * exposure_s
+                        / n as f64,
+                    x_px: x,
+                    y_px: y,
+                }
+            })
+            .collect();
+        Scene {
+            image_index: 0,
+            debris_index: 0,
+            debris_name: "test".into(),
+            norad: 1,
+            start: Epoch::from_gregorian_utc_at_midnight(2022, 1, 1),
+            exposure_s,
+            pointing: Pointing::Fixed {
+                ra_deg: ra,
+                dec_deg: dec,
+            },
+            area_m2: 1.0,
+            tumble: None,
+            geometry: Geometry {
+                range_km: 1000.0,
+                phase_angle_deg: 90.0,
+                earth_angle_deg: 120.0,
+                sun_angle_deg: 90.0,
+                moon_angle_deg: 90.0,
+                magnitude: debris_mag,
+            },
+            trajectory,
+            stars,
+            background: None,
+            snr: 1.0,
+            attempts: 1,
+            rejections: BTreeMap::new(),
+        }
+    }
+
     /// Pixel coordinates of a sky position with the pointing of `t_s` seconds after the start.
     pub fn pixel_at(&self, tan: &Tan, t_s: f64, ra_deg: f64, dec_deg: f64) -> Option<(f64, f64)> {
         match self.pointing {

@@ -2,19 +2,42 @@
 //! experiment has an 8-bit product) the final frame, the label box in it and the enhanced
 //! image. A pure function of (experiment, inputs, image index): every random draw comes from
 //! the image's own streams (`rng::stream(seed, index, purpose)`), so images can be made in
-//! any order, on any number of threads or machines. Nothing here touches the disk; the
-//! pipeline's writer does.
+//! any order, on any number of threads or machines. Nothing here touches the disk (the
+//! pipeline's writer does) or reads the campaign file (the `experiment` layer builds the
+//! [`Experiment`]).
 
 use std::time::Instant;
 
 use rand_chacha::ChaCha12Rng;
 
 use crate::enhance::{self, Gray8};
-use crate::experiment::Experiment;
-use crate::geometry::{self, BoxPx, Fill, Frame, LABEL_SHARE};
+use crate::geometry::{self, BoxPx, Fill, Frame, FrameKind, LABEL_SHARE};
 use crate::render::{self, Exposure};
 use crate::rng::{Purpose, stream};
 use crate::scene::{self, Inputs, NoScene, Pointing, Scene};
+use crate::sensor::Sensor;
+
+/// Everything one image needs besides its inputs and index.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Experiment {
+    /// The campaign seed: every random stream of image i is `rng::stream(seed, i, purpose)`.
+    pub seed: u64,
+    pub sensor: Sensor,
+    pub scene: scene::Spec,
+    pub render: render::Settings,
+    /// The final frame of the PNGs and labels, and the enhancement; None when the campaign
+    /// stops at the FITS (no `enhance` stage).
+    pub product: Option<Product>,
+}
+
+/// The 8-bit product of an image: its frame and enhancement.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Product {
+    pub frame: FrameKind,
+    /// Border of the padded frame, pixels.
+    pub pad_px: usize,
+    pub enhance: enhance::Settings,
+}
 
 /// Everything one image produces.
 pub struct ImageProducts {

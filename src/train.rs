@@ -11,7 +11,6 @@ use std::process::Command;
 use anyhow::{Context, bail};
 
 use crate::campaign::Campaign;
-use crate::geometry::Frame;
 use crate::hash::sha256_file;
 use crate::manifest;
 use crate::progress::Progress;
@@ -50,23 +49,6 @@ pub fn find_python(explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
             .collect::<Vec<_>>()
             .join(", ")
     )
-}
-
-/// Image size and batch of a campaign's training: the paper's (frame width; batch 16, 10 for
-/// the 1472 px rotated frame) unless the campaign sets them.
-pub fn size_and_batch(campaign: &Campaign) -> (u32, u32) {
-    let c = &campaign.resolved;
-    let f = Frame::new(
-        c.enhance.geometry,
-        c.sensor.width_px as usize,
-        c.sensor.height_px as usize,
-        c.enhance.pad_px as usize,
-        0.0,
-    );
-    let frame = f.width.max(f.height) as u32;
-    let imgsz = c.train.imgsz.unwrap_or(frame.div_ceil(32) * 32);
-    let batch = c.train.batch.unwrap_or(if imgsz > 1024 { 10 } else { 16 });
-    (imgsz, batch)
 }
 
 /// A model trained in an output directory, and the record that goes into its manifest.
@@ -111,7 +93,7 @@ pub fn fit(
     let script = tdir.join("train.py");
     std::fs::write(&script, TRAIN_PY)?;
     let t = &campaign.resolved.train;
-    let (imgsz, batch) = size_and_batch(campaign);
+    let (imgsz, batch) = crate::experiment::train_size_and_batch(campaign);
     // Starting weights (a .pt) are a file beside the campaign and are hashed into the record;
     // a model YAML names an architecture that Ultralytics builds from scratch.
     let (model_arg, start_weights) = if t.model.ends_with(".pt") {

@@ -9,7 +9,7 @@ use soig::campaign::Campaign;
 use soig::experiment::{self, Experiment};
 use soig::render::{self, Exposure};
 use soig::rng::{Purpose, poisson, stream};
-use soig::scene::{self, Geometry, Pointing, Scene, TrajectorySample};
+use soig::scene::{self, Scene, TrajectorySample};
 use soig::sensor::Sensor;
 use soig::sky::photometry::{debris_magnitude, diffuse_sphere_phase, photon_rate};
 use soig::sky::projection::Tan;
@@ -80,64 +80,23 @@ fn render_scene(c: &Campaign, s: &Scene, seed: u64) -> Exposure {
     )
 }
 
-/// A hand-made fixed-pointing scene at (ra, dec): the given stars and a straight debris streak
-/// from pixel `from` to `to` at constant magnitude.
+/// A hand-made fixed-pointing scene at (ra, dec) of the campaign's sensor (`Scene::fixed_streak`).
 fn fixed_scene(
     c: &Campaign,
-    (ra, dec): (f64, f64),
+    pointing: (f64, f64),
     stars: Vec<Star>,
     debris_mag: f64,
-    (from, to): ((f64, f64), (f64, f64)),
+    ends_px: ((f64, f64), (f64, f64)),
     exposure_s: f64,
 ) -> Scene {
-    let tan = sensor_of(c).projection(ra, dec);
-    let n = 200;
-    let trajectory = (0..n)
-        .map(|k| {
-            let f = (k as f64 + 0.5) / n as f64;
-            let (x, y) = (from.0 + f * (to.0 - from.0), from.1 + f * (to.1 - from.1));
-            let (ra_deg, dec_deg) = tan.sky(x, y);
-            TrajectorySample {
-                t_s: f * exposure_s,
-                ra_deg,
-                dec_deg,
-                mag: debris_mag,
-                expected_electrons: photon_rate(debris_mag, c.resolved.sensor.zero_point_mag)
-                    * exposure_s
-                    / n as f64,
-                x_px: x,
-                y_px: y,
-            }
-        })
-        .collect();
-    Scene {
-        image_index: 0,
-        debris_index: 0,
-        debris_name: "test".into(),
-        norad: 1,
-        start: Epoch::from_gregorian_utc_at_midnight(2022, 3, 1),
-        exposure_s,
-        pointing: Pointing::Fixed {
-            ra_deg: ra,
-            dec_deg: dec,
-        },
-        area_m2: 1.0,
-        tumble: None,
-        geometry: Geometry {
-            range_km: 1000.0,
-            phase_angle_deg: 90.0,
-            earth_angle_deg: 120.0,
-            sun_angle_deg: 90.0,
-            moon_angle_deg: 90.0,
-            magnitude: debris_mag,
-        },
-        trajectory,
+    Scene::fixed_streak(
+        &sensor_of(c),
+        pointing,
         stars,
-        background: None,
-        snr: 1.0,
-        attempts: 1,
-        rejections: Default::default(),
-    }
+        debris_mag,
+        ends_px,
+        exposure_s,
+    )
 }
 
 /// A star and its pixel.
