@@ -1,11 +1,53 @@
 //! soig: a space optical image generator. A campaign file becomes a reproducible experiment:
 //! scenes of space debris seen from a satellite, photon-mapped images, enhanced PNGs, an
-//! Ultralytics dataset, and a manifest hashing every artifact.
+//! Ultralytics dataset, detectors and their metrics, and a manifest hashing every artifact.
 //!
-//! Data flows one way: `campaign` -> `scene` -> `render` -> `fits` / `enhance` -> `dataset`,
-//! driven by `pipeline`, recorded by `manifest`.
+//! # Layers
+//!
+//! Imports go one way, top to bottom (no module imports one above it, and there is no cycle):
+//!
+//! ```text
+//! verbs          pipeline (run, train)   study                      main.rs: the CLI
+//! config layer   campaign (file, defaults, compose, validate, resolve)  experiment (-> values)
+//! product        simulate (one image in memory)   artifacts (its files)   dataset   train
+//! core           render -> scene -> sensor -> background     geometry (frames, label box)
+//!                enhance (+ clahe)   detect (streak, yolo)   metrics   report
+//! leaves         sky (orbit, frames, ephemeris, stars, projection, photometry, vec3)
+//!                imaging   rng   fits   hash   python   plot   progress
+//! at the side    manifest   output (whole-or-nothing directories)   error
+//! ```
+//!
+//! The core never sees the campaign file: the config layer builds a [`Sensor`], a
+//! [`scene::Spec`], [`render::Settings`] and [`enhance::Settings`] once, gathered in an
+//! [`Experiment`], and [`simulate::image`] turns (experiment, inputs, index) into the image's
+//! products in memory. `soig run`, `soig study`, the benchmarks and an embedding program all
+//! go through it.
+//!
+//! # Embedding
+//!
+//! ```no_run
+//! use soig::{Campaign, Experiment};
+//!
+//! let campaign = Campaign::load("campaigns/quickstart.toml".as_ref())?;
+//! let experiment = Experiment::new(&campaign);
+//! let inputs = soig::experiment::inputs(&campaign)?;
+//! let image = soig::simulate::image(&experiment, &inputs, 0)?;
+//! println!("{} at SNR {:.2}", image.exposure.truth.object, image.exposure.truth.snr);
+//! # Ok::<(), soig::Error>(())
+//! ```
+//!
+//! `examples/render_one.rs` builds its campaign in code; [`run`] writes a whole campaign with a
+//! [`Progress`] callback of the caller's.
 
-pub mod artifacts;
+pub use campaign::{Campaign, CampaignError};
+pub use error::{Error, Result};
+pub use manifest::{Manifest, verify};
+pub use pipeline::{RunSummary, run, train};
+pub use progress::{Progress, Silent};
+pub use sensor::Sensor;
+pub use simulate::{Experiment, ImageProducts};
+
+pub(crate) mod artifacts;
 pub mod background;
 pub mod campaign;
 pub mod dataset;
@@ -15,15 +57,15 @@ pub mod error;
 pub mod experiment;
 pub mod fits;
 pub mod geometry;
-pub mod hash;
+pub(crate) mod hash;
 pub mod imaging;
 pub mod manifest;
 pub mod metrics;
-pub mod output;
+pub(crate) mod output;
 pub mod pipeline;
-pub mod plot;
+pub(crate) mod plot;
 pub mod progress;
-pub mod python;
+pub(crate) mod python;
 pub mod render;
 pub mod report;
 pub mod rng;
@@ -32,4 +74,4 @@ pub mod sensor;
 pub mod simulate;
 pub mod sky;
 pub mod study;
-pub mod train;
+pub(crate) mod train;

@@ -24,7 +24,7 @@ use crate::progress::Progress;
 use crate::report::{self, DetectorRun, TestImage};
 use crate::scene::Pointing;
 use crate::simulate;
-use crate::train;
+use crate::train::{TRAIN_DIR, find_python, fit, volatile_files};
 
 /// What a finished run reports.
 #[derive(Debug)]
@@ -36,7 +36,7 @@ pub struct RunSummary {
 }
 
 /// Run the campaign into `output`. An existing `output` is replaced only if it is a soig output
-/// (it holds a manifest). A `train` stage trains with `python` (default: `train::find_python`).
+/// (it holds a manifest). A `train` stage trains with `python` (default: `find_python`).
 pub fn run(
     campaign: &Campaign,
     output: &Path,
@@ -45,7 +45,7 @@ pub fn run(
 ) -> anyhow::Result<RunSummary> {
     // Find the training Python before rendering anything, so a missing one fails at once.
     let python = if campaign.resolved.stages.contains(&Stage::Train) {
-        Some(train::find_python(python)?)
+        Some(find_python(python)?)
     } else {
         None
     };
@@ -72,9 +72,9 @@ pub fn train(
     if campaign.resolved.stages.contains(&Stage::Train) {
         // The pipeline finds (and checks) the interpreter itself.
         run(campaign, out, python, progress)?;
-        return Ok(out.join(train::TRAIN_DIR).join("model.onnx"));
+        return Ok(out.join(TRAIN_DIR).join("model.onnx"));
     }
-    let python = train::find_python(python)?;
+    let python = find_python(python)?;
     let reusable = out.join(MANIFEST).is_file()
         && manifest::verify(out)
             .is_ok_and(|(m, problems)| problems.is_empty() && m.campaign_hash == campaign.hash);
@@ -85,9 +85,9 @@ pub fn train(
         ));
         run(campaign, out, None, progress)?;
     }
-    let trained = train::fit(campaign, out, &python, progress)?;
+    let trained = fit(campaign, out, &python, progress)?;
     let old = Manifest::read(out)?;
-    let mut volatile = train::volatile_files(out)?;
+    let mut volatile = volatile_files(out)?;
     volatile.extend(old.volatile.iter().cloned());
     volatile.sort();
     volatile.dedup();
@@ -211,7 +211,7 @@ fn write_all(
         String::new()
     };
     let trained = match python {
-        Some(python) => Some(train::fit(campaign, dir, python, progress)?),
+        Some(python) => Some(fit(campaign, dir, python, progress)?),
         None => None,
     };
     if stages.contains(&Stage::Detect) {
@@ -235,7 +235,7 @@ fn write_all(
         .map(|v| v.to_string())
         .collect();
     if trained.is_some() {
-        volatile.extend(train::volatile_files(dir)?);
+        volatile.extend(volatile_files(dir)?);
     }
     let manifest = seal_manifest(
         dir,

@@ -664,7 +664,7 @@ pub fn render_with_jitter(
 }
 
 /// ISO 8601 UTC with milliseconds, e.g. `2022-03-04T05:06:07.891`.
-pub fn iso_utc(t: hifitime::Epoch) -> String {
+pub(crate) fn iso_utc(t: hifitime::Epoch) -> String {
     let (y, mo, d, h, mi, s, ns) = t.to_gregorian_utc();
     format!(
         "{y:04}-{mo:02}-{d:02}T{h:02}:{mi:02}:{s:02}.{:03}",
