@@ -1,0 +1,53 @@
+//! The detector (paper Eq. 11): ADU = photo-electrons / gain + background + bias, the
+//! background the paper's uniform one (its range scaled linearly with exposure) or a real
+//! frame's fluctuations on the sensor's sky level, the bias uniform per pixel.
+
+use rand::RngExt;
+use rand_chacha::ChaCha12Rng;
+
+use crate::background::RealFrame;
+use crate::scene::Scene;
+use crate::sensor::Sensor;
+
+/// The noisy image in ADU of the noise-free photo-electrons of a scene.
+pub(super) fn adu(
+    sensor: &Sensor,
+    electrons: &[u32],
+    scene: &Scene,
+    frame: Option<&RealFrame>,
+    noise_rng: &mut ChaCha12Rng,
+) -> Vec<f32> {
+    let s = sensor;
+    let (width, height) = (s.width_px, s.height_px);
+    let t_exp = scene.exposure_s;
+    let (b_lo, b_hi) = (s.bias.min_adu, s.bias.max_adu);
+    let uniform = |r: &mut ChaCha12Rng, lo: f64, hi: f64| {
+        if hi > lo { r.random_range(lo..hi) } else { lo }
+    };
+    match (frame, scene.background) {
+        (Some(f), Some(choice)) => {
+            let level = s.sky_level_adu(t_exp);
+            let bg = f.background(width, height, t_exp, choice.offset, level);
+            electrons
+                .iter()
+                .zip(bg)
+                .map(|(&e, bg)| {
+                    let bias = uniform(noise_rng, b_lo, b_hi);
+                    (e as f64 / s.gain_e_per_adu + bg as f64 + bias) as f32
+                })
+                .collect()
+        }
+        _ => {
+            let k = t_exp / s.background_exposure_s;
+            let (bg_lo, bg_hi) = (s.background.min_adu * k, s.background.max_adu * k);
+            electrons
+                .iter()
+                .map(|&e| {
+                    let bg = uniform(noise_rng, bg_lo, bg_hi);
+                    let bias = uniform(noise_rng, b_lo, b_hi);
+                    (e as f64 / s.gain_e_per_adu + bg + bias) as f32
+                })
+                .collect()
+        }
+    }
+}

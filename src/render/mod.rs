@@ -1,0 +1,235 @@
+//! Photon mapping (paper 2.2, 3.2.4-3.2.6): expected photons per source (Eq. 3), a Poisson
+//! draw, arrival times, Brownian jitter shared by every source (Eq. 2), a Gaussian PSF, the
+//! gnomonic projection, counting per pixel (one pixel convention, see `sky::projection`), and
+//! the detector (Eq. 11). Also the label box and the truth of the debris as rendered.
+//! It reads the sensor and its own settings, never the campaign file.
+
+use rand_chacha::ChaCha12Rng;
+use serde::Serialize;
+
+use crate::background::RealFrame;
+use crate::geometry::{LABEL_SHARE, flux_box};
+use crate::rng::poisson;
+use crate::scene::Scene;
+use crate::sensor::Sensor;
+
+mod detector;
+pub mod expected;
+mod jitter;
+mod photons;
+mod sources;
+#[cfg(test)]
+mod tests;
+mod truth;
+
+pub use jitter::Jitter;
+use photons::{Canvas, trace};
+pub use sources::TracedStar;
+use sources::{Path, Source, for_each_source};
+pub use truth::Truth;
+pub(crate) use truth::iso_utc;
+
+/// Above this many packets per source the packet weight grows so that no source traces more
+/// (only reached by sources far brighter than a scene allows, e.g. a magnitude -1 star). The
+/// debris counts as one source: its trajectory samples share this budget.
+pub const MAX_PACKETS_PER_SOURCE: u64 = 50_000_000;
+
+/// How photons reach the detector: `photon_mapping` (the paper's Monte Carlo, with the
+/// merging approximation) or `expected` (each source's expected photons per pixel, then one
+/// Poisson draw per pixel).
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, Serialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum RenderMethod {
+    #[default]
+    PhotonMapping,
+    Expected,
+}
+
+impl RenderMethod {
+    pub fn is_photon_mapping(&self) -> bool {
+        *self == RenderMethod::PhotonMapping
+    }
+
+    /// The name a campaign file uses.
+    pub fn name(&self) -> &'static str {
+        match self {
+            RenderMethod::PhotonMapping => "photon_mapping",
+            RenderMethod::Expected => "expected",
+        }
+    }
+}
+
+/// The renderer's approximation knobs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    pub method: RenderMethod,
+    /// Sources with more photons than this are traced in packets of `merge_factor` photons.
+    pub merge_threshold: u64,
+    pub merge_factor: u32,
+    /// Steps of the Brownian jitter path over the exposure.
+    pub jitter_steps: usize,
+}
+
+/// A rendered exposure.
+pub struct Exposure {
+    pub width: usize,
+    pub height: usize,
+    /// Noise-free image: photo-electrons per pixel from all sources.
+    pub electrons: Vec<u32>,
+    /// Noise-free photo-electrons of the debris alone, for its label box in any frame.
+    pub debris_electrons: Vec<u32>,
+    /// Noisy image in ADU (Eq. 11).
+    pub adu: Vec<f32>,
+    pub truth: Truth,
+    pub stars: Vec<TracedStar>,
+}
+
+/// Where the photons of the sources go: traced one by one, or as expected flux per pixel.
+enum Photons {
+    Mapped(Canvas),
+    Expected(expected::Flux),
+}
+
+/// Render a scene: photons (one stream, the jitter path first), then detector noise (another).
+pub fn render(
+    sensor: &Sensor,
+    settings: &Settings,
+    scene: &Scene,
+    frame: Option<&RealFrame>,
+    photons_rng: &mut ChaCha12Rng,
+    noise_rng: &mut ChaCha12Rng,
+) -> Exposure {
+    let jitter = Jitter::of_scene(sensor, settings, scene, photons_rng);
+    render_with_jitter(
+        sensor,
+        settings,
+        scene,
+        frame,
+        &jitter,
+        photons_rng,
+        noise_rng,
+    )
+}
+
+/// Render a scene for a given jitter path.
+pub fn render_with_jitter(
+    sensor: &Sensor,
+    settings: &Settings,
+    scene: &Scene,
+    frame: Option<&RealFrame>,
+    jitter: &Jitter,
+    photons_rng: &mut ChaCha12Rng,
+    noise_rng: &mut ChaCha12Rng,
+) -> Exposure {
+    let s = sensor;
+    let (width, height) = (s.width_px, s.height_px);
+    let psf_px = sensor.psf_sigma_px();
+    let t_exp = scene.exposure_s;
+    let jitter_mean = jitter.mean();
+    let merge = (settings.merge_threshold, settings.merge_factor);
+    let mut photons = match settings.method {
+        RenderMethod::PhotonMapping => Photons::Mapped(Canvas {
+            width,
+            height,
+            electrons: vec![0; width * height],
+            debris: vec![0; width * height],
+            debris_total: 0,
+        }),
+        RenderMethod::Expected => Photons::Expected(expected::Flux::new(width, height, psf_px)),
+    };
+    // The debris' trajectory samples share one source's packet budget (2000 samples of a
+    // magnitude -1 debris would otherwise trace 2e9 packets).
+    let debris_packets = (MAX_PACKETS_PER_SOURCE / scene.trajectory.len().max(1) as u64).max(1);
+    let traced = for_each_source(sensor, scene, jitter, |source| match &mut photons {
+        Photons::Mapped(canvas) => {
+            let count = poisson(photons_rng, source.expected);
+            let budget = if source.debris {
+                debris_packets
+            } else {
+                MAX_PACKETS_PER_SOURCE
+            };
+            trace(
+                canvas,
+                photons_rng,
+                count,
+                merge,
+                budget,
+                jitter,
+                psf_px,
+                source,
+            );
+        }
+        Photons::Expected(flux) => flux.add(source, jitter),
+    });
+    let canvas = match photons {
+        Photons::Mapped(canvas) => canvas,
+        Photons::Expected(flux) => flux.draw(photons_rng),
+    };
+    let (expected_debris, mag_min, mag_max) = scene
+        .trajectory
+        .iter()
+        .fold((0.0, f64::INFINITY, f64::NEG_INFINITY), |(e, lo, hi), p| {
+            (e + p.expected_electrons, lo.min(p.mag), hi.max(p.mag))
+        });
+
+    let adu = detector::adu(sensor, &canvas.electrons, scene, frame, noise_rng);
+
+    let at = |p: Option<&crate::scene::TrajectorySample>| {
+        p.map(|p| {
+            let (jx, jy) = jitter.at(p.t_s);
+            [p.x_px + jx, p.y_px + jy]
+        })
+    };
+    let first = at(scene.trajectory.first());
+    let last = at(scene.trajectory.last());
+    let g = &scene.geometry;
+    let truth = Truth {
+        image_index: scene.image_index,
+        object: scene.debris_name.clone(),
+        norad: scene.norad,
+        start_utc: iso_utc(scene.start),
+        exposure_s: t_exp,
+        pointing: scene.pointing.clone(),
+        jitter_mean_px: [jitter_mean.0, jitter_mean.1],
+        streak_start_px: first.unwrap_or([f64::NAN; 2]),
+        streak_end_px: last.unwrap_or([f64::NAN; 2]),
+        label_box_px: flux_box(
+            &canvas.debris.iter().map(|&v| v as f32).collect::<Vec<_>>(),
+            width,
+            height,
+            LABEL_SHARE,
+        ),
+        frame: None,
+        label_box_final_px: None,
+        magnitude: g.magnitude,
+        magnitude_min: mag_min,
+        magnitude_max: mag_max,
+        area_m2: scene.area_m2,
+        range_km: g.range_km,
+        phase_angle_deg: g.phase_angle_deg,
+        earth_angle_deg: g.earth_angle_deg,
+        sun_angle_deg: g.sun_angle_deg,
+        moon_angle_deg: g.moon_angle_deg,
+        tumble: scene.tumble,
+        expected_debris_electrons: expected_debris,
+        rendered_debris_electrons: canvas.debris_total,
+        snr: scene.snr,
+        stars_in_cone: scene.stars.len(),
+        stars_traced: traced.len(),
+        background_sigma_adu: sensor.background_sigma_adu(t_exp, frame),
+        background_frame: frame.map(|f| f.path.display().to_string()),
+        attempts: scene.attempts,
+        rejections: scene.rejections.clone(),
+    };
+    Exposure {
+        width,
+        height,
+        electrons: canvas.electrons,
+        debris_electrons: canvas.debris,
+        adu,
+        truth,
+        stars: traced,
+    }
+}

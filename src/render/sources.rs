@@ -1,0 +1,200 @@
+//! The light sources of a scene in the order photon mapping consumes its stream: field stars
+//! (fixed on the detector, or along survey trails sampled on a time grid) and the debris'
+//! trajectory samples, each with its expected photo-electrons and path over the exposure.
+
+use rand::RngExt;
+use rand_chacha::ChaCha12Rng;
+use serde::Serialize;
+
+use super::Jitter;
+use crate::scene::{Pointing, Scene};
+use crate::sensor::Sensor;
+use crate::sky::photometry::photon_rate;
+
+/// Spacing of the time nodes along a survey star trail, pixels.
+const SURVEY_NODE_SPACING_PX: f64 = 4.0;
+
+/// A star as traced in an image.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct TracedStar {
+    pub ra_deg: f64,
+    pub dec_deg: f64,
+    pub mag: f64,
+    /// Mean pixel coordinates over the exposure (0-based, pixel centres at integers): the
+    /// nominal position plus the mean jitter shift, where the FITS WCS puts the star.
+    pub x: f64,
+    pub y: f64,
+    pub expected_electrons: f64,
+}
+
+/// Where a source is over its share of the exposure, before jitter and PSF.
+#[derive(Clone, Copy)]
+pub(super) enum Path<'a> {
+    /// Fixed on the detector (a star under fixed pointing).
+    Still { x: f64, y: f64 },
+    /// A survey star trail, linear between nodes `step` seconds apart.
+    Trail { nodes: &'a [(f64, f64)], step: f64 },
+    /// A debris trajectory sample: all its photons arrive at `t`.
+    Instant { t: f64, x: f64, y: f64 },
+}
+
+impl Path<'_> {
+    pub(super) fn at(&self, t: f64) -> (f64, f64) {
+        match *self {
+            Path::Still { x, y } | Path::Instant { x, y, .. } => (x, y),
+            Path::Trail { nodes, step } => {
+                let u = t / step;
+                let i = (u as usize).min(nodes.len() - 2);
+                let f = u - i as f64;
+                let (p, q) = (nodes[i], nodes[i + 1]);
+                (p.0 + f * (q.0 - p.0), p.1 + f * (q.1 - p.1))
+            }
+        }
+    }
+}
+
+/// One light source of the scene: its expected photo-electrons, arriving uniformly over
+/// [t_a, t_b) along `path` (or all at once for a debris sample).
+pub(super) struct Source<'a> {
+    pub(super) expected: f64,
+    pub(super) path: Path<'a>,
+    pub(super) t_a: f64,
+    pub(super) t_b: f64,
+    pub(super) debris: bool,
+}
+
+impl Source<'_> {
+    /// Arrival time of one photon.
+    pub(super) fn arrival(&self, rng: &mut ChaCha12Rng) -> f64 {
+        match self.path {
+            Path::Instant { t, .. } => t,
+            _ if self.t_b > self.t_a => rng.random_range(self.t_a..self.t_b),
+            _ => self.t_a,
+        }
+    }
+}
+
+/// Every source of a scene that can put photons in the image, in a fixed order (the order
+/// in which photon mapping consumes its stream), and the stars as traced.
+pub(super) fn for_each_source(
+    sensor: &Sensor,
+    scene: &Scene,
+    jitter: &Jitter,
+    mut add: impl FnMut(&Source),
+) -> Vec<TracedStar> {
+    let s = sensor;
+    let (width, height) = (s.width_px as f64, s.height_px as f64);
+    let tan = scene.projection(sensor);
+    let scale = tan.scale_deg;
+    let psf_px = sensor.psf_sigma_px();
+    let t_exp = scene.exposure_s;
+    let jitter_mean = jitter.mean();
+
+    // Stars too far outside the image for any photon to land are skipped, and in survey
+    // images a star is exposed only while its trail is in the field (no work a scene does not
+    // need).
+    let margin = 8.0 * psf_px + jitter.max_excursion() + 1.0;
+    let near = |x: f64, y: f64| {
+        x > -0.5 - margin
+            && y > -0.5 - margin
+            && x < width - 0.5 + margin
+            && y < height - 0.5 + margin
+    };
+    let mut traced = Vec::new();
+    match scene.pointing {
+        Pointing::Fixed { .. } => {
+            // Fixed on the sky, photons uniform over the exposure.
+            for star in &scene.stars {
+                let Some((x0, y0)) = tan.pixel(star.ra_deg, star.dec_deg) else {
+                    continue;
+                };
+                if !near(x0, y0) {
+                    continue;
+                }
+                let expected = photon_rate(star.mag, s.zero_point_mag) * t_exp;
+                traced.push(TracedStar {
+                    ra_deg: star.ra_deg,
+                    dec_deg: star.dec_deg,
+                    mag: star.mag,
+                    x: x0 + jitter_mean.0,
+                    y: y0 + jitter_mean.1,
+                    expected_electrons: expected,
+                });
+                add(&Source {
+                    expected,
+                    path: Path::Still { x: x0, y: y0 },
+                    t_a: 0.0,
+                    t_b: t_exp,
+                    debris: false,
+                });
+            }
+        }
+        Pointing::Survey(track) => {
+            // Each star's trail is sampled on a time grid fine enough that linear interpolation
+            // between nodes is exact to well under 0.01 px (the trail is straight to second
+            // order in the drift), and every photon takes the position of its arrival time.
+            let drift_px = track.drift_deg / scale;
+            let nodes = ((drift_px / SURVEY_NODE_SPACING_PX).ceil() as usize + 1).max(2);
+            let step = t_exp / (nodes - 1) as f64;
+            let mut trail = vec![(f64::NAN, f64::NAN); nodes];
+            for star in &scene.stars {
+                let (mut first, mut last) = (None, None);
+                for (i, node) in trail.iter_mut().enumerate() {
+                    *node = scene
+                        .pixel_at(&tan, i as f64 * step, star.ra_deg, star.dec_deg)
+                        .unwrap_or((f64::NAN, f64::NAN));
+                    if near(node.0, node.1) {
+                        first.get_or_insert(i);
+                        last = Some(i);
+                    }
+                }
+                let (Some(a), Some(b)) = (first, last) else {
+                    continue;
+                };
+                // One node of slack on each side covers a trail entering between nodes.
+                let t_a = a.saturating_sub(1) as f64 * step;
+                let t_b = ((b + 1).min(nodes - 1)) as f64 * step;
+                let expected = photon_rate(star.mag, s.zero_point_mag) * (t_b - t_a);
+                let (xm, ym) = tan
+                    .pixel(star.ra_deg, star.dec_deg)
+                    .unwrap_or((f64::NAN, f64::NAN));
+                traced.push(TracedStar {
+                    ra_deg: star.ra_deg,
+                    dec_deg: star.dec_deg,
+                    mag: star.mag,
+                    x: xm + jitter_mean.0,
+                    y: ym + jitter_mean.1,
+                    expected_electrons: expected,
+                });
+                add(&Source {
+                    expected,
+                    path: Path::Trail {
+                        nodes: &trail,
+                        step,
+                    },
+                    t_a,
+                    t_b,
+                    debris: false,
+                });
+            }
+        }
+    }
+
+    // Debris: each trajectory sample is a source whose photons arrive at its time.
+    for p in &scene.trajectory {
+        if near(p.x_px, p.y_px) {
+            add(&Source {
+                expected: p.expected_electrons,
+                path: Path::Instant {
+                    t: p.t_s,
+                    x: p.x_px,
+                    y: p.y_px,
+                },
+                t_a: p.t_s,
+                t_b: p.t_s,
+                debris: true,
+            });
+        }
+    }
+    traced
+}

@@ -1,0 +1,380 @@
+//! Photon counts against Eq. 3, merging, jitter, and the two renderers against each other.
+
+use super::*;
+use crate::rng::{Purpose, stream};
+use crate::sensor::AduRange;
+use crate::sky::stars::Star;
+
+/// The sensor and render settings of the tests.
+struct Fixture {
+    sensor: Sensor,
+    render: Settings,
+}
+
+/// The paper's detector, optics and render settings on a 128 px image with a 0.0125 deg
+/// field radius, and the given jitter (the paper's: 2e-4 deg per sqrt(s)).
+fn fixture(jitter_deg_per_sqrt_s: f64) -> Fixture {
+    Fixture {
+        sensor: Sensor {
+            width_px: 128,
+            height_px: 128,
+            fov_radius_deg: 0.0125,
+            psf_sigma_arcsec: 1.0,
+            zero_point_mag: 22.26,
+            mag_limit: 16.5,
+            jitter_deg_per_sqrt_s,
+            gain_e_per_adu: 1.6,
+            bias: AduRange {
+                min_adu: 2.0,
+                max_adu: 3.0,
+            },
+            background: AduRange {
+                min_adu: 190.0,
+                max_adu: 210.0,
+            },
+            background_exposure_s: 5.0,
+        },
+        render: Settings {
+            method: RenderMethod::PhotonMapping,
+            merge_threshold: 100_000,
+            merge_factor: 5,
+            jitter_steps: 2000,
+        },
+    }
+}
+
+/// The projection of the test scenes: centred on (10, 20), 128 px.
+fn tan_of(c: &Fixture) -> crate::sky::projection::Tan {
+    c.sensor.projection(10.0, 20.0)
+}
+
+/// A scene centred on (10, 20) with the given stars and a debris streak along +x.
+fn scene(c: &Fixture, stars: Vec<Star>, debris_mag: f64, exposure_s: f64) -> Scene {
+    let ends = ((30.0, 40.0), (90.0, 40.0));
+    Scene::fixed_streak(&c.sensor, (10.0, 20.0), stars, debris_mag, ends, exposure_s)
+}
+
+#[test]
+fn mean_photons_match_eq3_within_poisson_error() {
+    // One star in the middle, far from the edges, and a debris streak: over many seeds the
+    // mean of the rendered photo-electrons matches t 10^(-0.4 (m - ZP)) within Poisson error.
+    let c = fixture(2e-4);
+    let tan = tan_of(&c);
+    let (ra, dec) = tan.sky(90.0, 90.0);
+    let star_mag = 15.0;
+    let debris_mag = 14.0;
+    let exposure = 5.0;
+    let s = scene(
+        &c,
+        vec![Star {
+            ra_deg: ra,
+            dec_deg: dec,
+            mag: star_mag,
+        }],
+        debris_mag,
+        exposure,
+    );
+    let zp = c.sensor.zero_point_mag;
+    let star_expected = exposure * 10f64.powf(-0.4 * (star_mag - zp));
+    let debris_expected = exposure * 10f64.powf(-0.4 * (debris_mag - zp));
+    let runs = 200;
+    let (mut star_sum, mut debris_sum) = (0.0, 0.0);
+    for i in 0..runs {
+        let e = render(
+            &c.sensor,
+            &c.render,
+            &s,
+            None,
+            &mut stream(1, i, Purpose::Photons),
+            &mut stream(1, i, Purpose::Noise),
+        );
+        let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
+        debris_sum += e.truth.rendered_debris_electrons as f64;
+        star_sum += (total - e.truth.rendered_debris_electrons) as f64;
+        assert!(
+            (e.truth.expected_debris_electrons - debris_expected).abs() < 1e-6 * debris_expected
+        );
+    }
+    for (sum, expected) in [(star_sum, star_expected), (debris_sum, debris_expected)] {
+        let mean = sum / runs as f64;
+        let sigma_of_mean = (expected / runs as f64).sqrt();
+        assert!(
+            (mean - expected).abs() < 4.0 * sigma_of_mean,
+            "mean {mean} vs Eq. 3 {expected} (sigma of mean {sigma_of_mean})"
+        );
+    }
+}
+
+#[test]
+fn merged_packets_keep_the_total_and_the_label_holds_the_streak() {
+    // A source above the merge threshold is traced in packets; the count stays exact.
+    let mut c = fixture(2e-4);
+    c.render.merge_threshold = 1000;
+    c.render.merge_factor = 5;
+    let s = scene(&c, vec![], 10.0, 2.0);
+    let e = render(
+        &c.sensor,
+        &c.render,
+        &s,
+        None,
+        &mut stream(2, 0, Purpose::Photons),
+        &mut stream(2, 0, Purpose::Noise),
+    );
+    let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
+    assert_eq!(total, e.truth.rendered_debris_electrons);
+    let b = e.truth.label_box_px.unwrap();
+    // The streak runs from x = 30 to 90 at y = 40; the box holds it with PSF margins.
+    assert!(b.x_min <= 30.0 && b.x_max >= 89.5, "{b:?}");
+    assert!(
+        b.y_min <= 40.0 && b.y_max >= 40.0 && b.y_max - b.y_min < 12.0,
+        "{b:?}"
+    );
+    // Background and bias scale as Eq. 11: with no source the mean ADU is the mean of
+    // background (scaled to 2 s) plus bias.
+    let mean_adu = e.adu.iter().map(|&a| a as f64).sum::<f64>() / e.adu.len() as f64;
+    let expected_bg = 200.0 * 2.0 / 5.0 + 2.5 + total as f64 / 1.6 / e.adu.len() as f64;
+    assert!(
+        (mean_adu - expected_bg).abs() < 0.1,
+        "{mean_adu} vs {expected_bg}"
+    );
+}
+
+#[test]
+fn star_centroid_lands_where_the_wcs_says() {
+    // With the pointing jitter on, a bright star's flux centroid is the traced position
+    // (nominal + mean jitter), which is where the FITS WCS (CRPIX shifted) puts it.
+    let c = fixture(3e-4);
+    let tan = tan_of(&c);
+    let (ra, dec) = tan.sky(64.3, 70.8);
+    let s = scene(
+        &c,
+        vec![Star {
+            ra_deg: ra,
+            dec_deg: dec,
+            mag: 12.0,
+        }],
+        30.0,
+        8.0,
+    );
+    for i in 0..5 {
+        let e = render(
+            &c.sensor,
+            &c.render,
+            &s,
+            None,
+            &mut stream(3, i, Purpose::Photons),
+            &mut stream(3, i, Purpose::Noise),
+        );
+        let st = e.stars[0];
+        let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
+        for y in 0..128 {
+            for x in 0..128 {
+                let v = e.electrons[y * 128 + x] as f64;
+                sx += v * x as f64;
+                sy += v * y as f64;
+                sw += v;
+            }
+        }
+        let (cx, cy) = (sx / sw, sy / sw);
+        assert!(
+            (cx - st.x).abs() < 0.05 && (cy - st.y).abs() < 0.05,
+            "centroid {cx},{cy} vs {},{}",
+            st.x,
+            st.y
+        );
+        let wcs = s
+            .projection(&c.sensor)
+            .shifted(e.truth.jitter_mean_px[0], e.truth.jitter_mean_px[1]);
+        let (wx, wy) = wcs.pixel(ra, dec).unwrap();
+        assert!((wx - st.x).abs() < 1e-9 && (wy - st.y).abs() < 1e-9);
+    }
+}
+
+/// Per-pixel sums over seeds: count, mean, second and fourth central moments.
+struct PixelStats {
+    n: f64,
+    mean: Vec<f64>,
+    var: Vec<f64>,
+    /// Standard error of each sample variance (from the fourth central moment).
+    var_se: Vec<f64>,
+}
+
+fn pixel_stats(images: &[Vec<u32>]) -> PixelStats {
+    let n = images.len() as f64;
+    let len = images[0].len();
+    let mut st = PixelStats {
+        n,
+        mean: vec![0.0; len],
+        var: vec![0.0; len],
+        var_se: vec![0.0; len],
+    };
+    for k in 0..len {
+        let m = images.iter().map(|im| im[k] as f64).sum::<f64>() / n;
+        let m2 = images
+            .iter()
+            .map(|im| (im[k] as f64 - m).powi(2))
+            .sum::<f64>()
+            / n;
+        let m4 = images
+            .iter()
+            .map(|im| (im[k] as f64 - m).powi(4))
+            .sum::<f64>()
+            / n;
+        st.mean[k] = m;
+        st.var[k] = m2 * n / (n - 1.0);
+        st.var_se[k] = ((m4 - m2 * m2 * (n - 3.0) / (n - 1.0)) / n).max(0.0).sqrt();
+    }
+    st
+}
+
+/// Chi-square of the per-pixel differences (a - b) / se over the pixels `on`, and its
+/// z-score against chi-square with as many degrees of freedom.
+fn chi2_z(on: &[usize], diff_se: impl Fn(usize) -> (f64, f64)) -> (f64, f64) {
+    let chi2: f64 = on
+        .iter()
+        .map(|&k| {
+            let (d, se) = diff_se(k);
+            (d / se).powi(2)
+        })
+        .sum();
+    let dof = on.len() as f64;
+    (chi2, (chi2 - dof) / (2.0 * dof).sqrt())
+}
+
+/// The noise-free images of `runs` seeds, for a fixed jitter path.
+fn noise_free(c: &Fixture, s: &Scene, jitter: &Jitter, runs: u64) -> Vec<Vec<u32>> {
+    (0..runs)
+        .map(|i| {
+            render_with_jitter(
+                &c.sensor,
+                &c.render,
+                s,
+                None,
+                jitter,
+                &mut stream(11, i, Purpose::Photons),
+                &mut stream(11, i, Purpose::Noise),
+            )
+            .electrons
+        })
+        .collect()
+}
+
+#[test]
+fn expected_and_photon_mapping_agree_in_mean_and_variance_per_pixel() {
+    // A star and a debris streak, a fixed (non-trivial) jitter path, merging off: for every
+    // pixel with signal, the mean and the variance over seeds of the two renderers agree
+    // within their standard errors (chi-square over pixels), and merging 5 photons per
+    // packet inflates the variance about 5 times (packets of F land like N / F photons of
+    // weight F: variance ~ F x mean, less where one pixel holds much of a source and for the
+    // remainder traced singly) as the exact formula below predicts, without biasing the mean.
+    let mut exact = fixture(4e-4);
+    exact.render.jitter_steps = 50;
+    exact.render.merge_threshold = 1_000_000_000_000;
+    let mut expected = fixture(4e-4);
+    expected.render.jitter_steps = 50;
+    expected.render.merge_threshold = 1_000_000_000_000;
+    expected.render.method = RenderMethod::Expected;
+    let mut merged = fixture(4e-4);
+    merged.render.jitter_steps = 50;
+    merged.render.merge_threshold = 1;
+    merged.render.merge_factor = 5;
+    let tan = tan_of(&exact);
+    let (ra, dec) = tan.sky(80.3, 70.6);
+    let star = Star {
+        ra_deg: ra,
+        dec_deg: dec,
+        mag: 15.5,
+    };
+    let s = scene(&exact, vec![star], 14.5, 2.0);
+    let jitter = Jitter::of_scene(
+        &exact.sensor,
+        &exact.render,
+        &s,
+        &mut stream(10, 0, Purpose::Photons),
+    );
+    assert!(
+        jitter.max_excursion() > 0.5,
+        "the jitter path moves the sources"
+    );
+    let runs = 300;
+    let a = pixel_stats(&noise_free(&exact, &s, &jitter, runs));
+    let b = pixel_stats(&noise_free(&expected, &s, &jitter, runs));
+    let m = pixel_stats(&noise_free(&merged, &s, &jitter, runs));
+    // Pixels where the Poisson counts are near normal.
+    let on: Vec<usize> = (0..a.mean.len()).filter(|&k| b.mean[k] >= 5.0).collect();
+    assert!(on.len() > 100, "{} pixels with signal", on.len());
+    let n = a.n;
+    let (chi2, z) = chi2_z(&on, |k| {
+        (a.mean[k] - b.mean[k], ((a.var[k] + b.var[k]) / n).sqrt())
+    });
+    eprintln!("means: chi2 {chi2:.1} over {} pixels (z {z:.2})", on.len());
+    assert!(
+        z.abs() < 4.0,
+        "means: chi2 {chi2} over {} pixels (z {z})",
+        on.len()
+    );
+    let (chi2, z) = chi2_z(&on, |k| {
+        (a.var[k] - b.var[k], a.var_se[k].hypot(b.var_se[k]))
+    });
+    eprintln!(
+        "variances: chi2 {chi2:.1} over {} pixels (z {z:.2})",
+        on.len()
+    );
+    assert!(
+        z.abs() < 4.0,
+        "variances: chi2 {chi2} over {} pixels (z {z})",
+        on.len()
+    );
+    // Both are Poisson: variance = mean, summed over the pixels.
+    let ratio = |st: &PixelStats| {
+        on.iter().map(|&k| st.var[k]).sum::<f64>() / on.iter().map(|&k| st.mean[k]).sum::<f64>()
+    };
+    for st in [&a, &b] {
+        assert!(
+            (ratio(st) - 1.0).abs() < 0.03,
+            "variance/mean {}",
+            ratio(st)
+        );
+    }
+    // Merging: the mean is unbiased, the variance 5 times the Poisson one.
+    let (chi2, z) = chi2_z(&on, |k| {
+        (m.mean[k] - b.mean[k], ((m.var[k] + b.var[k]) / n).sqrt())
+    });
+    assert!(z.abs() < 4.0, "merged means: chi2 {chi2} (z {z})");
+    // The exact merged variance of a pixel, per source with N ~ Poisson(lambda) photons in
+    // P = N div F packets and S = N mod F singles, each landing in the pixel with chance p:
+    // p (1 - p) (F^2 E[P] + E[S]) + p^2 lambda. Summed over the pixels with signal.
+    let f = 5.0;
+    let psf_px = exact.sensor.psf_sigma_px();
+    let mut predicted = vec![0.0; a.mean.len()];
+    for_each_source(&merged.sensor, &s, &jitter, |source| {
+        let mut flux = expected::Flux::new(128, 128, psf_px);
+        flux.add(source, &jitter);
+        let lambda = source.expected;
+        // The Poisson pmf in logs (exp(-lambda) underflows for a bright star).
+        let (mut e_p, mut e_s, mut ln_pmf) = (0.0, 0.0, -lambda);
+        for count in 0..(lambda + 12.0 * lambda.sqrt() + 30.0) as u64 {
+            e_p += ln_pmf.exp() * (count / 5) as f64;
+            e_s += ln_pmf.exp() * (count % 5) as f64;
+            ln_pmf += (lambda / (count + 1) as f64).ln();
+        }
+        for (k, v) in predicted.iter_mut().enumerate() {
+            let p = (flux.stars[k] + flux.debris[k]) / lambda;
+            *v += p * (1.0 - p) * (f * f * e_p + e_s) + p * p * lambda;
+        }
+    });
+    let predicted_ratio =
+        on.iter().map(|&k| predicted[k]).sum::<f64>() / on.iter().map(|&k| b.mean[k]).sum::<f64>();
+    eprintln!(
+        "{} pixels, {runs} seeds: variance/mean exact {:.4}, expected {:.4}, merged {:.4} (theory {predicted_ratio:.4})",
+        on.len(),
+        ratio(&a),
+        ratio(&b),
+        ratio(&m)
+    );
+    assert!(
+        (ratio(&m) / predicted_ratio - 1.0).abs() < 0.05 && predicted_ratio > 4.0,
+        "merged variance/mean {} vs theory {predicted_ratio}",
+        ratio(&m)
+    );
+}
