@@ -4,4 +4,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-SOIG_REQUIRE_ONNXRUNTIME=1 cargo test --locked "$@"
+# --release: the tests reuse the dependencies the quickstart's release build compiled (the test
+# profile would build every one of them again).
+SOIG_REQUIRE_ONNXRUNTIME=1 cargo test --release --locked "$@"

@@ -501,7 +501,6 @@ fn table(
 /// RMS error (in Poisson-noise units) against run time, one series per knob.
 fn plot(path: &Path, rows: &[Row]) -> anyhow::Result<()> {
     use plotters::prelude::*;
-    crate::plot::register_font();
     let time = |r: &Row| r.render_ms + r.scene_ms;
     let finite = |v: f64| v.is_finite() && v > 0.0;
     let xs: Vec<f64> = rows.iter().map(time).filter(|&v| finite(v)).collect();
@@ -516,12 +515,8 @@ fn plot(path: &Path, rows: &[Row]) -> anyhow::Result<()> {
     );
     let (x0, x1) = bounds(&xs);
     let (y0, y1) = bounds(&ys);
-    let (w, h) = (800u32, 560u32);
-    let mut buf = vec![0u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let mut chart = ChartBuilder::on(&root)
+    crate::plot::png(path, (800, 560), |root| {
+        let mut chart = ChartBuilder::on(root)
             .caption(
                 "Render settings: error against run time",
                 ("sans-serif", 22),
@@ -580,11 +575,8 @@ fn plot(path: &Path, rows: &[Row]) -> anyhow::Result<()> {
             .border_style(BLACK)
             .position(SeriesLabelPosition::UpperRight)
             .draw()?;
-        root.present()?;
-    }
-    let img = image::RgbImage::from_raw(w, h, buf).expect("buffer size");
-    img.save(path)?;
-    Ok(())
+        Ok(())
+    })
 }
 
 /// A log-axis range around the values, with some room.
