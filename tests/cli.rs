@@ -47,17 +47,20 @@ fn digest_of(out: &Output) -> String {
 }
 
 /// `soig run CAMPAIGN --quiet --out OUT`, which must succeed; returns its digest.
+/// `soig run CAMPAIGN --quiet --out OUT` on `threads` threads.
+fn run(campaign: &Path, out: &Path, threads: Option<usize>) -> Output {
+    let args = [
+        "run",
+        campaign.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    soig(&args, threads)
+}
+
 fn run_ok(campaign: &Path, out: &Path, threads: Option<usize>) -> String {
-    let o = soig(
-        &[
-            "run",
-            campaign.to_str().unwrap(),
-            "--quiet",
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        threads,
-    );
+    let o = run(campaign, out, threads);
     assert!(
         o.status.success(),
         "run failed: {}",
@@ -113,16 +116,7 @@ fn same_digest_on_any_thread_count_and_verify_catches_one_byte() {
 }
 
 fn assert_clean_failure(campaign: &Path, out: &Path, expect: &[&str]) {
-    let o = soig(
-        &[
-            "run",
-            campaign.to_str().unwrap(),
-            "--quiet",
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        None,
-    );
+    let o = run(campaign, out, None);
     assert_eq!(
         o.status.code(),
         Some(2),

@@ -4,8 +4,8 @@ use rand_chacha::ChaCha12Rng;
 use soig::campaign::Campaign;
 use soig::experiment::{self, Experiment};
 use soig::geometry::{self, Fill, Frame, FrameKind, LABEL_SHARE};
-use soig::rng::{Purpose, stream};
-use soig::scene::{self, Pointing};
+use soig::scene::Pointing;
+use soig::simulate::{self, ImageProducts};
 
 mod common;
 use common::{CampaignToml, neossat_frame, tle_object};
@@ -20,25 +20,29 @@ fn campaign(mode: &str) -> Campaign {
         .load("geom.toml")
 }
 
+/// Images 0..n of a campaign as `soig run` renders them, in memory, without the 8-bit product.
+fn rendered(c: &Campaign, n: u64) -> Vec<ImageProducts> {
+    let x = Experiment {
+        product: None,
+        ..Experiment::new(c)
+    };
+    let inputs = experiment::inputs(c).unwrap();
+    (0..n)
+        .map(|i| simulate::image(&x, &inputs, i).unwrap())
+        .collect()
+}
+
 #[test]
 fn survey_star_trails_are_parallel_and_horizontal_after_rotation() {
     let c = campaign("survey");
-    let x = Experiment::new(&c);
-    let inputs = experiment::inputs(&c).unwrap();
-    for i in 0..4 {
-        let s = scene::draw(
-            &x.scene,
-            &x.sensor,
-            &inputs,
-            i,
-            &mut stream(11, i, Purpose::Scene),
-        )
-        .unwrap();
+    let sensor = Experiment::new(&c).sensor;
+    for image in rendered(&c, 4) {
+        let s = image.scene;
         let Pointing::Survey(track) = s.pointing else {
             panic!("survey scene expected")
         };
         let frame = Frame::new(FrameKind::Rotated, 512, 512, 0, track.trail_angle_deg);
-        let tan = s.projection(&x.sensor);
+        let tan = s.projection(&sensor);
         let at = |t: f64, ra: f64, dec: f64| s.pixel_at(&tan, t, ra, dec);
         let mut n = 0;
         for star in s.stars.iter().take(200) {
@@ -60,7 +64,7 @@ fn survey_star_trails_are_parallel_and_horizontal_after_rotation() {
         }
         assert!(n > 10);
         // The trail is as long as the drift says.
-        let drift_px = track.drift_deg / x.sensor.pixel_scale_deg();
+        let drift_px = track.drift_deg / sensor.pixel_scale_deg();
         let (ra, dec) = (s.stars[0].ra_deg, s.stars[0].dec_deg);
         let (p, q) = (
             at(0.0, ra, dec).unwrap(),
@@ -107,25 +111,8 @@ fn needed_extent(img: &[f32], w: usize, h: usize, share: f64) -> (f64, f64) {
 fn label_box_is_the_tight_box_of_the_streak_in_every_frame() {
     for mode in ["fixed", "survey"] {
         let c = campaign(mode);
-        let x = Experiment::new(&c);
-        let inputs = experiment::inputs(&c).unwrap();
-        for i in 0..3 {
-            let s = scene::draw(
-                &x.scene,
-                &x.sensor,
-                &inputs,
-                i,
-                &mut stream(11, i, Purpose::Scene),
-            )
-            .unwrap();
-            let e = soig::render::render(
-                &x.sensor,
-                &x.render,
-                &s,
-                None,
-                &mut stream(11, i, Purpose::Photons),
-                &mut stream(11, i, Purpose::Noise),
-            );
+        for image in rendered(&c, 3) {
+            let (s, e) = (image.scene, image.exposure);
             let debris: Vec<f32> = e.debris_electrons.iter().map(|&v| v as f32).collect();
             let mut frames = vec![
                 Frame::new(FrameKind::Original, 512, 512, 0, 0.0),
@@ -187,27 +174,10 @@ fn semisynthetic_background_has_the_real_frames_noise_scaled_by_exposure() {
             frame.display()
         ))
         .load("semi.toml");
-    let x = Experiment::new(&c);
-    let inputs = experiment::inputs(&c).unwrap();
     let real = soig::background::RealFrame::load(&frame).unwrap();
-    for i in 0..3 {
-        let s = scene::draw(
-            &x.scene,
-            &x.sensor,
-            &inputs,
-            i,
-            &mut stream(3, i, Purpose::Scene),
-        )
-        .unwrap();
+    for image in rendered(&c, 3) {
+        let (s, e) = (image.scene, image.exposure);
         assert!(s.background.is_some());
-        let e = soig::render::render(
-            &x.sensor,
-            &x.render,
-            &s,
-            inputs.frame(s.background),
-            &mut stream(3, i, Purpose::Photons),
-            &mut stream(3, i, Purpose::Noise),
-        );
         // Background = ADU - electrons / gain - bias (uniform 2..3, mean 2.5).
         let bg: Vec<f32> = e
             .adu
