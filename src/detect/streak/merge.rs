@@ -2,7 +2,7 @@
 //! merge, and a candidate near a better one must still pass on its own (explaining away).
 
 use super::refine::{Ctx, Point, Seed, Seg, point_segment_distance};
-use super::stats::{bilinear, median_of};
+use super::stats::median_of;
 
 /// Absolute difference of two axis orientations in degrees, modulo 180 (result in [0, 90]).
 pub(super) fn angle_diff_deg(a: f64, b: f64) -> f64 {
@@ -29,12 +29,7 @@ impl Ctx<'_> {
             {
                 continue;
             }
-            vals.push(
-                (bilinear(self.z, self.w, self.h, x - nx, y - ny)
-                    + bilinear(self.z, self.w, self.h, x, y)
-                    + bilinear(self.z, self.w, self.h, x + nx, y + ny))
-                    / 3.0,
-            );
+            vals.push(self.cross_mean(x, y, nx, ny));
         }
         let n = vals.len();
         if (n as f64) < self.p.min_length || n == 0 {

@@ -68,7 +68,8 @@
 //!
 //! One submodule per step: `background` (1), `smooth`, `trails` and `stars` (2), `lines` (3),
 //! `components` (4), `refine` and `merge` (5-6), `output` (7); `stats` holds the robust
-//! statistics and bilinear sampling they share. This file holds the parameters and the pipeline.
+//! statistics they share (bilinear sampling is [`crate::imaging::bilinear`]). This file holds
+//! the parameters and the pipeline.
 
 mod background;
 mod components;
@@ -92,7 +93,7 @@ use output::score;
 use refine::{Ctx, Point, Seed, Seg};
 use smooth::{equalise_edge_noise, gaussian_kernel, smooth};
 use stars::mask_stars;
-use stats::robust_sigma;
+use stats::map_stats;
 use trails::remove_trails;
 
 /// Every knob of [`detect_streaks`], with its default: all settable from a campaign's
@@ -397,7 +398,7 @@ pub fn detect_streaks(
     drop(q);
     equalise_edge_noise(&mut z, w, h, &kernel);
     let kappa_white: f64 = kernel.iter().map(|&k| (k as f64) * (k as f64)).sum();
-    let kappa = robust_sigma(&z, w, h).max(0.5 * kappa_white);
+    let kappa = map_stats(&z, w, h).1.max(0.5 * kappa_white);
     let inv_kappa = (1.0 / kappa) as f32;
     z.iter_mut().for_each(|v| *v *= inv_kappa);
     if let Some(a) = star_trail_angle_deg.filter(|a| a.is_finite()) {

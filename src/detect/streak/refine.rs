@@ -6,7 +6,8 @@ use std::f64::consts::PI;
 
 use super::Sanitized;
 use super::smooth::corr;
-use super::stats::{bilinear, median_of};
+use super::stats::median_of;
+use crate::imaging::bilinear;
 
 /// A starting axis for refinement: centre, orientation (rad), half extent, how much of each end
 /// to leave out when measuring the level, and how far beyond the extent to look for the ends.
@@ -72,6 +73,16 @@ pub(super) fn point_segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)
 }
 
 impl Ctx<'_> {
+    /// z at (x, y), bilinear between pixel centres.
+    fn z_at(&self, x: f64, y: f64) -> f64 {
+        bilinear(self.z, self.w, self.h, x, y) as f64
+    }
+
+    /// Profile sample: the mean of z at lateral offsets -1, 0, 1 along the normal (nx, ny).
+    pub(super) fn cross_mean(&self, x: f64, y: f64, nx: f64, ny: f64) -> f64 {
+        (self.z_at(x - nx, y - ny) + self.z_at(x, y) + self.z_at(x + nx, y + ny)) / 3.0
+    }
+
     /// Range of t for which (cx, cy) + t (ux, uy) lies inside the pixel-centre rectangle.
     fn t_range(&self, cx: f64, cy: f64, ux: f64, uy: f64) -> (f64, f64) {
         let mut lo = f64::NEG_INFINITY;
@@ -100,7 +111,7 @@ impl Ctx<'_> {
         let mut s = 0.0;
         for t in a..=b {
             let t = t as f64;
-            s += bilinear(self.z, self.w, self.h, cx + t * ux, cy + t * uy).clamp(-clip, clip);
+            s += self.z_at(cx + t * ux, cy + t * uy).clamp(-clip, clip);
         }
         s
     }
@@ -145,13 +156,7 @@ impl Ctx<'_> {
         }
         // Profile along the axis: mean of z at lateral offsets -1, 0, 1.
         let prof: Vec<f64> = (ta..=tb)
-            .map(|t| {
-                let (x, y) = (cx + t as f64 * ux, cy + t as f64 * uy);
-                (bilinear(self.z, self.w, self.h, x - nx, y - ny)
-                    + bilinear(self.z, self.w, self.h, x, y)
-                    + bilinear(self.z, self.w, self.h, x + nx, y + ny))
-                    / 3.0
-            })
+            .map(|t| self.cross_mean(cx + t as f64 * ux, cy + t as f64 * uy, nx, ny))
             .collect();
         let at = |t: i64| prof[(t - ta) as usize];
         let inner = (half - seed.shrink).max(1.0);

@@ -4,7 +4,7 @@
 use std::f64::consts::PI;
 
 use super::Sanitized;
-use super::stats::bilinear;
+use crate::imaging::bilinear;
 
 /// Zero the smoothed map around round compact sources (stars): local maxima of `z` of at least
 /// `star_mask_sigma` whose ring at radius 2 sqrt(2) psf_sigma (twice the smoothed PSF sigma)
@@ -62,7 +62,7 @@ pub(super) fn mask_stars(z: &mut [f32], w: usize, h: usize, p: &Sanitized) -> us
                     continue;
                 }
                 inside += 1;
-                ring_max = ring_max.max(bilinear(z, w, h, px, py));
+                ring_max = ring_max.max(bilinear(z, w, h, px, py) as f64);
             }
             if inside * 2 >= NR && ring_max < p.star_ring_ratio * v as f64 {
                 stars.push((x, y, v as f64));

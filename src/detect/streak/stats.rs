@@ -1,7 +1,9 @@
-//! Robust statistics and bilinear sampling of the detector's maps: the histogram median and MAD
-//! of the background cells, medians of small sets, the subsampled median and MAD-sigma of a
-//! whole map, and bilinear reads of an f32 map in f32 arithmetic. The detector's own copies:
-//! their rounding (f32 vs f64, subsampling, histogram vs sort) is part of its pinned output.
+//! Robust statistics of the detector's maps: the histogram median and MAD of the background
+//! cells, medians of small sets, and the median and MAD-sigma of a whole map from a regular
+//! subsample ([`crate::imaging::robust_stats`] of it). The rounding (f64 mean of the middle pair
+//! for small sets, histogram for cells, subsampling for maps) is part of the pinned output.
+
+use crate::imaging::robust_stats;
 
 /// Continuous CDF and quantiles of an 8-bit histogram, each grey level spread uniformly over
 /// [v - 0.5, v + 0.5).
@@ -82,38 +84,10 @@ fn subsample(v: &[f32], w: usize, h: usize) -> Vec<f32> {
     s
 }
 
-/// Median of a map, from a regular subsample.
-pub(super) fn robust_median(v: &[f32], w: usize, h: usize) -> f64 {
-    let mut s = subsample(v, w, h);
-    if s.is_empty() {
-        return 0.0;
-    }
-    let mid = s.len() / 2;
-    *s.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1 as f64
-}
-
-/// Robust (1.4826 MAD) standard deviation of a map, from a regular subsample.
+/// Median and robust (1.4826 MAD) standard deviation of a map, from a regular subsample. The
+/// maps are finite (derived from 8-bit pixels over a noise floored at `min_noise_sigma`), so
+/// [`robust_stats`] drops nothing.
 #[inline(never)]
-pub(super) fn robust_sigma(v: &[f32], w: usize, h: usize) -> f64 {
-    let mut s = subsample(v, w, h);
-    if s.is_empty() {
-        return 0.0;
-    }
-    let mid = s.len() / 2;
-    let med = *s.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
-    s.iter_mut().for_each(|x| *x = (*x - med).abs());
-    let mad = *s.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
-    1.4826 * mad as f64
-}
-
-/// Bilinear read of `m` at (x, y), clamped to the pixel-centre rectangle; f32 weights.
-pub(super) fn bilinear(m: &[f32], w: usize, h: usize, x: f64, y: f64) -> f64 {
-    let x = x.clamp(0.0, (w - 1) as f64);
-    let y = y.clamp(0.0, (h - 1) as f64);
-    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-    let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
-    let a = m[y0 * w + x0] * (1.0 - fx) + m[y0 * w + x1] * fx;
-    let b = m[y1 * w + x0] * (1.0 - fx) + m[y1 * w + x1] * fx;
-    (a * (1.0 - fy) + b * fy) as f64
+pub(super) fn map_stats(v: &[f32], w: usize, h: usize) -> (f64, f64) {
+    robust_stats(&subsample(v, w, h))
 }

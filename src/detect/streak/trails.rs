@@ -4,7 +4,7 @@
 use super::Sanitized;
 use super::lines::transpose;
 use super::smooth::corr;
-use super::stats::robust_median;
+use super::stats::map_stats;
 
 /// Survey images: remove structures elongated along the star-trail direction. From each pixel
 /// of `z` the mean along that direction over the `trail_filter_px` pixels before it or the
@@ -30,7 +30,7 @@ pub(super) fn remove_trails(z: &mut [f32], w: usize, h: usize, angle: f64, p: &S
     } else {
         subtract_side_means(z, h, w, t, hk, p.psf_sigma);
     }
-    let med = robust_median(z, w, h) as f32;
+    let med = map_stats(z, w, h).0 as f32;
     z.iter_mut().for_each(|v| *v -= med);
 }
 
