@@ -61,7 +61,7 @@ pub(crate) mod hash;
 pub mod imaging;
 pub mod manifest;
 pub mod metrics;
-pub(crate) mod output;
+pub mod output;
 pub mod pipeline;
 pub(crate) mod plot;
 pub mod progress;

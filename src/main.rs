@@ -120,6 +120,12 @@ enum EvalMode {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // Ctrl-C and SIGTERM (Slurm's scancel, Kubernetes' pod stop) leave no staging directory or
+    // lock behind; 130 is the shells' exit status for an interrupted command.
+    let _ = ctrlc::set_handler(|| {
+        soig::output::abandon();
+        std::process::exit(130);
+    });
     match cli.command {
         Command::Run {
             campaign,

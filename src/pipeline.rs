@@ -49,7 +49,7 @@ pub fn run(
     } else {
         None
     };
-    let (digest, images, seconds) = write_replacing(output, |staging| {
+    let (digest, images, seconds) = write_replacing(output, &[&campaign.base_dir], |staging| {
         write_all(campaign, staging, python.as_deref(), progress)
     })?;
     Ok(RunSummary {

@@ -103,7 +103,7 @@ pub fn run(campaign: &Campaign, out: &Path, opts: &Options) -> anyhow::Result<Su
         opts.image,
         campaign.resolved.images
     );
-    crate::output::write_replacing(out, |dir| study(campaign, dir, opts))
+    crate::output::write_replacing(out, &[&campaign.base_dir], |dir| study(campaign, dir, opts))
 }
 
 /// The study itself, its files written into `dir`.

@@ -480,3 +480,114 @@ fn study_writes_a_sane_table_plot_and_manifest() {
         assert!(err.contains(says) && !err.contains("panicked"), "{err}");
     }
 }
+
+/// A run that must fail with exit 2 and a message holding `expect`, without a panic.
+fn assert_refused(o: &Output, expect: &str) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.contains(expect), "expected {expect:?} in: {err}");
+}
+
+#[test]
+fn a_users_files_are_never_replaced() {
+    let tmp = tempfile::tempdir().unwrap();
+    let campaign = small_campaign(tmp.path(), "");
+    // Another tool's manifest.json does not make a soig output.
+    let other = tmp.path().join("other");
+    std::fs::create_dir(&other).unwrap();
+    std::fs::write(other.join("manifest.json"), "{\"tool\": \"not soig\"}").unwrap();
+    std::fs::write(other.join("data.txt"), "keep me").unwrap();
+    assert_refused(&run(&campaign, &other, None), "not a soig output");
+    assert_eq!(
+        std::fs::read_to_string(other.join("data.txt")).unwrap(),
+        "keep me"
+    );
+    // A name or an output that resolves to the campaign's folder.
+    for (file, c) in [
+        ("dots.toml", CampaignToml::new("..", 1, 2)),
+        (
+            "up.toml",
+            CampaignToml::new("up", 1, 2).top("output = \"new-folder/..\"\n"),
+        ),
+    ] {
+        let c = c
+            .debris(ELEMENTS_40649)
+            .tables("[sensor]\nwidth_px = 64\nheight_px = 64\nfov_radius_deg = 0.00625\n")
+            .write(&tmp.path().join(file));
+        let o = soig(&["run", c.to_str().unwrap(), "--quiet"], None);
+        assert_refused(&o, "campaign's folder");
+        assert!(
+            c.is_file() && campaign.is_file(),
+            "the campaign folder was touched"
+        );
+    }
+    // `--out .` inside a soig output.
+    let out = tmp.path().join("out");
+    run_ok(&campaign, &out, None);
+    let o = Command::new(env!("CARGO_BIN_EXE_soig"))
+        .args(["run", campaign.to_str().unwrap(), "--quiet", "--out", "."])
+        .current_dir(&out)
+        .output()
+        .unwrap();
+    assert_refused(&o, "the current directory");
+    assert!(
+        soig(&["verify", out.to_str().unwrap()], None)
+            .status
+            .success()
+    );
+}
+
+#[test]
+fn one_writer_per_output_and_no_junk_from_killed_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let campaign = small_campaign(tmp.path(), "");
+    let out = tmp.path().join("out");
+    // A live writer's lock (this test's own PID) refuses a second run.
+    let lock = tmp.path().join(".out.lock");
+    std::fs::write(&lock, std::process::id().to_string()).unwrap();
+    assert_refused(
+        &run(&campaign, &out, None),
+        "being written by another soig run",
+    );
+    assert!(!out.exists());
+    // A dead writer's lock and staging directory (PIDs above Linux's 2^22 limit) are cleared.
+    std::fs::write(&lock, "999999999").unwrap();
+    let stale = tmp.path().join(".out.partial-999999999");
+    std::fs::create_dir(&stale).unwrap();
+    std::fs::write(stale.join("big.fits"), vec![0u8; 4096]).unwrap();
+    run_ok(&campaign, &out, None);
+    assert!(!stale.exists() && !lock.exists());
+}
+
+#[test]
+fn sigterm_leaves_no_staging_directory_or_lock() {
+    let tmp = tempfile::tempdir().unwrap();
+    let campaign = small_with(3, 400).write(&tmp.path().join("long.toml"));
+    let out = tmp.path().join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_soig"))
+        .args(["run", campaign.to_str().unwrap(), "--quiet", "--out"])
+        .arg(&out)
+        .spawn()
+        .unwrap();
+    let staging = tmp.path().join(format!(".out.partial-{}", child.id()));
+    let started = std::time::Instant::now();
+    while !staging.exists() && started.elapsed().as_secs() < 30 {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    assert!(staging.exists(), "the run never started writing");
+    let killed = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{status:?}");
+    let left: Vec<String> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".out"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+    assert!(!out.exists());
+}
