@@ -58,6 +58,10 @@ enum Command {
     Verify {
         /// An output directory of `soig run`.
         dir: PathBuf,
+        /// The digest pinned for it (e.g. in CI): verify fails unless the recomputed digest is
+        /// this one, so a manifest rewritten with consistent hashes is caught.
+        #[arg(long, value_name = "HEX")]
+        digest: Option<String>,
     },
     /// Measure what each rendering approximation (renderer, photon merging, trajectory
     /// samples, jitter steps) costs in accuracy and saves in time on one scene of the campaign:
@@ -161,8 +165,19 @@ fn main() -> ExitCode {
             println!("model {}", model.display());
             Ok(())
         }),
-        Command::Verify { dir } => match soig::manifest::verify(&dir) {
-            Ok((m, problems)) if problems.is_empty() => {
+        Command::Verify { dir, digest } => match soig::manifest::verify(&dir) {
+            Ok((m, mut problems)) if problems.is_empty() => {
+                if let Some(pinned) = digest.filter(|d| *d != m.digest) {
+                    problems.push(soig::manifest::Problem::Pinned {
+                        pinned,
+                        found: m.digest.clone(),
+                    });
+                    for p in &problems {
+                        eprintln!("{p}");
+                    }
+                    eprintln!("verify failed: {} is not the pinned output", dir.display());
+                    return ExitCode::from(1);
+                }
                 println!("ok: {} files match, digest {}", m.files.len(), m.digest);
                 ExitCode::SUCCESS
             }

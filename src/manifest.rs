@@ -137,6 +137,11 @@ pub enum Problem {
     Missing(String),
     Extra(String),
     Digest,
+    /// The digest is consistent but not the one pinned by the user.
+    Pinned {
+        pinned: String,
+        found: String,
+    },
 }
 
 impl std::fmt::Display for Problem {
@@ -149,6 +154,9 @@ impl std::fmt::Display for Problem {
                 f,
                 "the manifest's digest does not match its contents (manifest edited?)"
             ),
+            Problem::Pinned { pinned, found } => {
+                write!(f, "digest {found} is not the pinned {pinned}")
+            }
         }
     }
 }

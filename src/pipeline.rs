@@ -43,12 +43,21 @@ pub fn run(
     python: Option<&Path>,
     progress: &dyn Progress,
 ) -> anyhow::Result<RunSummary> {
-    // Find the training Python before rendering anything, so a missing one fails at once.
+    // Find the training Python and load the campaign's model before rendering anything, so a
+    // missing interpreter or a bad model fails at once, not after every image.
     let python = if campaign.resolved.stages.contains(&Stage::Train) {
         Some(find_python(python)?)
     } else {
         None
     };
+    if let (true, Some(m)) = (
+        campaign.resolved.stages.contains(&Stage::Detect),
+        &campaign.resolved.detect.model,
+    ) {
+        let path = campaign.base_dir.join(m);
+        YoloDetector::load(&path, yolo_params(campaign))
+            .with_context(|| format!("loading model {}", path.display()))?;
+    }
     let (digest, images, seconds) = write_replacing(output, &[&campaign.base_dir], |staging| {
         write_all(campaign, staging, python.as_deref(), progress)
     })?;
@@ -247,6 +256,17 @@ fn write_all(
     Ok((manifest.digest, n, seconds))
 }
 
+/// The YOLO detector's settings of a campaign.
+fn yolo_params(campaign: &Campaign) -> YoloParams {
+    let d = &campaign.resolved.detect;
+    YoloParams {
+        conf: d.conf,
+        iou: d.iou,
+        max_det: d.max_det as usize,
+        ..YoloParams::default()
+    }
+}
+
 /// What an image left for the detect stage.
 struct Written {
     subset: Option<Subset>,
@@ -323,13 +343,7 @@ fn detect_and_report(
         });
     }
     if let Some(path) = model {
-        let params = YoloParams {
-            conf: c.detect.conf,
-            iou: c.detect.iou,
-            max_det: c.detect.max_det as usize,
-            ..YoloParams::default()
-        };
-        let mut yolo = YoloDetector::load(path, params)
+        let mut yolo = YoloDetector::load(path, yolo_params(campaign))
             .with_context(|| format!("loading model {}", path.display()))?;
         progress.start("yolo", images.len() as u64);
         let (mut detections, mut seconds) = (Vec::new(), Vec::new());

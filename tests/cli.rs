@@ -338,6 +338,18 @@ fn bad_models_fail_cleanly() {
             .write(&tmp.path().join("small.toml"));
         assert_clean_failure(&c, &out, &["error", expect]);
     }
+    // The model is loaded before the first image: the run fails before it creates anything,
+    // not even the output's parent folder.
+    let late = tmp.path().join("new-parent").join("out");
+    let c = small()
+        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
+        .tables(&format!(
+            "[detect]\nmodel = \"{}\"\n",
+            fixture("not_onnx.onnx")
+        ))
+        .write(&tmp.path().join("small.toml"));
+    assert_refused(&run(&c, &late, None), "not_onnx.onnx");
+    assert!(!tmp.path().join("new-parent").exists());
 }
 
 /// The committed fixed-pointing model (models/soig-yolov8n-fixed.onnx) detects the debris of the
@@ -590,4 +602,35 @@ fn sigterm_leaves_no_staging_directory_or_lock() {
         .collect();
     assert!(left.is_empty(), "{left:?}");
     assert!(!out.exists());
+}
+
+#[test]
+fn verify_against_a_pinned_digest_catches_a_consistent_forgery() {
+    let tmp = tempfile::tempdir().unwrap();
+    let campaign = small_campaign(tmp.path(), "");
+    let out = tmp.path().join("out");
+    let digest = run_ok(&campaign, &out, None);
+    let pinned = |d: &str| soig(&["verify", out.to_str().unwrap(), "--digest", d], None);
+    assert!(pinned(&digest).status.success());
+    // Forge: change a label, then rewrite the manifest with hashes that agree with it.
+    let label = std::fs::read_dir(out.join("labels/train"))
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    std::fs::write(&label, "0 0.5 0.5 0.1 0.1\n").unwrap();
+    let old = soig::Manifest::read(&out).unwrap();
+    let mut forged =
+        soig::Manifest::build(&out, &old.campaign_hash, old.campaign, &old.volatile).unwrap();
+    forged.seal();
+    forged.write(&out).unwrap();
+    assert!(
+        soig(&["verify", out.to_str().unwrap()], None)
+            .status
+            .success()
+    );
+    let o = pinned(&digest);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("is not the pinned"));
 }
