@@ -326,7 +326,7 @@ fn detect_and_report(
                 let pixels = load(img)?;
                 let t = Instant::now();
                 let found =
-                    detect_streaks(&pixels, img.width, img.height, &params, w.trail_angle_deg);
+                    detect_streaks(&pixels, img.width, img.height, params, w.trail_angle_deg);
                 Ok((
                     found.into_iter().map(|c| c.detection).collect(),
                     t.elapsed().as_secs_f64(),
