@@ -59,7 +59,8 @@ impl RealFrame {
             path: path.to_path_buf(),
             message: e.to_string(),
         };
-        let (mut pixels, rows, cols) = crate::fits::read_f32(path).map_err(|e| err(&e))?;
+        let (mut pixels, rows, cols) = crate::fits::read_f32(path)
+            .map_err(|e| err(&format!("not a readable 2-D FITS image ({e})")))?;
         let mut f = FitsFile::open(path).map_err(|e| err(&e))?;
         let hdu = f.primary_hdu().map_err(|e| err(&e))?;
         let exposure_s: f64 = ["EXPTIME", "EXPOSURE", "AEXPTIME"]
@@ -76,11 +77,23 @@ impl RealFrame {
         if rows < 2 || cols < 2 {
             return Err(err(&format!("a {cols} x {rows} frame is too small")));
         }
+        let finite = pixels.iter().filter(|v| v.is_finite()).count();
+        if finite * 2 < pixels.len() {
+            return Err(err(&format!(
+                "only {finite} of its {} pixels are finite numbers: not a usable noise frame",
+                pixels.len()
+            )));
+        }
         let (median, sigma) = robust_stats(&pixels);
         let masked = mask_sources(&mut pixels, cols, rows, median, sigma);
         flatten(&mut pixels, cols, rows);
         // The noise statistics of what is left: the frame's sky noise.
         let (median, sigma) = robust_stats(&pixels);
+        if !(median.is_finite() && sigma.is_finite() && sigma > 0.0) {
+            return Err(err(&format!(
+                "no noise left to use (median {median}, robust sigma {sigma}): a constant frame?"
+            )));
+        }
         Ok(RealFrame {
             path: path.to_path_buf(),
             width: cols,
@@ -264,6 +277,45 @@ mod tests {
             f.background(4, 1, 10.0, (1, 1), 0.0),
             vec![4.0, 5.0, 3.0, 4.0]
         );
+    }
+
+    /// A 64 x 64 frame of `value`s with an EXPTIME of 10 s.
+    fn frame_of(dir: &Path, name: &str, value: impl Fn(usize) -> f32) -> PathBuf {
+        let path = dir.join(name);
+        let pixels: Vec<f32> = (0..64 * 64).map(value).collect();
+        let cards = vec![(
+            "EXPTIME".to_string(),
+            crate::fits::Card::Real(10.0),
+            String::new(),
+        )];
+        crate::fits::write_image(&path, 64, 64, crate::fits::Pixels::F32(&pixels), &cards).unwrap();
+        path
+    }
+
+    #[test]
+    fn unusable_frames_are_refused_with_their_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let cases = [
+            (frame_of(dir.path(), "nan.fits", |_| f32::NAN), "finite"),
+            (frame_of(dir.path(), "flat.fits", |_| 100.0), "no noise"),
+        ];
+        for (path, expect) in cases {
+            let e = RealFrame::load(&path).unwrap_err().to_string();
+            assert!(
+                e.contains(path.to_str().unwrap()) && e.contains(expect),
+                "{e}"
+            );
+        }
+        let text = dir.path().join("text.fits");
+        std::fs::write(&text, "not a FITS file").unwrap();
+        let e = RealFrame::load(&text).unwrap_err().to_string();
+        assert!(
+            e.contains("text.fits") && e.contains("not a readable"),
+            "{e}"
+        );
+        // A noisy frame loads.
+        let ok = frame_of(dir.path(), "ok.fits", |i| 100.0 + ((i * 7919) % 13) as f32);
+        assert!(RealFrame::load(&ok).is_ok());
     }
 
     #[test]

@@ -178,6 +178,20 @@ fn write_all(
         .map(|i| -> anyhow::Result<Written> {
             let subset = dataset_stage.then(|| subsets[i as usize]);
             let products = simulate::image(&x, &inputs, i)?;
+            // Never a non-finite pixel in an output (an extreme gain or frame could make one).
+            let bad = products
+                .exposure
+                .adu
+                .iter()
+                .filter(|v| !v.is_finite())
+                .count();
+            if bad > 0 {
+                anyhow::bail!(
+                    "image {i}: {bad} non-finite pixels in the noisy image (sensor.gain_e_per_adu {}, background {:?})",
+                    c.sensor.gain_e_per_adu,
+                    c.background
+                );
+            }
             let png = artifacts::write_image(
                 dir,
                 i,

@@ -240,6 +240,30 @@ mod tests {
     }
 
     #[test]
+    fn run_away_sensors_and_star_budgets_are_refused() {
+        for (extra, field) in [
+            (
+                "[sensor]\nzero_point_mag = 1e300\n",
+                "sensor.zero_point_mag",
+            ),
+            (
+                "[sensor]\ngain_e_per_adu = 1e-300\n",
+                "sensor.gain_e_per_adu",
+            ),
+            (
+                "[sensor]\nmag_limit = 30.0\n[stars]\nsource = \"procedural\"\ncone_radius_deg = 10.0\n",
+                "sensor.mag_limit",
+            ),
+        ] {
+            let e = load(&minimal(extra)).unwrap_err();
+            assert_eq!(e.field.as_deref(), Some(field), "{e}");
+            assert!(e.line.is_some(), "{e}");
+        }
+        // The paper's sensor and a deep but small cone pass.
+        load(&minimal("[sensor]\nmag_limit = 20.0\n")).unwrap();
+    }
+
+    #[test]
     fn streak_detector_knobs_are_optional_and_checked() {
         let c = load(&minimal(
             "[detect.streak]\nthreshold_sigma = 3.5\nmin_snr = 7.0\n",

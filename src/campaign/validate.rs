@@ -3,6 +3,9 @@
 
 use super::{CampaignFile, FrameKind, LightCurve, PointingMode, Stage, Stars};
 
+/// Most model stars a scene's star cone may hold.
+const MAX_STARS_PER_CONE: f64 = 2e6;
+
 /// Field-level checks that need no files. Returns (field path, message).
 pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     fn check(ok: bool, field: &str, msg: &str) -> Result<(), (String, String)> {
@@ -74,15 +77,18 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "sensor.fov_radius_deg",
         "must be in (0, 10] degrees (the gnomonic projection is used)",
     )?;
+    // Bounds of real instruments, with room: a zero point of 0 is a telescope that collects one
+    // photo-electron per second from a magnitude-0 star, 40 one far beyond the largest built;
+    // CCD and CMOS gains are 0.1-20 e-/ADU.
     check(
-        s.zero_point_mag.is_finite(),
+        (0.0..=40.0).contains(&s.zero_point_mag),
         "sensor.zero_point_mag",
-        "must be finite",
+        "must be a magnitude in [0, 40] (the magnitude that gives 1 e-/s)",
     )?;
     check(
-        pos(s.gain_e_per_adu),
+        (1e-3..=1e4).contains(&s.gain_e_per_adu),
         "sensor.gain_e_per_adu",
-        "must be positive",
+        "must be in [0.001, 10000] e-/ADU",
     )?;
     check(
         nonneg(s.background_min_adu),
@@ -129,6 +135,29 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "stars.cone_radius_deg",
         "must be in (0, 10] degrees",
     )?;
+    // The star budget: the model count of stars to the limiting magnitude in the widest cone a
+    // scene loads, in the galactic plane. Beyond this an image's star query alone takes minutes.
+    let cone_deg = match c.pointing.mode {
+        PointingMode::Fixed => c.stars.cone_radius_deg(),
+        PointingMode::Survey => {
+            super::MAX_SURVEY_DRIFT_DEG / 2.0
+                + s.fov_radius_deg * (1.0f64).hypot(s.height_px as f64 / s.width_px as f64)
+        }
+    };
+    let stars = crate::sky::stars::cumulative_density_per_deg2(0.0, s.mag_limit)
+        * std::f64::consts::PI
+        * cone_deg
+        * cone_deg;
+    if stars > MAX_STARS_PER_CONE {
+        return Err((
+            "sensor.mag_limit".into(),
+            format!(
+                "about {stars:.1e} stars brighter than magnitude {} in a {cone_deg:.2} deg star cone \
+                 (at most {MAX_STARS_PER_CONE:.0e}): lower the limiting magnitude or the cone",
+                s.mag_limit
+            ),
+        ));
+    }
     if let Stars::Catalog { epoch_jyear, .. } = c.stars {
         check(
             (1000.0..=3000.0).contains(&epoch_jyear),
