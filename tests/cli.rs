@@ -147,6 +147,16 @@ fn bad_campaigns_fail_with_a_clear_message_and_no_output() {
     // Negative exposure.
     let c = small_campaign(tmp.path(), "[exposure]\nmin_s = -1.0\n");
     assert_clean_failure(&c, &out, &["small.toml:", "exposure.min_s", "positive"]);
+    // A window decades from the TLEs' epoch.
+    let c = small_campaign(
+        tmp.path(),
+        "[window]\nstart = \"1990-01-01T00:00:00 UTC\"\nend = \"1990-01-02T00:00:00 UTC\"\n",
+    );
+    assert_clean_failure(
+        &c,
+        &out,
+        &["small.toml:", "observer.tle_file", "days from the orbit's epoch"],
+    );
     // Split ratios that do not sum to 1.
     let c = small_campaign(tmp.path(), "[split]\ntrain = 0.7\nval = 0.2\ntest = 0.2\n");
     assert_clean_failure(&c, &out, &["small.toml:", "split", "sum to 1"]);

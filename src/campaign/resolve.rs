@@ -56,7 +56,14 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
             .map(|(i, (spec, body))| (format!("debris[{i}]"), spec, body)),
     );
     for (field, spec, body) in specs {
-        if let Err(e) = check_propagates(body, window_start, window_end) {
+        let problem = match check_propagates(body, window_start, window_end) {
+            Err(e) => Some(format!(
+                "{e}: the object cannot be propagated anywhere in the window {} .. {}",
+                file.window.start, file.window.end
+            )),
+            Ok(()) => epoch_too_far(body, window_start, window_end),
+        };
+        if let Some(problem) = problem {
             let (suffix, source) = match (&spec.tle_file, &spec.tle, &spec.elements) {
                 (Some(f), _, _) => {
                     let full = base_dir.join(f);
@@ -70,13 +77,7 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
                 (_, Some(_), _) => (".tle", String::new()),
                 _ => (".elements", String::new()),
             };
-            return Err(fail(
-                &format!("{field}{suffix}"),
-                format!(
-                    "{e}{source}: the object cannot be propagated anywhere in the window {} .. {}",
-                    file.window.start, file.window.end
-                ),
-            ));
+            return Err(fail(&format!("{field}{suffix}"), format!("{problem}{source}")));
         }
     }
     if let Background::Frames { paths } = &resolved.background {
@@ -287,6 +288,26 @@ fn resolve_object(
 
 /// Instants at which `check_propagates` tries an object, evenly over the window.
 const PROPAGATION_CHECKS: u32 = 65;
+
+/// Farthest a window may reach from an orbit's epoch, days. SGP4's along-track error grows by
+/// roughly a few km per day from a TLE's epoch: three years covers the paper's year-long window
+/// with a TLE from inside it many times over, and refuses a 1900 or 2200 window with a 2022 TLE.
+const MAX_DAYS_FROM_EPOCH: f64 = 3.0 * 365.25;
+
+/// Why a body's orbit is too far from its epoch for the window, if it is.
+fn epoch_too_far(body: &Body, start: Epoch, end: Epoch) -> Option<String> {
+    let epoch = body.propagator.epoch();
+    let days = (start - epoch)
+        .to_seconds()
+        .abs()
+        .max((end - epoch).to_seconds().abs())
+        / 86_400.0;
+    (days > MAX_DAYS_FROM_EPOCH).then(|| {
+        format!(
+            "the window reaches {days:.0} days from the orbit's epoch {epoch} (at most {MAX_DAYS_FROM_EPOCH:.0}): use elements or a TLE of the window's time"
+        )
+    })
+}
 
 /// Ok if the body propagates at one of `PROPAGATION_CHECKS` instants of the window; else the
 /// first failure (at the window start). An object that decays inside the window is kept:
