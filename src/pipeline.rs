@@ -177,7 +177,19 @@ fn write_all(
         .into_par_iter()
         .map(|i| -> anyhow::Result<Written> {
             let subset = dataset_stage.then(|| subsets[i as usize]);
-            let products = simulate::image(&x, &inputs, i)?;
+            let products = simulate::image(&x, &inputs, i).map_err(|e| {
+                // Draws meet the checks in turn, so a rare reason can be the one that matters.
+                let fields: Vec<String> = e
+                    .reasons_by_count()
+                    .into_iter()
+                    .map(|r| format!("{r}: {}", rejection_fields(r)))
+                    .collect();
+                anyhow::anyhow!(
+                    "{e}; in {}, what decides each: {}",
+                    campaign.source.display(),
+                    fields.join("; ")
+                )
+            })?;
             // Never a non-finite pixel in an output (an extreme gain or frame could make one).
             let bad = products
                 .exposure
@@ -268,6 +280,26 @@ fn write_all(
         trained.map(|t| t.record),
     )?;
     Ok((manifest.digest, n, seconds))
+}
+
+/// The campaign fields that decide a scene-draw rejection reason (`scene::try_draw`).
+fn rejection_fields(reason: &str) -> &'static str {
+    match reason {
+        "earth angle" => "`visibility.earth_min_deg` (and the observer's attitude)",
+        "sun angle" => "`visibility.sun_min_deg`",
+        "moon angle" => "`visibility.moon_min_deg`",
+        "line of sight through the earth" => {
+            "`visibility.earth_clearance_km` and the observer's and debris' orbits"
+        }
+        "debris in earth shadow" => "the `window` and the debris' orbits (rarely sunlit)",
+        "fainter than the magnitude limit" => {
+            "`sensor.mag_limit`, `photometry` and the debris' ranges"
+        }
+        "star brighter than the limit in the field" => "`visibility.brightest_star_mag`",
+        "signal to noise below the gate" => "`visibility.snr_min` and `exposure`",
+        "propagation failed" => "the `window` and the orbits' epochs",
+        _ => "`exposure.max_s` and `render.trajectory_samples`",
+    }
 }
 
 /// The YOLO detector's settings of a campaign.

@@ -335,6 +335,18 @@ pub struct NoScene {
     pub image: u64,
     pub attempts: u32,
     pub reasons: String,
+    /// Draws rejected for each reason.
+    pub rejections: BTreeMap<&'static str, u32>,
+}
+
+impl NoScene {
+    /// The reasons draws were rejected for, the most frequent first.
+    pub fn reasons_by_count(&self) -> Vec<&'static str> {
+        let mut r: Vec<(&'static str, u32)> =
+            self.rejections.iter().map(|(k, v)| (*k, *v)).collect();
+        r.sort_by(|a, b| b.1.cmp(&a.1));
+        r.into_iter().map(|(k, _)| k).collect()
+    }
 }
 
 /// Draw the scene of one image, retrying rejected draws on the same stream.
@@ -365,6 +377,7 @@ pub fn draw(
             .map(|(k, v)| format!("{k} x{v}"))
             .collect::<Vec<_>>()
             .join(", "),
+        rejections,
     })
 }
 

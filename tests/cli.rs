@@ -155,8 +155,27 @@ fn bad_campaigns_fail_with_a_clear_message_and_no_output() {
     assert_clean_failure(
         &c,
         &out,
-        &["small.toml:", "observer.tle_file", "days from the orbit's epoch"],
+        &[
+            "small.toml:",
+            "observer.tle_file",
+            "days from the orbit's epoch",
+        ],
     );
+    // A gate no draw can pass: the message names the reason and the field to look at.
+    let c = small_campaign(
+        tmp.path(),
+        "[visibility]\nsnr_min = 1e9\nmax_attempts = 20\n",
+    );
+    assert_clean_failure(
+        &c,
+        &out,
+        &["no acceptable scene", "visibility.snr_min", "small.toml"],
+    );
+    // The observer among the debris.
+    let c = CampaignToml::new("self", 0, 1)
+        .debris(&tle_object(41335))
+        .write(&tmp.path().join("self.toml"));
+    assert_clean_failure(&c, &out, &["self.toml:", "debris[0]", "observer itself"]);
     // Split ratios that do not sum to 1.
     let c = small_campaign(tmp.path(), "[split]\ntrain = 0.7\nval = 0.2\ntest = 0.2\n");
     assert_clean_failure(&c, &out, &["small.toml:", "split", "sum to 1"]);

@@ -53,6 +53,8 @@ pub struct Campaign {
     pub output_dir: PathBuf,
     /// Directory of the campaign file, for relative paths.
     pub base_dir: PathBuf,
+    /// The campaign file (or the name given to campaign text built in code), for messages.
+    pub source: PathBuf,
 }
 
 impl Campaign {
@@ -118,6 +120,7 @@ impl Campaign {
             window_end: r.window_end,
             output_dir,
             base_dir,
+            source: path.to_path_buf(),
         })
     }
 

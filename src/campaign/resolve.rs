@@ -45,6 +45,16 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
                 .map_err(|(f, m)| fail(&format!("debris[{i}]{f}"), m))?,
         );
     }
+    // The observer cannot observe itself: every draw would fail its geometry.
+    if let Some(i) = debris.iter().position(|d| d.norad == observer.norad) {
+        return Err(fail(
+            &format!("debris[{i}].norad"),
+            format!(
+                "NORAD {} is the observer itself: the debris must be other objects",
+                observer.norad
+            ),
+        ));
+    }
     // An object SGP4 cannot propagate anywhere in the window (decayed before it opens,
     // or diverged) would fail every scene draw, ending in "no acceptable scene" after
     // max_attempts draws: refuse it here, naming its field and its TLE.
@@ -77,7 +87,10 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
                 (_, Some(_), _) => (".tle", String::new()),
                 _ => (".elements", String::new()),
             };
-            return Err(fail(&format!("{field}{suffix}"), format!("{problem}{source}")));
+            return Err(fail(
+                &format!("{field}{suffix}"),
+                format!("{problem}{source}"),
+            ));
         }
     }
     if let Background::Frames { paths } = &resolved.background {

@@ -153,14 +153,20 @@ fn locate_onnxruntime(search: &OrtSearch) -> Result<PathBuf, YoloError> {
 /// `$VIRTUAL_ENV`, `~/.local` and the interpreter's site dirs. The error tells the user to run the
 /// project's setup (`pip install onnxruntime`) when absent.
 pub fn find_onnxruntime() -> Result<PathBuf, YoloError> {
-    let mut prefixes = vec![PathBuf::from(".venv")];
+    // The project's .venv (scripts/setup.sh) in the current directory, else beside the
+    // executable's repository, so soig finds it when started from anywhere.
+    let repo_venv = Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv");
+    let mut prefixes = vec![PathBuf::from(".venv"), repo_venv.clone()];
     if let Some(v) = std::env::var_os("VIRTUAL_ENV").filter(|v| !v.is_empty()) {
         prefixes.push(PathBuf::from(v));
     }
     if let Some(home) = std::env::var_os("HOME").filter(|v| !v.is_empty()) {
         prefixes.push(PathBuf::from(home).join(".local"));
     }
-    let mut pythons = vec![PathBuf::from(".venv/bin/python3")];
+    let mut pythons = vec![
+        PathBuf::from(".venv/bin/python3"),
+        repo_venv.join("bin/python3"),
+    ];
     pythons.retain(|p| p.is_file());
     pythons.push(PathBuf::from("python3"));
     locate_onnxruntime(&OrtSearch {
