@@ -344,7 +344,7 @@ impl NoScene {
     pub fn reasons_by_count(&self) -> Vec<&'static str> {
         let mut r: Vec<(&'static str, u32)> =
             self.rejections.iter().map(|(k, v)| (*k, *v)).collect();
-        r.sort_by(|a, b| b.1.cmp(&a.1));
+        r.sort_by_key(|&(_, n)| std::cmp::Reverse(n));
         r.into_iter().map(|(k, _)| k).collect()
     }
 }
