@@ -8,13 +8,13 @@ use serde::{Deserialize, Serialize};
 /// COCO metrics as pycocotools reports them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CocoMetrics {
-    /// AP@[.5:.95] (stats[0]); -1 when no class has objects.
+    /// AP@[.5:.95] (`stats[0]`); -1 when no class has objects.
     pub ap: f64,
-    /// AP at IoU 0.5 (stats[1]).
+    /// AP at IoU 0.5 (`stats[1]`).
     pub ap50: f64,
-    /// AP at IoU 0.75 (stats[2]).
+    /// AP at IoU 0.75 (`stats[2]`).
     pub ap75: f64,
-    /// AR with at most 100 detections per image (stats[8]).
+    /// AR with at most 100 detections per image (`stats[8]`).
     pub ar100: f64,
     /// The 101-point interpolated precision at IoU 0.5 (`eval['precision'][0, :, k, 0, 2]`), averaged
     /// over the classes where it is defined; -1 where no class defines it.
