@@ -89,14 +89,16 @@ impl Manifest {
         campaign: serde_json::Value,
         volatile: &[String],
     ) -> std::io::Result<Manifest> {
-        let mut files = BTreeMap::new();
-        for rel in list_files(dir)? {
-            if volatile.contains(&rel) {
-                continue;
-            }
-            let (sha256, bytes) = sha256_file(&dir.join(&rel))?;
-            files.insert(rel, FileEntry { sha256, bytes });
-        }
+        use rayon::prelude::*;
+        // Hashed in parallel: a 4000-image run has ~12000 files.
+        let files = list_files(dir)?
+            .into_par_iter()
+            .filter(|rel| !volatile.contains(rel))
+            .map(|rel| {
+                let (sha256, bytes) = sha256_file(&dir.join(&rel))?;
+                Ok((rel, FileEntry { sha256, bytes }))
+            })
+            .collect::<std::io::Result<BTreeMap<_, _>>>()?;
         let mut m = Manifest {
             tool: "soig".into(),
             version: env!("CARGO_PKG_VERSION").into(),

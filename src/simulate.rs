@@ -88,13 +88,19 @@ pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProduct
         // rendered streak in the final frame.
         let mut rng = stream(seed, index, Purpose::Enhance);
         let adu = geometry::warp(&exposure.adu, w, h, &frame, Fill::SkyNoise(&mut rng));
-        let debris: Vec<f32> = exposure
-            .debris_electrons
-            .iter()
-            .map(|&v| v as f32)
-            .collect();
-        let debris = geometry::warp::<ChaCha12Rng>(&debris, w, h, &frame, Fill::Zero);
-        let label = geometry::flux_box(&debris, frame.width, frame.height, LABEL_SHARE);
+        // In the original frame that is the box the renderer already found (the same
+        // computation on the same pixels): not built again (7.5 ms a 1024 px image).
+        let label = if frame.is_identity() {
+            exposure.truth.label_box_px
+        } else {
+            let debris: Vec<f32> = exposure
+                .debris_electrons
+                .iter()
+                .map(|&v| v as f32)
+                .collect();
+            let debris = geometry::warp::<ChaCha12Rng>(&debris, w, h, &frame, Fill::Zero);
+            geometry::flux_box(&debris, frame.width, frame.height, LABEL_SHARE)
+        };
         exposure.truth.frame = Some(frame.clone());
         exposure.truth.label_box_final_px = label;
         let png = enhance::enhance(&adu, frame.width, frame.height, &p.enhance);
