@@ -54,32 +54,34 @@ pub fn write_image(
     let exposure = &products.exposure;
     let (w, h) = (exposure.width, exposure.height);
     let cards = provenance_cards(provenance, sensor, &products.scene, exposure);
-    if artifacts.fits {
+    // Both FITS carry the same keywords but their unit.
+    let write_fits = |file: String, pixels: Pixels, unit: &str, comment: &str| {
         let mut cards = cards.clone();
-        cards.push((
-            "BUNIT".into(),
-            Card::Str("adu".into()),
-            "Eq. 11: e-/gain + background + bias".into(),
-        ));
-        let path = dir.join("fits").join(format!("{stem}.fits"));
-        fits::write_image(&path, w, h, Pixels::F32(&exposure.adu), &cards)
-            .with_context(|| format!("writing {}", path.display()))?;
+        cards.push(("BUNIT".into(), Card::Str(unit.into()), comment.into()));
+        let path = dir.join("fits").join(file);
+        fits::write_image(&path, w, h, pixels, &cards)
+            .with_context(|| format!("writing {}", path.display()))
+    };
+    if artifacts.fits {
+        write_fits(
+            format!("{stem}.fits"),
+            Pixels::F32(&exposure.adu),
+            "adu",
+            "Eq. 11: e-/gain + background + bias",
+        )?;
     }
     if artifacts.noise_free_fits {
-        let mut cards = cards;
-        cards.push((
-            "BUNIT".into(),
-            Card::Str("electron".into()),
-            "noise-free photo-electrons".into(),
-        ));
-        let path = dir.join("fits").join(format!("{stem}_clean.fits"));
         let e: Vec<i32> = exposure
             .electrons
             .iter()
             .map(|&v| v.min(i32::MAX as u32) as i32)
             .collect();
-        fits::write_image(&path, w, h, Pixels::I32(&e), &cards)
-            .with_context(|| format!("writing {}", path.display()))?;
+        write_fits(
+            format!("{stem}_clean.fits"),
+            Pixels::I32(&e),
+            "electron",
+            "noise-free photo-electrons",
+        )?;
     }
     if artifacts.star_list {
         let path = dir.join("truth").join(format!("{stem}_stars.csv"));

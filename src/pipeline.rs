@@ -298,7 +298,10 @@ fn rejection_fields(reason: &str) -> &'static str {
         "star brighter than the limit in the field" => "`visibility.brightest_star_mag`",
         "signal to noise below the gate" => "`visibility.snr_min` and `exposure`",
         "propagation failed" => "the `window` and the orbits' epochs",
-        _ => "`exposure.max_s` and `render.trajectory_samples`",
+        "streak too fast to sample (over 1e6 trajectory samples)" => {
+            "`exposure.max_s` and `render.trajectory_samples`"
+        }
+        _ => "the campaign's `exposure`, `pointing` and `visibility`",
     }
 }
 
