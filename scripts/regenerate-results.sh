@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Reruns every committed reference run in results/ and copies back what is committed of each
+# (digest, metrics, reports, PR curve; the images stay in the scratch folder), then the study.
+# Run after any change that moves a digest, on a quiet machine; results/README.md says when
+# it was last done. Usage: bash scripts/regenerate-results.sh [SCRATCH_DIR]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scratch="${1:-$(mktemp -d)}"
+soig=target/release/soig
+cargo build --release --locked
+for campaign in results/campaigns/*.toml; do
+    name=$(basename "$campaign" .toml)
+    "$soig" run "$campaign" --out "$scratch/$name"
+    mkdir -p "results/$name"
+    python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["digest"])' \
+        "$scratch/$name/manifest.json" > "results/$name/digest.txt"
+    for f in metrics.csv report.json report.md pr_curve.png; do
+        cp "$scratch/$name/report/$f" "results/$name/$f"
+    done
+done
+"$soig" study campaigns/quickstart.toml --seeds 16 --out "$scratch/study"
+rm -rf results/study && mkdir -p results/study
+cp "$scratch/study/"{errors.csv,manifest.json,study.csv,study.json,study.md,study.png} results/study/
+echo "results regenerated (scratch: $scratch)"
