@@ -313,14 +313,8 @@ fn draw_and_render(c: &Campaign, n: u64) -> Vec<(Scene, Exposure)> {
     let x = Experiment::new(c);
     (0..n)
         .map(|i| {
-            let s = scene::draw(
-                &x.scene,
-                &x.sensor,
-                &inputs,
-                i,
-                &mut stream(c.resolved.seed, i, Purpose::Scene),
-            )
-            .unwrap_or_else(|e| panic!("{e}"));
+            let s = scene::draw(&x.scene, &x.sensor, &inputs, c.resolved.seed, i)
+                .unwrap_or_else(|e| panic!("{e}"));
             for p in &s.trajectory {
                 assert!(p.expected_electrons.is_finite() && p.expected_electrons >= 0.0);
                 assert!(p.ra_deg.is_finite() && p.dec_deg.is_finite());
