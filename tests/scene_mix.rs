@@ -20,7 +20,7 @@ fn chi_square(observed: &[usize], expected: &[f64]) -> f64 {
 /// The 0.1% upper quantile of chi-square with 3 degrees of freedom (four objects): a correct
 /// draw exceeds it for one seed in a thousand. The old draw, which redrew the object with
 /// every rejected scene, gave FENGYUN 1C DEB 7.7% of the images instead of 25%: a chi-square
-/// near 50 at 400 images, far beyond it.
+/// of about 64 at 400 images, far beyond it.
 const CHI2_3DOF_P001: f64 = 16.266;
 
 /// The paper's four debris seen from SENTINEL-3A, every other setting the paper's but the
