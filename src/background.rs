@@ -112,6 +112,14 @@ impl RealFrame {
         self.pixels[j * self.width + i]
     }
 
+    /// The mean ADU this frame adds to a pixel of an image exposed `exposure_s`, on top of the
+    /// sensor's sky level (see `background`): the mean of its scaled fluctuations about its
+    /// median, close to 0 (the frame gives the noise, the sensor the level).
+    pub fn level_adu(&self, exposure_s: f64) -> f64 {
+        let mean = self.pixels.iter().map(|&v| v as f64).sum::<f64>() / self.pixels.len() as f64;
+        (mean - self.median) * exposure_s / self.exposure_s
+    }
+
     /// The background of a `width` x `height` image exposed `exposure_s`: the mirror-tiled
     /// frame's fluctuations about its median, normalised by its exposure and scaled to this one
     /// (paper 3.4), on the sky level `level_adu`.

@@ -141,12 +141,18 @@ fn main() -> ExitCode {
             let campaign = Campaign::load_with_overrides(&campaign, &set)?;
             let output = out.unwrap_or_else(|| campaign.output_dir.clone());
             let s = soig::pipeline::run(&campaign, &output, python.as_deref(), &*progress(quiet))?;
+            let mix: Vec<String> = s
+                .mix
+                .iter()
+                .map(|d| format!("{} (NORAD {}) {}", d.object, d.norad, d.images))
+                .collect();
             println!(
-                "{} images in {:.1} s ({:.2} images/s) -> {}\ndigest {}",
+                "{} images in {:.1} s ({:.2} images/s) -> {}\ndebris mix: {}\ndigest {}",
                 s.images,
                 s.seconds,
                 s.images as f64 / s.seconds,
                 s.output.display(),
+                mix.join(", "),
                 s.digest
             );
             Ok(())

@@ -39,7 +39,11 @@ pub struct Manifest {
     /// tool version, both hashed, so they are recorded but not part of the digest.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub effective: Option<serde_json::Value>,
-    /// sha256 of the canonical JSON of everything above but `effective`.
+    /// Images per debris object (`pipeline::DebrisCount`): a summary of the truth sidecars,
+    /// each of which names its object and is hashed, so recorded but not part of the digest.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub debris_mix: Option<serde_json::Value>,
+    /// sha256 of the canonical JSON of everything above but `effective` and `debris_mix`.
     pub digest: String,
 }
 
@@ -76,6 +80,7 @@ fn digest_of(m: &Manifest) -> String {
     let fields = v.as_object_mut().expect("object");
     fields.remove("digest");
     fields.remove("effective");
+    fields.remove("debris_mix");
     hex(&Sha256::digest(
         serde_json::to_string(&v).expect("json").as_bytes(),
     ))
@@ -108,6 +113,7 @@ impl Manifest {
             volatile: volatile.to_vec(),
             training: None,
             effective: None,
+            debris_mix: None,
             digest: String::new(),
         };
         m.digest = digest_of(&m);

@@ -33,6 +33,33 @@ pub struct RunSummary {
     pub digest: String,
     pub images: usize,
     pub seconds: f64,
+    /// The realised debris mix: images of each object, in the campaign's order.
+    pub mix: Vec<DebrisCount>,
+}
+
+/// How many images of a run show one debris object.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DebrisCount {
+    pub object: String,
+    pub norad: u64,
+    pub images: usize,
+}
+
+/// Images per debris object, from the object index of each image.
+fn debris_mix(campaign: &Campaign, shown: impl Iterator<Item = usize>) -> Vec<DebrisCount> {
+    let mut mix: Vec<DebrisCount> = campaign
+        .debris
+        .iter()
+        .map(|d| DebrisCount {
+            object: d.name.clone(),
+            norad: d.norad,
+            images: 0,
+        })
+        .collect();
+    for i in shown {
+        mix[i].images += 1;
+    }
+    mix
 }
 
 /// Run the campaign into `output`. An existing `output` is replaced only if it is a soig output
@@ -58,14 +85,12 @@ pub fn run(
         YoloDetector::load(&path, yolo_params(campaign))
             .with_context(|| format!("loading model {}", path.display()))?;
     }
-    let (digest, images, seconds) = write_replacing(output, &[&campaign.base_dir], |staging| {
+    write_replacing(output, &[&campaign.base_dir], |staging| {
         write_all(campaign, staging, python.as_deref(), progress)
-    })?;
-    Ok(RunSummary {
+    })
+    .map(|s| RunSummary {
         output: output.to_path_buf(),
-        digest,
-        images,
-        seconds,
+        ..s
     })
 }
 
@@ -106,20 +131,23 @@ pub fn train(
         old.campaign.clone(),
         &volatile,
         Some(trained.record),
+        old.debris_mix.clone(),
     )?;
     Ok(trained.model)
 }
 
-/// Hash `dir` into its manifest with the effective values and the training record, and write
-/// it.
+/// Hash `dir` into its manifest with the effective values, the training record and the debris
+/// mix, and write it.
 fn seal_manifest(
     dir: &Path,
     campaign: &Campaign,
     resolved: serde_json::Value,
     volatile: &[String],
     training: Option<serde_json::Value>,
+    debris_mix: Option<serde_json::Value>,
 ) -> anyhow::Result<Manifest> {
     let mut m = Manifest::build(dir, &campaign.hash, resolved, volatile)?;
+    m.debris_mix = debris_mix;
     m.effective = Some(serde_json::to_value(
         Experiment::new(campaign).effective(campaign),
     )?);
@@ -136,7 +164,7 @@ fn write_all(
     dir: &Path,
     python: Option<&Path>,
     progress: &dyn Progress,
-) -> anyhow::Result<(String, usize, f64)> {
+) -> anyhow::Result<RunSummary> {
     let c = &campaign.resolved;
     let n = c.images as usize;
     let stages = &c.stages;
@@ -185,8 +213,9 @@ fn write_all(
                     .map(|r| format!("{r}: {}", rejection_fields(r)))
                     .collect();
                 anyhow::anyhow!(
-                    "{e}; in {}, what decides each: {}",
+                    "{e}; in {}, field `debris[{}]`: remove the object, lower its `weight` or relax the rules (an object no draw shows is an error, not a silently smaller share); what decides each rejection: {}",
                     campaign.source.display(),
+                    e.debris_index,
                     fields.join("; ")
                 )
             })?;
@@ -222,6 +251,7 @@ fn write_all(
             };
             progress.advance();
             Ok(Written {
+                debris_index: products.scene.debris_index,
                 subset,
                 png,
                 conversion_s,
@@ -272,14 +302,22 @@ fn write_all(
     if trained.is_some() {
         volatile.extend(volatile_files(dir)?);
     }
+    let mix = debris_mix(campaign, written.iter().map(|w| w.debris_index));
     let manifest = seal_manifest(
         dir,
         campaign,
         serde_json::to_value(c)?,
         &volatile,
         trained.map(|t| t.record),
+        Some(serde_json::to_value(&mix)?),
     )?;
-    Ok((manifest.digest, n, seconds))
+    Ok(RunSummary {
+        output: dir.to_path_buf(),
+        digest: manifest.digest,
+        images: n,
+        seconds,
+        mix,
+    })
 }
 
 /// The campaign fields that decide a scene-draw rejection reason (`scene::try_draw`).
@@ -296,7 +334,9 @@ fn rejection_fields(reason: &str) -> &'static str {
             "`sensor.mag_limit`, `photometry` and the debris' ranges"
         }
         "star brighter than the limit in the field" => "`visibility.brightest_star_mag`",
-        "signal to noise below the gate" => "`visibility.snr_min` and `exposure`",
+        "signal to noise below the gate" => {
+            "`visibility.snr_min`, `visibility.snr_definition` and `exposure`"
+        }
         "propagation failed" => "the `window` and the orbits' epochs",
         "streak too fast to sample (over 1e6 trajectory samples)" => {
             "`exposure.max_s` and `render.trajectory_samples`"
@@ -316,8 +356,10 @@ fn yolo_params(campaign: &Campaign) -> YoloParams {
     }
 }
 
-/// What an image left for the detect stage.
+/// What an image left for the summary and the detect stage.
 struct Written {
+    /// The debris object it shows (index in the campaign's debris).
+    debris_index: usize,
     subset: Option<Subset>,
     png: Option<WrittenPng>,
     /// FITS -> PNG conversion time (frame, enhancement, encoding), seconds.

@@ -21,6 +21,8 @@ pub enum Purpose {
     Split = 4,
     /// Enhancement (noise fill of padded areas).
     Enhance = 5,
+    /// Which debris object an image shows, drawn once before the scene's retries.
+    Debris = 6,
 }
 
 /// The stream for (seed, image index, purpose).

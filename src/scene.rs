@@ -1,8 +1,10 @@
 //! The scene draw (paper 3.2.1-3.2.3): which debris, when, how long, where the sensor points,
-//! which stars are in the field, and the visibility checks that reject a draw. A rejected draw
-//! retries with the same random stream, so the accepted scene is a pure function of
-//! (scene spec, sensor, inputs, image index). The campaign file is never seen here: the
-//! config layer (`experiment`) builds the values.
+//! which stars are in the field, and the visibility checks that reject a draw. The debris
+//! object is drawn once per image, from its own stream, by the campaign's weights; a rejected
+//! draw retries everything else for that object on the scene stream, so a rarely visible
+//! object keeps its share of the images, and the accepted scene is a pure function of (scene
+//! spec, sensor, inputs, seed, image index). The campaign file is never seen here: the config
+//! layer (`experiment`) builds the values.
 
 use std::collections::BTreeMap;
 
@@ -13,6 +15,7 @@ use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
 use crate::background::{BackgroundModel, FrameChoice, RealFrame};
+use crate::rng::{Purpose, stream};
 use crate::sensor::Sensor;
 use crate::sky::ephemeris::{moon_position_km, sun_position_km};
 use crate::sky::frames::teme_to_gcrs_matrix;
@@ -91,6 +94,21 @@ pub struct TumbleRange {
     pub amplitude_max: f64,
 }
 
+/// What the signal-to-noise gate divides the mean debris ADU per footprint pixel by.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, Serialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum SnrDefinition {
+    /// The paper's (3.2.6): the mean level of the combined noise matrices, background plus
+    /// bias (~202 ADU per pixel for 5 s; a semisynthetic image's level with its real frame).
+    #[default]
+    NoiseLevel,
+    /// Their standard deviation (~5.8 ADU per pixel for 5 s): a gate ~35x weaker that admits
+    /// streaks no eye or detector can see (soig's reading before the paper's was adopted).
+    NoiseSigma,
+}
+
 /// Scene acceptance rules (paper 3.2.2 and 3.2.6), with the effective signal-to-noise gate.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Gate {
@@ -100,6 +118,7 @@ pub struct Gate {
     pub earth_clearance_km: f64,
     pub brightest_star_mag: f64,
     pub snr_min: f64,
+    pub snr_definition: SnrDefinition,
     pub max_attempts: u32,
 }
 
@@ -112,6 +131,9 @@ pub struct Spec {
     pub exposure_min_s: f64,
     pub exposure_max_s: f64,
     pub pointing: PointingMode,
+    /// Relative weight of each debris object, in the order of `Inputs::debris`: an image shows
+    /// object i with probability w_i / sum(w) (an object without a weight here weighs 1).
+    pub debris_weights: Vec<f64>,
     /// The debris at mid-exposure is placed uniformly within this fraction of the half-field.
     pub placement_fraction: f64,
     /// Debris area |N(mean, std)| m^2 and albedo (Eq. 6-7).
@@ -239,8 +261,12 @@ pub struct Scene {
     pub stars: Vec<Star>,
     /// The real background frame of a semisynthetic image.
     pub background: Option<FrameChoice>,
-    /// Expected debris signal per footprint pixel over background noise, the acceptance gate.
+    /// The signal-to-noise ratio the gate judged, by its definition (one of the two below).
     pub snr: f64,
+    /// Expected debris ADU per footprint pixel over the mean level of background plus bias
+    /// (`SnrDefinition::NoiseLevel`), and over their standard deviation (`NoiseSigma`).
+    pub snr_noise_level: f64,
+    pub snr_noise_sigma: f64,
     /// Draws tried, and why the rejected ones were rejected.
     pub attempts: u32,
     pub rejections: BTreeMap<&'static str, u32>,
@@ -311,6 +337,8 @@ impl Scene {
             stars,
             background: None,
             snr: 1.0,
+            snr_noise_level: 1.0,
+            snr_noise_sigma: 1.0,
             attempts: 1,
             rejections: BTreeMap::new(),
         }
@@ -328,11 +356,17 @@ impl Scene {
     }
 }
 
-/// Why no scene could be drawn.
+/// Why no scene could be drawn: the image's debris object was never visible.
 #[derive(Debug, thiserror::Error)]
-#[error("image {image}: no acceptable scene in {attempts} draws (rejections: {reasons})")]
+#[error(
+    "image {image}: {object} (NORAD {norad}, debris[{debris_index}]) was never visible in {attempts} draws (rejections: {reasons})"
+)]
 pub struct NoScene {
     pub image: u64,
+    /// The object drawn for the image: its index in the campaign's debris, name and number.
+    pub debris_index: usize,
+    pub object: String,
+    pub norad: u64,
     pub attempts: u32,
     pub reasons: String,
     /// Draws rejected for each reason.
@@ -349,18 +383,37 @@ impl NoScene {
     }
 }
 
-/// Draw the scene of one image, retrying rejected draws on the same stream.
+/// The debris object of image `image`, by the spec's weights, from the image's own debris
+/// stream (so the retries of the scene draw never change which object an image shows).
+pub fn choose_debris(spec: &Spec, debris: usize, seed: u64, image: u64) -> usize {
+    let weight = |i: usize| spec.debris_weights.get(i).copied().unwrap_or(1.0);
+    let total: f64 = (0..debris).map(weight).sum();
+    let mut u = stream(seed, image, Purpose::Debris).random_range(0.0..total);
+    for i in 0..debris {
+        if u < weight(i) {
+            return i;
+        }
+        u -= weight(i);
+    }
+    // Rounding of the subtractions can leave u just above the last weight.
+    debris - 1
+}
+
+/// Draw the scene of image `image` of a campaign with this seed: the debris object first,
+/// then the rest, retried on the scene stream until the gate accepts it.
 pub fn draw(
     spec: &Spec,
     sensor: &Sensor,
     inputs: &Inputs,
+    seed: u64,
     image: u64,
-    rng: &mut ChaCha12Rng,
 ) -> Result<Scene, NoScene> {
+    let debris_index = choose_debris(spec, inputs.debris.len(), seed, image);
+    let rng = &mut stream(seed, image, Purpose::Scene);
     let mut rejections: BTreeMap<&'static str, u32> = BTreeMap::new();
     let max = spec.gate.max_attempts;
     for attempt in 1..=max {
-        match try_draw(spec, sensor, inputs, image, rng) {
+        match try_draw(spec, sensor, inputs, image, debris_index, rng) {
             Ok(mut scene) => {
                 scene.attempts = attempt;
                 scene.rejections = rejections;
@@ -369,8 +422,12 @@ pub fn draw(
             Err(reason) => *rejections.entry(reason).or_default() += 1,
         }
     }
+    let debris = &inputs.debris[debris_index];
     Err(NoScene {
         image,
+        debris_index,
+        object: debris.name.clone(),
+        norad: debris.norad,
         attempts: max,
         reasons: rejections
             .iter()
@@ -401,9 +458,9 @@ fn try_draw(
     sensor: &Sensor,
     inputs: &Inputs,
     image: u64,
+    debris_index: usize,
     rng: &mut ChaCha12Rng,
 ) -> Result<Scene, &'static str> {
-    let debris_index = rng.random_range(0..inputs.debris.len());
     let span_s = (spec.window_end - spec.window_start).to_seconds();
     let exposure_s = if spec.exposure_max_s > spec.exposure_min_s {
         rng.random_range(spec.exposure_min_s..=spec.exposure_max_s)
@@ -580,11 +637,21 @@ fn try_draw(
         trajectory = sample(finer)?;
     }
 
-    let snr = expected_snr(
+    let frame = inputs.frame(background);
+    let snr_noise_level = expected_snr(
         sensor,
         &trajectory,
-        sensor.background_sigma_adu(exposure_s, inputs.frame(background)),
+        sensor.noise_level_adu(exposure_s, frame),
     );
+    let snr_noise_sigma = expected_snr(
+        sensor,
+        &trajectory,
+        sensor.background_sigma_adu(exposure_s, frame),
+    );
+    let snr = match v.snr_definition {
+        SnrDefinition::NoiseLevel => snr_noise_level,
+        SnrDefinition::NoiseSigma => snr_noise_sigma,
+    };
     if snr < v.snr_min {
         return Err("signal to noise below the gate");
     }
@@ -612,16 +679,19 @@ fn try_draw(
         stars: field,
         background,
         snr,
+        snr_noise_level,
+        snr_noise_sigma,
         attempts: 0,
         rejections: BTreeMap::new(),
     })
 }
 
-/// Expected debris signal over noise, the paper's acceptance gate (3.2.6), defined here as the
-/// mean debris ADU per footprint pixel over the per-pixel standard deviation of background plus
-/// bias. The footprint is the in-image streak length times the PSF FWHM, plus one FWHM square:
-/// `(L + w) w`. Computed from expected values, before any photon is traced.
-pub fn expected_snr(sensor: &Sensor, trajectory: &[TrajectorySample], noise_sigma_adu: f64) -> f64 {
+/// Expected debris signal over noise, the paper's acceptance gate (3.2.6): the mean debris ADU
+/// per footprint pixel over `noise_adu`, the per-pixel level of background plus bias (the
+/// paper's reading) or their standard deviation (see `SnrDefinition`). The footprint is the
+/// in-image streak length times the PSF FWHM, plus one FWHM square: `(L + w) w`. Computed from
+/// expected values, before any photon is traced.
+pub fn expected_snr(sensor: &Sensor, trajectory: &[TrajectorySample], noise_adu: f64) -> f64 {
     let mut electrons = 0.0;
     let mut length_px = 0.0;
     let mut last: Option<(f64, f64)> = None;
@@ -640,8 +710,8 @@ pub fn expected_snr(sensor: &Sensor, trajectory: &[TrajectorySample], noise_sigm
     let fwhm_px = sensor.psf_fwhm_px();
     let footprint = (length_px + fwhm_px) * fwhm_px;
     let signal_adu = electrons / sensor.gain_e_per_adu / footprint.max(1.0);
-    if noise_sigma_adu > 0.0 {
-        signal_adu / noise_sigma_adu
+    if noise_adu > 0.0 {
+        signal_adu / noise_adu
     } else if signal_adu > 0.0 {
         f64::INFINITY
     } else {

@@ -77,6 +77,17 @@ impl Sensor {
             / self.background_exposure_s
     }
 
+    /// The mean level of the background and bias noise matrices per pixel, ADU, for an
+    /// exposure: what the detector (`render::detector`) adds to every pixel besides the
+    /// photo-electrons. The uniform model's mean, or the sensor's sky level plus the mean the
+    /// real frame adds to it; both plus the mean bias. The paper's signal-to-noise gate divides
+    /// by this (see `scene::SnrDefinition`).
+    pub fn noise_level_adu(&self, exposure_s: f64, frame: Option<&RealFrame>) -> f64 {
+        let bias = (self.bias.min_adu + self.bias.max_adu) / 2.0;
+        let frame = frame.map_or(0.0, |f| f.level_adu(exposure_s));
+        self.sky_level_adu(exposure_s) + frame + bias
+    }
+
     /// Background plus bias noise standard deviation per pixel, ADU, for an exposure: the
     /// uniform model's, or the real frame's robust sigma scaled by exposure.
     pub fn background_sigma_adu(&self, exposure_s: f64, frame: Option<&RealFrame>) -> f64 {

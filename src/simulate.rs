@@ -61,13 +61,7 @@ pub struct FinalImage {
 /// Draw, render and (with a product) frame and enhance image `index`.
 pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProducts, NoScene> {
     let seed = x.seed;
-    let scene = scene::draw(
-        &x.scene,
-        &x.sensor,
-        inputs,
-        index,
-        &mut stream(seed, index, Purpose::Scene),
-    )?;
+    let scene = scene::draw(&x.scene, &x.sensor, inputs, seed, index)?;
     let mut exposure = render::render(
         &x.sensor,
         &x.render,

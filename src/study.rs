@@ -200,13 +200,7 @@ fn draw(x: &Experiment, inputs: &Inputs, image: u64) -> anyhow::Result<(Scene, f
     let mut scene = None;
     for _ in 0..3 {
         let t = Instant::now();
-        let s = scene::draw(
-            &x.scene,
-            &x.sensor,
-            inputs,
-            image,
-            &mut stream(x.seed, image, Purpose::Scene),
-        )?;
+        let s = scene::draw(&x.scene, &x.sensor, inputs, x.seed, image)?;
         times.push(t.elapsed().as_secs_f64() * 1e3);
         scene = Some(s);
     }

@@ -161,15 +161,24 @@ fn bad_campaigns_fail_with_a_clear_message_and_no_output() {
             "days from the orbit's epoch",
         ],
     );
-    // A gate no draw can pass: the message names the reason and the field to look at.
+    // A gate no draw can pass: the message names the object never visible (name, NORAD, its
+    // field), the reason and the field to look at.
     let c = small_campaign(
         tmp.path(),
-        "[visibility]\nsnr_min = 1e9\nmax_attempts = 20\n",
+        "[visibility]\nsnr_min = 1e9\nmax_attempts = 200\n",
     );
+    // 200 draws: most fail the earth angle; enough reach the gate to name it.
     assert_clean_failure(
         &c,
         &out,
-        &["no acceptable scene", "visibility.snr_min", "small.toml"],
+        &[
+            "was never visible in 200 draws",
+            "(NORAD ",
+            "field `debris[",
+            "signal to noise below the gate x",
+            "visibility.snr_min",
+            "small.toml",
+        ],
     );
     // The observer among the debris.
     let c = CampaignToml::new("self", 0, 1)

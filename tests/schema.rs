@@ -19,119 +19,119 @@ fn committed_schema_is_current() {
 const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     (
         "campaigns/model-fixed.toml",
-        "1b9bc500f77336791e45700a7f0f5f586c2f60c9d3f3ce499b3812fa21b7ba8d",
+        "9e585bacc9a4f33755fd0b3f3624a9a389d9c65648577224e4c462140ae15dd8",
     ),
     (
         "campaigns/model-survey-stage2.toml",
-        "e499515f4ee08979d30a81570e35d757adf28beedf480bba3665cca8ba569441",
+        "75841b18509f9c33b7811a091446459f9c45788ce5b4c7986fcfdb89fe393b1e",
     ),
     (
         "campaigns/model-survey.toml",
-        "95cc8e70d4033007e956f3bb5ceec2cb221306b60d6add8daa561c9bbd2f8e3f",
+        "30e8f1ec16a661f7d840fa881f86cea42226114e72dd4ee58746c0c14731c534",
     ),
     (
         "campaigns/paper-fixed-original-semisynthetic-small.toml",
-        "109a2690e0f1de29ccdb820e086ceacb389bb66b8109dd2df7220633498d7d72",
+        "4c6f850f58ba9f91e4c330a3d3c354e080dea278a26f493069b0dbba6efa8a83",
     ),
     (
         "campaigns/paper-fixed-original-semisynthetic.toml",
-        "b523a7fb91741812201626e36d9a8d47d048326693006b381bc64fb9b26beec6",
+        "34f24086bc7b39672a2aa0dfcf5acb4e2e1002b3738c3939aa9af251af0ae45b",
     ),
     (
         "campaigns/paper-fixed-original-small.toml",
-        "b9a36fdfe558b3feb2d12a6684d13c4092f22abaa40d7a37a60cc5080d183e30",
+        "61e7dbd1cf280adf4bb54bc1f2c3dc9830d17816df3cbe20f6db21dd44fe44b1",
     ),
     (
         "campaigns/paper-fixed-original.toml",
-        "e66cb0d98a1479fbdd9df1acbeb0c6461a56ce1fe03694540c7a50554f12572e",
+        "a265c9ca2815752a2eb97b8e580f838f9880075de401bcec3b784a831a21cb2c",
     ),
     (
         "campaigns/paper-fixed-padded-semisynthetic-small.toml",
-        "e83d28c6469948b33a4b93f67f17ddf9c0d4b9c76b019ab27a0d731bbc740afd",
+        "f91fb0e13797fd64fcadcf23ff16f1c6d67a833b30e792cf48b21f8de2099016",
     ),
     (
         "campaigns/paper-fixed-padded-semisynthetic.toml",
-        "29427f2e7d03ac180fb510fed27829259d45d83bc3255d2b30b7be3f8b2efd22",
+        "460898c3e912cc44c4138bc46ac4e4cd034b7f8628393b879fc491708a84b7b0",
     ),
     (
         "campaigns/paper-fixed-padded-small.toml",
-        "6784d6f8436156a7d930fb4bb875cc400e1bcf057bba05e0afa041e27916f6d0",
+        "b037f52e2f71b8639831ba4b47ba8ae029f4179ad09850433d49b1de15dff388",
     ),
     (
         "campaigns/paper-fixed-padded.toml",
-        "9620b0e632383709f2b134f5d496b5e21a3ef6b40ebc71cbfc5bf6b4958b585e",
+        "eb8dab45133e3fc29267fd2ed376f4339472625eadca6d69cebed554444792c3",
     ),
     (
         "campaigns/paper-survey-original-semisynthetic-small.toml",
-        "f219454f957791ad074f790f519fc51a0b044a123ab3a5479a1f82c679f5c335",
+        "05b4ed67ca617b3cd72ff2d64d4ace4f5a4323eee488e2979b2e2dfe56183a3e",
     ),
     (
         "campaigns/paper-survey-original-semisynthetic.toml",
-        "05a7cbb0da446d3700e9520ecaf9ff5d7016e8b7d5b7ce2fb5235777d51adaed",
+        "91af64e6b91771e333e37f260e690165a39879e747ff781db1c109d3c8bf31f9",
     ),
     (
         "campaigns/paper-survey-original-small.toml",
-        "bb16fe258bd1cfdaec9acc4253917dff580c49773bae10082cfab7d29a12cb35",
+        "294b5675994e0173776486ec0305988e46e66ed63b85da8b930c7bde96617fba",
     ),
     (
         "campaigns/paper-survey-original.toml",
-        "1e8cd465bfe1c83e6c6009c8e442b8817f04a05771f6ade8d141d2ecb21fb123",
+        "7a904f5513dfff5d0ba2340faecf504e38728d1d264079ce70afd3bccec36183",
     ),
     (
         "campaigns/paper-survey-rotated-semisynthetic-small.toml",
-        "55e53cf7fbdc30613b119db721c69abf69a3a1e469410f84fb5b132c2c375d6c",
+        "e20beef358c1fc42f755909b5043aa604302b576dc25021c016266f4a8468560",
     ),
     (
         "campaigns/paper-survey-rotated-semisynthetic.toml",
-        "e2284dc84f817deaa7dbe9f4bb4c9e971b52a30d58e6b3a7c67ff5a7c1802b21",
+        "43f1f9d9cf858a06cb906b5174e6e73b5828720d75a80b0086276ab58e9648fe",
     ),
     (
         "campaigns/paper-survey-rotated-small.toml",
-        "39f4e8198f9d04e3cccac3816775d170abd110325125fc038fd4428ab9ab1e0c",
+        "014d21606a4386ff13df4204b5e132e0870e23f5b4b269e9b4a74088255fd3da",
     ),
     (
         "campaigns/paper-survey-rotated.toml",
-        "5be59e182afa5a167f37fd704188187a195938452629b255cfa9941bc1b17337",
+        "e97a974ba7f161056a3874fd7b4339c59dbc7b9c8d2c88965c15f4a5f3d1a445",
     ),
     (
         "campaigns/quickstart.toml",
-        "1bb7b5cef0d88dc06ab3db6dbd77e171c7fb8d2583ad46ca98fe192467123fca",
+        "e1240fa7c096a9809228d0e1866e00d39ba22496da028f54cc2a38d257e5c7e9",
     ),
     (
         "campaigns/survey-quickstart.toml",
-        "f958c2280503fbc5042d12a0f76f43877091b83466ae19c70726309b99a6f70f",
+        "51b4e0046a486878a8c4af90c3ce8dd4fb195a9ac6babff8b3a66d3c0d38af82",
     ),
     (
         "results/campaigns/results-fixed-original-semisynthetic.toml",
-        "68d58c11ccaa3e5438f4b5db57fa7a7a36dfeaf0a6eb019b01e276f0d551b702",
+        "d7e8a7dec56c27671aac176e60050b03afc3d6ea32dfb1d6762c813dd5df8dbb",
     ),
     (
         "results/campaigns/results-fixed-original-synthetic.toml",
-        "542b4952bf11056c4261565a1af8087944689b272911638bce8a534bd2ed2967",
+        "199f621e91bfb88905b4be3a394796ccc248b0f347c6c516605d2b9607d773c4",
     ),
     (
         "results/campaigns/results-fixed-padded-semisynthetic.toml",
-        "5c5cf1d600a9917c5f6c567acca146393b140afbcb5fcccf673b20c68a65f70b",
+        "de72276e1a369ca1f215328851565044330dbc8182f5f6ea400b532f04ba9b97",
     ),
     (
         "results/campaigns/results-fixed-padded-synthetic.toml",
-        "741ce1c48781cd56dbbb67262e253c50d926aee8d3c2d5aec3664f6a06ac5daf",
+        "66e72140e2403e769ccd9b6068217b82411699b45919800391a0677ca1526a4a",
     ),
     (
         "results/campaigns/results-survey-original-semisynthetic.toml",
-        "fe149b92c912d5c054af2850b6d71561f8d7f5ca3941effb3832656d12f56182",
+        "a68be3fb87f49e250c1abbc779981e0640ce662a9a9bb6dcd69e501daab03f31",
     ),
     (
         "results/campaigns/results-survey-original-synthetic.toml",
-        "ec52d0dca486f338c5a405c086afb0c132fbaa223e81810f252663fbbfee572d",
+        "0815ac6b02103aabb53f4b78aba6fbca411080394db09aa70cbd9f51eb5e17a8",
     ),
     (
         "results/campaigns/results-survey-rotated-semisynthetic.toml",
-        "1d93c2aab7f17b41c7c7dde9e58e6da3154b9a2357300cf4084681209affeef4",
+        "f295d92e762bfa9e4b90cacabddda2e62c5fd02bee5f78e8022166ae867a9103",
     ),
     (
         "results/campaigns/results-survey-rotated-synthetic.toml",
-        "fc78184466f1eb1113f01eed6c7d8e28713f03067a07f5627240d77aefafe1e6",
+        "2e107a7baff5a30e2bdd281e52fba0ffb6967ccf9d8cef9faf2115780acc507a",
     ),
 ];
 

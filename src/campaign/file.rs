@@ -4,7 +4,7 @@
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::{FrameKind, PointingMode, RenderMethod, defaults};
+use super::{FrameKind, PointingMode, RenderMethod, SnrDefinition, defaults};
 use crate::detect::streak::StreakParams;
 
 /// A campaign as written in TOML. Every section is optional and defaults to the paper's values.
@@ -26,7 +26,7 @@ pub struct CampaignFile {
     pub output: Option<String>,
     /// The observing satellite (the paper: SENTINEL-3A, NORAD 41335).
     pub observer: ObjectSpec,
-    /// The debris set; each image shows one of them, drawn uniformly.
+    /// The debris set; each image shows one of them, drawn uniformly (or by their `weight`).
     pub debris: Vec<ObjectSpec>,
     #[serde(default)]
     pub window: Window,
@@ -94,6 +94,10 @@ pub struct ObjectSpec {
     /// Mean orbital elements, for objects with no public TLE (the paper's NORAD 40649).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub elements: Option<ElementsSpec>,
+    /// Debris only: relative weight in the draw of each image's object (default 1, all equal):
+    /// an object of weight 2 is shown twice as often as one of weight 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<f64>,
 }
 
 /// Orbital elements as in the paper's Table 1.
@@ -300,10 +304,15 @@ pub struct Visibility {
     /// An image is rejected when a star brighter than this is in the star cone.
     #[serde(default = "defaults::brightest_star")]
     pub brightest_star_mag: f64,
-    /// Minimum debris signal / background noise (see `scene::snr`); default 0.15 for fixed
+    /// Minimum debris signal / noise (see `scene::expected_snr`); default 0.15 for fixed
     /// pointing, 0.035 for survey.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub snr_min: Option<f64>,
+    /// The noise `snr_min` divides by: `noise_level`, the mean level of background plus bias
+    /// per pixel (the paper's reading, ~202 ADU for 5 s), or `noise_sigma`, their standard
+    /// deviation (~5.8 ADU for 5 s: a gate ~35x weaker that admits invisible streaks).
+    #[serde(default)]
+    pub snr_definition: SnrDefinition,
     /// Scene draws tried per image before the campaign fails.
     #[serde(default = "defaults::max_attempts")]
     pub max_attempts: u32,

@@ -22,7 +22,7 @@ pub use resolve::{MAX_SURVEY_DRIFT_DEG, parse_epoch};
 
 pub use crate::geometry::FrameKind;
 pub use crate::render::RenderMethod;
-pub use crate::scene::{Body, PointingMode};
+pub use crate::scene::{Body, PointingMode, SnrDefinition};
 
 use crate::hash::hash_json;
 use compose::Layers;

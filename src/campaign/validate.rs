@@ -204,6 +204,20 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
             "must be in [0, 1): the flux factor 1 + a sin(..) must stay positive",
         )?;
     }
+    check(
+        c.observer.weight.is_none(),
+        "observer.weight",
+        "only debris objects have a weight (the observer is in every image)",
+    )?;
+    for (i, d) in c.debris.iter().enumerate() {
+        if let Some(w) = d.weight {
+            check(
+                pos(w),
+                &format!("debris[{i}].weight"),
+                "must be a positive, finite number",
+            )?;
+        }
+    }
     let v = &c.visibility;
     for (f, x) in [
         ("visibility.earth_min_deg", v.earth_min_deg),

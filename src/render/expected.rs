@@ -9,6 +9,8 @@ use rand_chacha::ChaCha12Rng;
 
 use super::{Canvas, Jitter, Path, Source};
 use crate::rng::poisson;
+use crate::scene::{Scene, TrajectorySample};
+use crate::sensor::Sensor;
 
 /// Pixels farther than this many PSF sigmas from the path get nothing (a share of 6e-7 of the
 /// photons per axis; photon mapping lands them).
@@ -97,14 +99,77 @@ impl Flux {
 
 /// The expected flux of a scene for a jitter path, without the Poisson draw: the noise-free
 /// image an infinite number of photon-mapped renders averages to.
-pub fn expected_flux(
-    sensor: &crate::sensor::Sensor,
-    scene: &crate::scene::Scene,
-    jitter: &Jitter,
-) -> Flux {
+pub fn expected_flux(sensor: &Sensor, scene: &Scene, jitter: &Jitter) -> Flux {
     let mut flux = Flux::new(sensor.width_px, sensor.height_px, sensor.psf_sigma_px());
     super::for_each_source(sensor, scene, jitter, |source| flux.add(source, jitter));
     flux
+}
+
+/// The integrated matched-filter signal-to-noise ratio of the debris streak,
+/// `sqrt(sum_i s_i^2 / sigma_i^2)` over the image's pixels: `s_i` the expected debris ADU of
+/// pixel i (its trajectory samples, the jitter path and the PSF integrated over the pixel, as
+/// this renderer computes them, over the gain), `sigma_i^2 = noise_sigma_adu^2 + s_i / gain`
+/// the background-plus-bias variance plus the debris' own Poisson shot noise (`s_i gain`
+/// electrons of that variance, over gain^2). Star light on the streak is left out. It is the
+/// SNR of the ideal linear detector that knows the streak's shape and place: what no real
+/// detector beats. Computed on the box the streak's PSF can reach, not the whole image.
+pub fn matched_filter_snr(
+    sensor: &Sensor,
+    scene: &Scene,
+    jitter: &Jitter,
+    noise_sigma_adu: f64,
+) -> f64 {
+    let psf_px = sensor.psf_sigma_px();
+    let (w, h) = (sensor.width_px as f64, sensor.height_px as f64);
+    // Every pixel a sample's PSF can reach after any jitter shift is within `margin` of it.
+    let margin = PSF_SUPPORT_SIGMA * psf_px + jitter.max_excursion() + 1.0;
+    let near = |p: &&TrajectorySample| {
+        p.x_px > -0.5 - margin
+            && p.y_px > -0.5 - margin
+            && p.x_px < w - 0.5 + margin
+            && p.y_px < h - 0.5 + margin
+    };
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in scene.trajectory.iter().filter(near) {
+        lo = [lo[0].min(p.x_px), lo[1].min(p.y_px)];
+        hi = [hi[0].max(p.x_px), hi[1].max(p.y_px)];
+    }
+    if !(lo[0].is_finite() && lo[1].is_finite()) {
+        return 0.0;
+    }
+    let x0 = (lo[0] - margin).floor().max(0.0);
+    let y0 = (lo[1] - margin).floor().max(0.0);
+    let x1 = (hi[0] + margin).ceil().min(w - 1.0);
+    let y1 = (hi[1] + margin).ceil().min(h - 1.0);
+    if x1 < x0 || y1 < y0 {
+        return 0.0;
+    }
+    let mut flux = Flux::new((x1 - x0) as usize + 1, (y1 - y0) as usize + 1, psf_px);
+    for p in scene.trajectory.iter().filter(near) {
+        let source = Source {
+            expected: p.expected_electrons,
+            path: Path::Instant {
+                t: p.t_s,
+                x: p.x_px - x0,
+                y: p.y_px - y0,
+            },
+            t_a: p.t_s,
+            t_b: p.t_s,
+            debris: true,
+        };
+        flux.add(&source, jitter);
+    }
+    let gain = sensor.gain_e_per_adu;
+    let var = noise_sigma_adu * noise_sigma_adu;
+    flux.debris
+        .iter()
+        .filter(|&&e| e > 0.0)
+        .map(|&e| {
+            let s = e / gain;
+            s * s / (var + s / gain)
+        })
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// First pixel and the PSF share of each pixel of the support along one axis (pixel i spans

@@ -182,6 +182,7 @@ pub fn render_with_jitter(
             [p.x_px + jx, p.y_px + jy]
         })
     };
+    let sigma_adu = sensor.background_sigma_adu(t_exp, frame);
     let first = at(scene.trajectory.first());
     let last = at(scene.trajectory.last());
     let g = &scene.geometry;
@@ -216,9 +217,12 @@ pub fn render_with_jitter(
         expected_debris_electrons: expected_debris,
         rendered_debris_electrons: canvas.debris_total,
         snr: scene.snr,
+        snr_noise_level: scene.snr_noise_level,
+        snr_noise_sigma: scene.snr_noise_sigma,
+        snr_matched_filter: expected::matched_filter_snr(sensor, scene, jitter, sigma_adu),
         stars_in_cone: scene.stars.len(),
         stars_traced: traced.len(),
-        background_sigma_adu: sensor.background_sigma_adu(t_exp, frame),
+        background_sigma_adu: sigma_adu,
         background_frame: frame.map(|f| f.path.display().to_string()),
         attempts: scene.attempts,
         rejections: scene.rejections.clone(),

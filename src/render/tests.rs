@@ -378,3 +378,80 @@ fn expected_and_photon_mapping_agree_in_mean_and_variance_per_pixel() {
         ratio(&m)
     );
 }
+
+/// The integrated matched-filter SNR against a dense numpy sum of the same Gaussian streaks
+/// (tests/reference/matched_filter_reference.py: the PSF integrated over every pixel of the
+/// image with math.erfc, no support cut). One diagonal streak leaves the image (only its
+/// in-image pixels count), one short faint streak sits inside it. Tolerance 1e-5 relative:
+/// soig's erfc is good to 1.2e-7 and its 5-sigma PSF support drops ~1e-6 of the flux; anything
+/// else (a wrong shot-noise term, gain, PSF width or clipping) moves the SNR by percents.
+#[test]
+fn matched_filter_snr_matches_numpy() {
+    let c = fixture(0.0);
+    for (mag, from, to, t, expected) in [
+        (13.0, (30.3, 40.7), (150.0, 100.2), 2.0, 63.173575463),
+        (17.0, (40.0, 40.0), (43.0, 41.0), 5.0, 10.723850467),
+    ] {
+        let s = Scene::fixed_streak(&c.sensor, (10.0, 20.0), vec![], mag, (from, to), t);
+        let jitter = Jitter::of_scene(
+            &c.sensor,
+            &c.render,
+            &s,
+            &mut stream(0, 0, Purpose::Photons),
+        );
+        let sigma = c.sensor.background_sigma_adu(t, None);
+        let snr = expected::matched_filter_snr(&c.sensor, &s, &jitter, sigma);
+        assert!(
+            (snr - expected).abs() < 1e-5 * expected,
+            "{mag}: {snr} vs {expected}"
+        );
+    }
+}
+
+/// The paper's signal-to-noise gate divides by the level of the noise matrices: the mean of
+/// what the detector adds to a pixel besides photo-electrons, for the uniform model and for a
+/// real frame (on a 512 px image, one whole period of the 512 px frame's tiling).
+#[test]
+fn noise_level_is_the_mean_the_detector_adds() {
+    use crate::background::{FrameChoice, RealFrame};
+    let c = fixture(0.0);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/neossat/NEOS_SCI_2024239174545_cord.fits");
+    let frame = RealFrame::load(&path).unwrap();
+    let mut big = fixture(0.0);
+    big.sensor.width_px = 512;
+    big.sensor.height_px = 512;
+    big.sensor.fov_radius_deg = 0.05;
+    for (c, t, f) in [(&c, 2.0, None), (&c, 7.0, None), (&big, 3.0, Some(&frame))] {
+        // Magnitude 60: 1e-15 e-/s, no debris photon.
+        let mut s = scene(c, vec![], 60.0, t);
+        if f.is_some() {
+            s.background = Some(FrameChoice {
+                frame: 0,
+                offset: (100, 37),
+            });
+        }
+        let e = render(
+            &c.sensor,
+            &c.render,
+            &s,
+            f,
+            &mut stream(1, 0, Purpose::Photons),
+            &mut stream(1, 0, Purpose::Noise),
+        );
+        let n = e.adu.len() as f64;
+        let mean = e.adu.iter().map(|&v| v as f64).sum::<f64>() / n;
+        let level = c.sensor.noise_level_adu(t, f);
+        // Five standard errors of the mean of n uniform draws (background plus bias); the
+        // frame's whole period has exactly its mean, so only the bias draws and float32
+        // rounding (~1e-5 relative) are left.
+        let tolerance = 5.0 * c.sensor.background_sigma_adu(t, None) / n.sqrt() + 1e-4 * level;
+        assert!(
+            (mean - level).abs() < tolerance,
+            "{t} s, frame {}: mean {mean} vs level {level}",
+            f.is_some()
+        );
+    }
+    // The paper's 5 s level: 200 ADU of background plus 2.5 of bias.
+    assert!((c.sensor.noise_level_adu(5.0, None) - 202.5).abs() < 1e-12);
+}

@@ -40,7 +40,15 @@ pub struct Truth {
     pub tumble: Option<crate::scene::Tumble>,
     pub expected_debris_electrons: f64,
     pub rendered_debris_electrons: u64,
+    /// The signal-to-noise ratio the scene gate judged (`visibility.snr_definition`), and
+    /// both ratios: expected debris ADU per footprint pixel over the mean level of background
+    /// plus bias (the paper's) and over their standard deviation (`scene::expected_snr`).
     pub snr: f64,
+    pub snr_noise_level: f64,
+    pub snr_noise_sigma: f64,
+    /// The streak's integrated matched-filter SNR, `sqrt(sum_i s_i^2 / sigma_i^2)` over pixels
+    /// with shot noise (`render::expected::matched_filter_snr`): below ~7 it is hard to find.
+    pub snr_matched_filter: f64,
     pub stars_in_cone: usize,
     pub stars_traced: usize,
     pub background_sigma_adu: f64,
