@@ -171,7 +171,7 @@ fn write_all(
         seed: c.seed,
         observer: campaign.observer.name.clone(),
     };
-    progress.start(&format!("soig {}", c.name), n as u64);
+    progress.start("render", n as u64);
     let started = Instant::now();
     let written: Vec<Written> = (0..n as u64)
         .into_par_iter()
@@ -368,6 +368,7 @@ fn detect_and_report(
     let mut runs = Vec::new();
     if c.detect.classical {
         let params: &StreakParams = &c.detect.streak;
+        progress.start("streak", images.len() as u64);
         let results: Vec<(Vec<Detection>, f64)> = images
             .par_iter()
             .zip(chosen.par_iter())
@@ -376,12 +377,14 @@ fn detect_and_report(
                 let t = Instant::now();
                 let found =
                     detect_streaks(&pixels, img.width, img.height, params, w.trail_angle_deg);
+                progress.advance();
                 Ok((
                     found.into_iter().map(|c| c.detection).collect(),
                     t.elapsed().as_secs_f64(),
                 ))
             })
             .collect::<anyhow::Result<_>>()?;
+        progress.finish();
         let (detections, seconds) = results.into_iter().unzip();
         runs.push(DetectorRun {
             name: "streak".into(),
@@ -447,5 +450,6 @@ fn detect_and_report(
         &runs,
         c.detect.conf,
         &conversion,
+        progress,
     )
 }
