@@ -326,15 +326,15 @@ pub fn text(c: &Comparison) -> String {
         }
         Some(a) => artifacts::text(&mut s, a),
     }
-    if let (Some(b), Some(r)) = (c.baseline.test_images, c.run.test_images) {
-        if b != r || c.baseline.test_objects != c.run.test_objects {
-            let _ = writeln!(
-                s,
-                "test set: {b} images, {} objects -> {r} images, {} objects",
-                c.baseline.test_objects.unwrap_or_default(),
-                c.run.test_objects.unwrap_or_default()
-            );
-        }
+    if let (Some(b), Some(r)) = (c.baseline.test_images, c.run.test_images)
+        && (b != r || c.baseline.test_objects != c.run.test_objects)
+    {
+        let _ = writeln!(
+            s,
+            "test set: {b} images, {} objects -> {r} images, {} objects",
+            c.baseline.test_objects.unwrap_or_default(),
+            c.run.test_objects.unwrap_or_default()
+        );
     }
     if !c.metrics.is_empty() {
         let _ = writeln!(

@@ -18,55 +18,16 @@ pub const END: &str = "<!-- soig tables end -->";
 
 /// The paper's Tables 3 and 5: (pointing, frame, background) -> P, R, mAP50, mAP50-95, as
 /// printed.
+#[rustfmt::skip]
 const PAPER_METRICS: [(&str, &str, &str, [&str; 4]); 8] = [
-    (
-        "fixed",
-        "original",
-        "synthetic",
-        ["1", "0.988", "0.993", "0.933"],
-    ),
-    (
-        "fixed",
-        "padded",
-        "synthetic",
-        ["1", "0.99", "0.995", "0.941"],
-    ),
-    (
-        "fixed",
-        "original",
-        "semisynthetic",
-        ["0.995", "0.985", "0.992", "0.945"],
-    ),
-    (
-        "fixed",
-        "padded",
-        "semisynthetic",
-        ["1", "0.988", "0.993", "0.946"],
-    ),
-    (
-        "survey",
-        "original",
-        "synthetic",
-        ["0.921", "0.899", "0.94", "0.907"],
-    ),
-    (
-        "survey",
-        "rotated",
-        "synthetic",
-        ["0.989", "0.929", "0.978", "0.934"],
-    ),
-    (
-        "survey",
-        "original",
-        "semisynthetic",
-        ["0.847", "0.856", "0.894", "0.853"],
-    ),
-    (
-        "survey",
-        "rotated",
-        "semisynthetic",
-        ["0.987", "0.938", "0.972", "0.95"],
-    ),
+    ("fixed", "original", "synthetic", ["1", "0.988", "0.993", "0.933"]),
+    ("fixed", "padded", "synthetic", ["1", "0.99", "0.995", "0.941"]),
+    ("fixed", "original", "semisynthetic", ["0.995", "0.985", "0.992", "0.945"]),
+    ("fixed", "padded", "semisynthetic", ["1", "0.988", "0.993", "0.946"]),
+    ("survey", "original", "synthetic", ["0.921", "0.899", "0.94", "0.907"]),
+    ("survey", "rotated", "synthetic", ["0.989", "0.929", "0.978", "0.934"]),
+    ("survey", "original", "semisynthetic", ["0.847", "0.856", "0.894", "0.853"]),
+    ("survey", "rotated", "semisynthetic", ["0.987", "0.938", "0.972", "0.95"]),
 ];
 
 /// The paper's Table 6 by frame: conversion (an i7-1370P) and detection (an RTX 2060).
@@ -134,16 +95,17 @@ impl Row {
         })
     }
 
+    /// The row of the paper's Tables 3 and 5 that this test set reproduces.
+    fn paper_row(&self) -> Option<usize> {
+        PAPER_METRICS.iter().position(|(p, f, b, _)| {
+            *p == self.pointing && *f == self.frame && *b == self.background
+        })
+    }
+
     /// Table 3 (fixed) or 5 (survey), and the position of the row in it.
     fn place(&self) -> (u8, usize) {
         let table = if self.pointing == "fixed" { 3 } else { 5 };
-        let index = PAPER_METRICS
-            .iter()
-            .position(|(p, f, b, _)| {
-                *p == self.pointing && *f == self.frame && *b == self.background
-            })
-            .unwrap_or(PAPER_METRICS.len());
-        (table, index)
+        (table, self.paper_row().unwrap_or(PAPER_METRICS.len()))
     }
 
     /// e.g. "Original (synthetic)", the paper's row names.
@@ -152,10 +114,7 @@ impl Row {
     }
 
     fn paper_metrics(&self) -> [&'static str; 4] {
-        PAPER_METRICS
-            .iter()
-            .find(|(p, f, b, _)| *p == self.pointing && *f == self.frame && *b == self.background)
-            .map_or(["-"; 4], |r| r.3)
+        self.paper_row().map_or(["-"; 4], |i| PAPER_METRICS[i].3)
     }
 }
 

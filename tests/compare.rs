@@ -47,7 +47,8 @@ fn campaign(dir: &Path, seed: u64, model: Option<&Path>) -> PathBuf {
     c.write(&dir.join(format!("small-{seed}.toml")))
 }
 
-fn run(campaign: &Path, out: &Path) {
+/// `soig run`, which must succeed: its stdout.
+fn run(campaign: &Path, out: &Path) -> String {
     let o = soig(&[
         "run",
         campaign.to_str().unwrap(),
@@ -56,6 +57,7 @@ fn run(campaign: &Path, out: &Path) {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    stdout(&o)
 }
 
 fn copy_dir(from: &Path, to: &Path) {
@@ -181,8 +183,29 @@ fn metric_drop_within_and_beyond_tolerance_and_a_results_row() {
     let tmp = tempfile::tempdir().unwrap();
     let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/yolo/tiny.onnx");
     let c = campaign(tmp.path(), 7, Some(&model));
-    let base = tmp.path().join("base");
-    run(&c, &base);
+    // `soig run .../x/../base` ends naming the clean path, the digest, the report and the
+    // headline metrics of each detector.
+    std::fs::create_dir(tmp.path().join("x")).unwrap();
+    let ending = run(&c, &tmp.path().join("x/../base"));
+    let base = tmp.path().canonicalize().unwrap().join("base");
+    let digest = soig::Manifest::read(&base).unwrap().digest;
+    let lines: Vec<&str> = ending.lines().collect();
+    assert!(
+        lines[0].ends_with(&format!("-> {}", base.display())),
+        "{ending}"
+    );
+    assert_eq!(lines[1], format!("digest {digest}"));
+    assert_eq!(
+        lines[2],
+        format!(
+            "report {}/report/report.md (3 test images, 3 objects)",
+            base.display()
+        )
+    );
+    for (line, detector) in lines[3..].iter().zip(["streak", "yolo"]) {
+        assert!(line.trim_start().starts_with(detector), "{ending}");
+        assert!(line.contains("mAP50-95"), "{ending}");
+    }
     let map50 = |dir: &Path| -> f64 {
         let r: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join("report/report.json")).unwrap())
@@ -224,7 +247,6 @@ fn metric_drop_within_and_beyond_tolerance_and_a_results_row() {
     for f in ["report.json", "metrics.csv"] {
         std::fs::copy(base.join("report").join(f), row.join(f)).unwrap();
     }
-    let digest = soig::Manifest::read(&base).unwrap().digest;
     std::fs::write(row.join("digest.txt"), format!("{digest}\n")).unwrap();
     let (code, text) = compare(&row, &base, &[]);
     assert_eq!((code, text.contains("identical")), (0, true), "{text}");
