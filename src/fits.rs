@@ -78,6 +78,17 @@ pub fn write_image(
 
 /// Read back a float image and its size (rows, cols), for checks and tests.
 pub fn read_f32(path: &Path) -> Result<(Vec<f32>, usize, usize), fitsio::errors::Error> {
+    read(path)
+}
+
+/// Read any 2-D image as f64 (exact for both of soig's pixel types), e.g. to compare two runs.
+pub fn read_f64(path: &Path) -> Result<(Vec<f64>, usize, usize), fitsio::errors::Error> {
+    read(path)
+}
+
+fn read<T: fitsio::images::ReadImage>(
+    path: &Path,
+) -> Result<(T, usize, usize), fitsio::errors::Error> {
     let mut f = FitsFile::open(path)?;
     let hdu = f.primary_hdu()?;
     let (rows, cols) = match &hdu.info {
@@ -89,6 +100,6 @@ pub fn read_f32(path: &Path) -> Result<(Vec<f32>, usize, usize), fitsio::errors:
             )));
         }
     };
-    let data: Vec<f32> = hdu.read_image(&mut f)?;
+    let data = hdu.read_image(&mut f)?;
     Ok((data, rows, cols))
 }

@@ -7,7 +7,7 @@
 //! Imports go one way, top to bottom (no module imports one above it, and there is no cycle):
 //!
 //! ```text
-//! verbs          pipeline (run, train)   study                      main.rs: the CLI
+//! verbs          pipeline (run, train)   study   compare   tables    main.rs: the CLI
 //! config layer   campaign (file, defaults, compose, validate, resolve)  experiment (-> values)
 //! product        simulate (one image in memory)   artifacts (its files)   dataset   train
 //! core           render -> scene -> sensor -> background     geometry (frames, label box)
@@ -50,6 +50,7 @@ pub use simulate::{Experiment, ImageProducts};
 pub(crate) mod artifacts;
 pub mod background;
 pub mod campaign;
+pub mod compare;
 pub mod dataset;
 pub mod detect;
 pub mod enhance;
@@ -74,4 +75,6 @@ pub mod sensor;
 pub mod simulate;
 pub mod sky;
 pub mod study;
+pub mod summary;
+pub mod tables;
 pub(crate) mod train;

@@ -85,6 +85,31 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
+    /// Compare a run with a baseline (a run folder or a pinned `results/` row): exit 0 when
+    /// identical or every metric within tolerance, 1 on a regression, 2 on an error.
+    Compare {
+        baseline: PathBuf,
+        run: PathBuf,
+        /// Allowed fall of a metric, `NAME=VALUE` (`map50-95=0.01`, `all=0.05`; default 0.002,
+        /// see src/compare/tolerance.rs). Repeatable.
+        #[arg(long, value_name = "NAME=VALUE")]
+        tolerance: Vec<String>,
+        /// Print the same facts as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The paper's Tables 3, 5 and 6 from run folders or `results/` rows, beside the paper's
+    /// figures: Markdown on stdout.
+    Tables {
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Also write tables.md, metrics.csv (Tables 3, 5) and timing.csv (Table 6) here.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Replace the generated block of this Markdown file (e.g. results/README.md).
+        #[arg(long)]
+        readme: Option<PathBuf>,
+    },
     /// Print the JSON Schema of the campaign format.
     Schema,
     /// Score YOLO-format predictions (`cls xc yc w h score`) against YOLO labels, exactly as
@@ -141,20 +166,7 @@ fn main() -> ExitCode {
             let campaign = Campaign::load_with_overrides(&campaign, &set)?;
             let output = out.unwrap_or_else(|| campaign.output_dir.clone());
             let s = soig::pipeline::run(&campaign, &output, python.as_deref(), &*progress(quiet))?;
-            let mix: Vec<String> = s
-                .mix
-                .iter()
-                .map(|d| format!("{} (NORAD {}) {}", d.object, d.norad, d.images))
-                .collect();
-            println!(
-                "{} images in {:.1} s ({:.2} images/s) -> {}\ndebris mix: {}\ndigest {}",
-                s.images,
-                s.seconds,
-                s.images as f64 / s.seconds,
-                s.output.display(),
-                mix.join(", "),
-                s.digest
-            );
+            print!("{}", s.final_lines());
             Ok(())
         }),
         Command::Train {
@@ -254,6 +266,32 @@ fn main() -> ExitCode {
             );
             Ok(())
         }),
+        Command::Compare {
+            baseline,
+            run,
+            tolerance,
+            json,
+        } => {
+            let compared = soig::compare::Tolerances::parse(&tolerance)
+                .and_then(|t| soig::compare::compare(&baseline, &run, &t));
+            match compared {
+                Ok(c) if json => {
+                    println!("{}", serde_json::to_string_pretty(&c).expect("json"));
+                    ExitCode::from(c.exit_code())
+                }
+                Ok(c) => {
+                    print!("{}", soig::compare::text(&c));
+                    ExitCode::from(c.exit_code())
+                }
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(2)
+                }
+            }
+        }
+        Command::Tables { runs, out, readme } => {
+            user_errors(|| soig::tables::write(&runs, out.as_deref(), readme.as_deref()))
+        }
         Command::Schema => {
             println!("{}", soig::campaign::schema_json());
             ExitCode::SUCCESS

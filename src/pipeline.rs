@@ -199,7 +199,7 @@ fn write_all(
         seed: c.seed,
         observer: campaign.observer.name.clone(),
     };
-    progress.start(&format!("soig {}", c.name), n as u64);
+    progress.start("render", n as u64);
     let started = Instant::now();
     let written: Vec<Written> = (0..n as u64)
         .into_par_iter()
@@ -410,6 +410,7 @@ fn detect_and_report(
     let mut runs = Vec::new();
     if c.detect.classical {
         let params: &StreakParams = &c.detect.streak;
+        progress.start("streak", images.len() as u64);
         let results: Vec<(Vec<Detection>, f64)> = images
             .par_iter()
             .zip(chosen.par_iter())
@@ -418,12 +419,14 @@ fn detect_and_report(
                 let t = Instant::now();
                 let found =
                     detect_streaks(&pixels, img.width, img.height, params, w.trail_angle_deg);
+                progress.advance();
                 Ok((
                     found.into_iter().map(|c| c.detection).collect(),
                     t.elapsed().as_secs_f64(),
                 ))
             })
             .collect::<anyhow::Result<_>>()?;
+        progress.finish();
         let (detections, seconds) = results.into_iter().unzip();
         runs.push(DetectorRun {
             name: "streak".into(),
@@ -489,5 +492,6 @@ fn detect_and_report(
         &runs,
         c.detect.conf,
         &conversion,
+        progress,
     )
 }

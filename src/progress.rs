@@ -23,7 +23,9 @@ pub struct Silent;
 
 impl Progress for Silent {}
 
-/// Progress bars on stderr with rate and ETA, and notes printed there.
+/// Progress bars on stderr with rate and ETA, one style for every stage (render, streak,
+/// yolo, report), and notes printed there. indicatif draws nothing when stderr is not a
+/// terminal.
 #[derive(Default)]
 pub struct Bars {
     bar: Mutex<Option<ProgressBar>>,
@@ -34,7 +36,7 @@ impl Progress for Bars {
         let bar = ProgressBar::new(total);
         bar.set_style(
             ProgressStyle::with_template(
-                "{msg} [{bar:30}] {pos}/{len} images, {per_sec}, ETA {eta}",
+                "{msg:>7} [{bar:30}] {pos:>5}/{len:5}  elapsed {elapsed:>4}  ETA {eta:>4}",
             )
             .expect("valid template")
             .progress_chars("=> "),

@@ -14,7 +14,7 @@ mod figures;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::detect::Detection;
 use crate::metrics::{self, AtThreshold, CocoMetrics, ImageEval, UltralyticsMetrics};
@@ -41,7 +41,7 @@ pub struct DetectorRun {
     pub seconds: Vec<f64>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct DetectorMetrics {
     pub detector: String,
     pub description: String,
@@ -51,7 +51,7 @@ pub struct DetectorMetrics {
     pub at_threshold: AtThresholdSummary,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct UltralyticsSummary {
     pub precision: f64,
     pub recall: f64,
@@ -60,7 +60,7 @@ pub struct UltralyticsSummary {
     pub f1_conf: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct CocoSummary {
     pub ap: f64,
     pub ap50: f64,
@@ -68,7 +68,7 @@ pub struct CocoSummary {
     pub ar100: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct AtThresholdSummary {
     pub conf: f64,
     pub iou: f64,
@@ -81,7 +81,7 @@ pub struct AtThresholdSummary {
 }
 
 /// The deterministic part of the report.
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct Report {
     pub campaign: String,
     pub campaign_hash: String,
@@ -92,6 +92,15 @@ pub struct Report {
     pub images: usize,
     pub objects: usize,
     pub detectors: Vec<DetectorMetrics>,
+}
+
+impl Report {
+    /// Read a `report.json` (of a run's `report/` or a pinned `results/` row).
+    pub fn read(path: &Path) -> Result<Report, crate::Error> {
+        let text = std::fs::read_to_string(path).map_err(|e| crate::Error::input(path, e))?;
+        serde_json::from_str(&text)
+            .map_err(|e| crate::Error::input(path, format!("not a soig report: {e}")))
+    }
 }
 
 /// Median and spread (min, max) of timings.
@@ -205,6 +214,7 @@ pub fn write(
     runs: &[DetectorRun],
     conf: f64,
     conversion_s: &[f64],
+    progress: &dyn crate::progress::Progress,
 ) -> anyhow::Result<()> {
     let rdir = dir.join("report");
     std::fs::create_dir_all(rdir.join("previews"))?;
@@ -214,6 +224,7 @@ pub fn write(
     csv_rows.write_record([
         "image", "detector", "x1", "y1", "x2", "y2", "score", "class",
     ])?;
+    progress.start("report", runs.len() as u64);
     for run in runs {
         let pdir = rdir.join("predictions").join(&run.name);
         std::fs::create_dir_all(&pdir)?;
@@ -243,7 +254,9 @@ pub fn write(
         ));
         figures::previews(&rdir.join("previews"), images, run, conf)?;
         detectors.push(m);
+        progress.advance();
     }
+    progress.finish();
     csv_rows.flush()?;
 
     let report = Report {
