@@ -110,6 +110,9 @@ impl TanWcs {
 mod tests {
     use super::*;
 
+    /// Header cards (keyword, value as written).
+    type Cards = &'static [(&'static str, &'static str)];
+
     fn header(cards: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {
         let cards: Vec<(String, String)> = cards
             .iter()
@@ -119,7 +122,7 @@ mod tests {
     }
 
     /// The NEOSSat frames' WCS cards (CD and CDELT both present: CD wins).
-    const NEOSSAT_RAW: &[(&str, &str)] = &[
+    const NEOSSAT_RAW: Cards = &[
         ("CTYPE1", "RA---TAN"),
         ("CTYPE2", "DEC--TAN"),
         ("CUNIT1", "degrees"),
@@ -144,7 +147,7 @@ mod tests {
     /// 3 arcsec.
     #[test]
     fn matches_astropy() {
-        let cases: &[(&[(&str, &str)], f64, f64, f64, f64)] = &[
+        let cases: &[(Cards, f64, f64, f64, f64)] = &[
             (NEOSSAT_RAW, 0.0, 0.0, 240.066315740, -30.144899841),
             (NEOSSAT_RAW, 557.0, 508.0, 240.321402110, -29.557622210),
             (NEOSSAT_RAW, 1077.0, 1019.0, 240.540912902, -28.981704760),
@@ -166,7 +169,7 @@ mod tests {
     }
 
     /// PC x CDELT near the pole, with a rotation and a flip.
-    const PC_CDELT: &[(&str, &str)] = &[
+    const PC_CDELT: Cards = &[
         ("CTYPE1", "RA---TAN"),
         ("CTYPE2", "DEC--TAN"),
         ("CRPIX1", "100.5"),
