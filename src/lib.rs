@@ -7,13 +7,13 @@
 //! Imports go one way, top to bottom (no module imports one above it, and there is no cycle):
 //!
 //! ```text
-//! verbs          pipeline (run, train)   study   compare   tables    main.rs: the CLI
+//! verbs          pipeline (run, train)   study   compare   tables   detect_frames   main.rs: the CLI
 //! config layer   campaign (file, defaults, compose, validate, resolve)  experiment (-> values)
 //! product        simulate (one image in memory)   artifacts (its files)   dataset   train
 //! core           render -> scene -> sensor -> background     geometry (frames, label box)
 //!                enhance (+ clahe)   detect (streak, yolo)   metrics   report
 //! leaves         sky (orbit, frames, ephemeris, stars, projection, photometry, vec3)
-//!                imaging   rng   fits   hash   python   plot   progress
+//!                imaging   rng   fits   frames   hash   python   plot   progress
 //! at the side    manifest   output (whole-or-nothing directories)   error
 //! ```
 //!
@@ -53,10 +53,12 @@ pub mod campaign;
 pub mod compare;
 pub mod dataset;
 pub mod detect;
+pub mod detect_frames;
 pub mod enhance;
 pub mod error;
 pub mod experiment;
 pub mod fits;
+pub mod frames;
 pub mod geometry;
 pub(crate) mod hash;
 pub mod imaging;

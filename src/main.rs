@@ -110,6 +110,45 @@ enum Command {
         #[arg(long)]
         readme: Option<PathBuf>,
     },
+    /// Run soig's detectors on real frames (FITS of any numeric type, PNG): detections.csv and
+    /// .json (pixel boxes, streak ends, RA/Dec through the frame's WCS), YOLO-format
+    /// predictions, previews and a manifest.
+    Detect {
+        /// FITS or PNG frames.
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// A YOLOv8 ONNX model (Ultralytics export); without one only the streak detector runs.
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// Which detectors (default: all with --model, else streak).
+        #[arg(long, value_enum)]
+        detector: Option<DetectorChoice>,
+        /// Output directory.
+        #[arg(long, default_value = "detections")]
+        out: PathBuf,
+        /// Take the enhancement (`[enhance]`) and detector settings (`[detect]`) of this campaign.
+        #[arg(long)]
+        campaign: Option<PathBuf>,
+        /// Streak-detector knobs (the keys of a campaign's `[detect.streak]`) from a TOML file,
+        /// replacing the campaign's.
+        #[arg(long, value_name = "FILE.toml")]
+        streak: Option<PathBuf>,
+        /// The frame's PSF FWHM in pixels (sets the streak detector's cross-section).
+        #[arg(long)]
+        psf_fwhm_px: Option<f64>,
+        /// The frame's PSF FWHM in arcseconds, over the pixel scale.
+        #[arg(long)]
+        psf_fwhm_arcsec: Option<f64>,
+        /// Pixel scale, arcsec per pixel (default: the WCS's).
+        #[arg(long)]
+        pixel_scale_arcsec: Option<f64>,
+        /// Direction of star trails, degrees from +x towards +y (image rows down), if known.
+        #[arg(long, allow_negative_numbers = true)]
+        star_trail_angle_deg: Option<f64>,
+        /// YOLO confidence threshold (default: the campaign's, else 0.5).
+        #[arg(long)]
+        conf: Option<f64>,
+    },
     /// Print the JSON Schema of the campaign format.
     Schema,
     /// Score YOLO-format predictions (`cls xc yc w h score`) against YOLO labels, exactly as
@@ -139,6 +178,13 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum DetectorChoice {
+    Streak,
+    Yolo,
+    All,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -292,6 +338,46 @@ fn main() -> ExitCode {
         Command::Tables { runs, out, readme } => {
             user_errors(|| soig::tables::write(&runs, out.as_deref(), readme.as_deref()))
         }
+        Command::Detect {
+            inputs,
+            model,
+            detector,
+            out,
+            campaign,
+            streak,
+            psf_fwhm_px,
+            psf_fwhm_arcsec,
+            pixel_scale_arcsec,
+            star_trail_angle_deg,
+            conf,
+        } => user_errors(|| {
+            use soig::detect_frames::{Optics, Options, Which};
+            let campaign = campaign.map(|c| Campaign::load(&c)).transpose()?;
+            let which = match (detector, &model) {
+                (Some(DetectorChoice::Streak), _) | (None, None) => Which::Streak,
+                (Some(DetectorChoice::Yolo), _) => Which::Yolo,
+                (Some(DetectorChoice::All), _) | (None, Some(_)) => Which::All,
+            };
+            let mut opts = Options::new(campaign.as_ref(), which, model);
+            opts.optics = Optics {
+                psf_fwhm_px,
+                psf_fwhm_arcsec,
+                pixel_scale_arcsec,
+            };
+            opts.star_trail_angle_deg = star_trail_angle_deg;
+            if let Some(path) = streak {
+                opts.streak = soig::detect_frames::streak_params_file(&path)?;
+            }
+            if let Some(c) = conf {
+                opts.yolo.conf = c;
+            }
+            let s = soig::detect_frames::run(&inputs, &out, &opts)?;
+            for f in &s.frames {
+                println!("{}: {} detection(s)", f.file, f.detections.len());
+            }
+            println!("-> {}\ndigest {}", s.output.display(), s.digest);
+            Ok(())
+        }),
         Command::Schema => {
             println!("{}", soig::campaign::schema_json());
             ExitCode::SUCCESS

@@ -10,6 +10,7 @@
 //! `figures`.
 
 mod figures;
+pub(crate) use figures::draw_rect;
 
 use std::fmt::Write as _;
 use std::path::Path;

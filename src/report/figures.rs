@@ -128,7 +128,8 @@ pub(super) fn previews(
     Ok(())
 }
 
-fn draw_rect(img: &mut RgbImage, b: &[f64; 4], c: Rgb<u8>) {
+/// A 2 px rectangle along the edges of a pixel-edge box `[x1, y1, x2, y2]`, clipped to the image.
+pub(crate) fn draw_rect(img: &mut RgbImage, b: &[f64; 4], c: Rgb<u8>) {
     let (w, h) = (img.width() as i64, img.height() as i64);
     let clamp = |v: f64, n: i64| (v.round() as i64).clamp(0, n - 1);
     let (x0, y0, x1, y1) = (

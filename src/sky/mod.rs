@@ -10,6 +10,7 @@ pub mod stars;
 #[cfg(test)]
 mod testing;
 pub mod vec3;
+pub mod wcs;
 
 pub use vec3::{
     Mat3, Vec3, angle_deg, cross, dot, mat_mul, mat_vec, norm, radec_deg, radec_unit, rotate,

@@ -349,6 +349,9 @@ impl StreakParams {
 pub struct Candidate {
     /// Box (pixel-edge coordinates), score in [0, 1) and class.
     pub detection: Detection,
+    /// The half-level ends of the streak, in the box's pixel-edge coordinates (pixel `i` spans
+    /// `[i, i + 1]`, so a pixel centre is at `i + 0.5`), not clipped to the image.
+    pub ends: [[f64; 2]; 2],
     /// Length between the half-level ends, pixels.
     pub length_px: f64,
     /// Axis orientation, degrees from +x towards +y (image rows down), in [0, 180).

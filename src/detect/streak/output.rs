@@ -31,6 +31,7 @@ impl Ctx<'_> {
         };
         Candidate {
             detection,
+            ends: [[a.0 + 0.5, a.1 + 0.5], [b.0 + 0.5, b.1 + 0.5]],
             length_px: s.length,
             orientation_deg: s.theta.to_degrees().rem_euclid(180.0),
             elongation: s.elongation,

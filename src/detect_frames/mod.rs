@@ -1,0 +1,398 @@
+//! `soig detect`: soig's detectors on real frames (FITS of any numeric type, PNG).
+//!
+//! A FITS frame's sky region (`frames`) is enhanced with the campaign's enhancement (soig's
+//! defaults without a campaign) into the 8-bit image the detectors were made for; a PNG is
+//! taken as already enhanced. Nothing of soig's own sensor is assumed: the streak detector's
+//! PSF width is the frame's, from `--psf-fwhm-px`, or `--psf-fwhm-arcsec` over the pixel scale
+//! (`--pixel-scale-arcsec`, else the WCS's). YOLO letterboxes a frame of any size into its
+//! input as Ultralytics' `predict` does and maps the boxes back (`detect::yolo`).
+//!
+//! Every position is in the file's own pixel grid, in pixel-edge coordinates (Ultralytics'
+//! xyxy: pixel `i` spans `[i, i + 1]`; FITS pixel `p` is centred at `p - 0.5`), and through
+//! the frame's TAN WCS, when it has one, on the sky. `output` writes the files.
+
+mod output;
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+
+use crate::campaign::{Campaign, Detect, Enhance, PointingMode};
+use crate::detect::Detection;
+use crate::detect::streak::{StreakParams, detect_streaks};
+use crate::detect::yolo::{YoloDetector, YoloParams};
+use crate::enhance::{self, Gray8};
+use crate::frames::{Frame, RegionPixels};
+
+/// FWHM of a Gaussian over its sigma, 2 sqrt(2 ln 2).
+const FWHM_PER_SIGMA: f64 = 2.354_820_045_030_949;
+
+/// Which detectors to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Which {
+    Streak,
+    Yolo,
+    All,
+}
+
+/// The frame's optics as the user gives them; what is not given comes from the header.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Optics {
+    pub psf_fwhm_px: Option<f64>,
+    pub psf_fwhm_arcsec: Option<f64>,
+    pub pixel_scale_arcsec: Option<f64>,
+}
+
+impl Optics {
+    /// Each value given must be a positive, finite number.
+    fn check(&self) -> anyhow::Result<()> {
+        for (name, v) in [
+            ("--psf-fwhm-px", self.psf_fwhm_px),
+            ("--psf-fwhm-arcsec", self.psf_fwhm_arcsec),
+            ("--pixel-scale-arcsec", self.pixel_scale_arcsec),
+        ] {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0)
+            {
+                bail!("{name} {v}: must be a positive number");
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Everything `soig detect` does to every frame.
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub which: Which,
+    pub model: Option<PathBuf>,
+    pub enhance: enhance::Settings,
+    pub streak: StreakParams,
+    pub yolo: YoloParams,
+    pub optics: Optics,
+    /// Direction of star trails in the image axes, degrees (see `detect::streak`), if known.
+    pub star_trail_angle_deg: Option<f64>,
+    /// The campaign the settings came from, for the record.
+    pub campaign: Option<PathBuf>,
+}
+
+impl Options {
+    /// The campaign's enhancement and detector settings, or soig's defaults without one.
+    pub fn new(campaign: Option<&Campaign>, which: Which, model: Option<PathBuf>) -> Options {
+        let (e, d, fixed) = match campaign {
+            Some(c) => (
+                c.resolved.enhance.clone(),
+                c.resolved.detect.clone(),
+                c.resolved.pointing.mode == PointingMode::Fixed,
+            ),
+            None => (Enhance::default(), Detect::default(), true),
+        };
+        Options {
+            which,
+            model,
+            // As `Experiment::new`: the square root only for fixed pointing (paper 3.3).
+            enhance: enhance::Settings {
+                sqrt: e.sqrt && fixed,
+                clahe_clip_limit: e.clahe_clip_limit,
+                clahe_tiles: e.clahe_tiles,
+                gamma: e.gamma,
+            },
+            streak: d.streak.clone(),
+            yolo: YoloParams {
+                conf: d.conf,
+                iou: d.iou,
+                max_det: d.max_det as usize,
+                ..YoloParams::default()
+            },
+            optics: Optics::default(),
+            star_trail_angle_deg: None,
+            campaign: campaign.map(|c| c.source.clone()),
+        }
+    }
+}
+
+/// Streak-detector knobs from a TOML file holding the keys of a campaign's `[detect.streak]`
+/// table (each optional; see `detect::streak::StreakParams`), e.g. settings for real frames.
+pub fn streak_params_file(path: &Path) -> anyhow::Result<StreakParams> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read streak settings {}", path.display()))?;
+    let params: StreakParams = toml::from_str(&text)
+        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
+    if let Err((field, message)) = params.check() {
+        // The line that sets the field, for the message.
+        let line = text
+            .lines()
+            .position(|l| l.trim_start().starts_with(field))
+            .map(|i| format!(":{}", i + 1))
+            .unwrap_or_default();
+        bail!("{}{line}: field `{field}`: {message}", path.display());
+    }
+    Ok(params)
+}
+
+/// One detection on one frame.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Found {
+    pub detector: &'static str,
+    pub confidence: f64,
+    /// x1, y1, x2, y2 in the file's pixel-edge coordinates.
+    pub pixel_box: [f64; 4],
+    /// The streak's ends (streak detector only), same coordinates.
+    pub ends: Option<[[f64; 2]; 2]>,
+    /// (RA, Dec) in degrees of the box centre and of the ends, through the frame's WCS.
+    pub centre_radec: Option<[f64; 2]>,
+    pub ends_radec: Option<[[f64; 2]; 2]>,
+}
+
+/// What was done to one frame and what was found on it.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FrameResult {
+    pub file: String,
+    pub sha256: String,
+    pub format: &'static str,
+    pub width: usize,
+    pub height: usize,
+    /// The sky region the detectors saw, 0-based half-open, and the keyword that gave it.
+    pub region: crate::frames::Region,
+    pub region_keyword: Option<&'static str>,
+    pub wcs: Option<crate::sky::wcs::TanWcs>,
+    pub wcs_problem: Option<String>,
+    pub pixel_scale_arcsec: Option<f64>,
+    /// The streak detector's PSF FWHM in pixels and where it came from.
+    pub psf_fwhm_px: f64,
+    pub psf_source: &'static str,
+    /// Pixels of a FITS frame that were not finite numbers (set to the median before enhancing).
+    pub non_finite_pixels: usize,
+    /// Added to a FITS frame before the square root when it holds negative values (a
+    /// calibrated frame whose sky was subtracted), so the square root does not clip half of it.
+    pub pedestal: f64,
+    pub detections: Vec<Found>,
+    #[serde(skip)]
+    pub enhanced: Gray8,
+}
+
+/// The outcome of `soig detect`.
+#[derive(Debug)]
+pub struct Summary {
+    pub frames: Vec<FrameResult>,
+    pub output: PathBuf,
+    pub digest: String,
+}
+
+/// Run the detectors on every input and write `out` whole (see [`crate::output`]). Every
+/// input and the model are read before anything is written.
+pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options) -> anyhow::Result<Summary> {
+    if inputs.is_empty() {
+        bail!("no input frame given");
+    }
+    opts.optics.check()?;
+    let mut yolo = match (opts.which, &opts.model) {
+        (Which::Streak, _) => None,
+        (Which::Yolo | Which::All, Some(m)) => Some(
+            YoloDetector::load(m, opts.yolo)
+                .with_context(|| format!("loading model {}", m.display()))?,
+        ),
+        (Which::Yolo, None) => bail!("--detector yolo needs --model M.onnx"),
+        (Which::All, None) => None,
+    };
+    let frames: Vec<Frame> = inputs
+        .iter()
+        .map(|p| Frame::read(p))
+        .collect::<Result<_, _>>()?;
+    let mut stems = std::collections::BTreeSet::new();
+    for f in &frames {
+        if !stems.insert(output::stem(&f.path)) {
+            bail!(
+                "{}: another input has the same file stem; its prediction and preview files would collide",
+                f.path.display()
+            );
+        }
+    }
+    let mut results = Vec::with_capacity(frames.len());
+    for frame in &frames {
+        results.push(detect_frame(frame, opts, yolo.as_mut())?);
+    }
+    let keep: Vec<PathBuf> = inputs
+        .iter()
+        .filter_map(|p| {
+            std::fs::canonicalize(p)
+                .ok()?
+                .parent()
+                .map(Path::to_path_buf)
+        })
+        .collect();
+    let keep_refs: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
+    let digest =
+        crate::output::write_replacing(out, &keep_refs, |dir| output::write(dir, &results, opts))?;
+    Ok(Summary {
+        frames: results,
+        output: out.to_path_buf(),
+        digest,
+    })
+}
+
+/// Enhance one frame, run the detectors on its sky region, put the results into the file's
+/// pixel grid and on the sky.
+fn detect_frame(
+    frame: &Frame,
+    opts: &Options,
+    yolo: Option<&mut YoloDetector>,
+) -> anyhow::Result<FrameResult> {
+    let (rw, rh) = (frame.region.width(), frame.region.height());
+    let (enhanced, non_finite, pedestal, format) = match &frame.pixels {
+        RegionPixels::Gray(g) => (
+            Gray8 {
+                width: rw,
+                height: rh,
+                pixels: g.clone(),
+            },
+            0,
+            0.0,
+            "png",
+        ),
+        RegionPixels::Values(v) => {
+            let (values, non_finite, pedestal) = prepare(v, opts.enhance.sqrt);
+            (
+                enhance::enhance(&values, rw, rh, &opts.enhance),
+                non_finite,
+                pedestal,
+                "fits",
+            )
+        }
+    };
+    let pixel_scale = opts
+        .optics
+        .pixel_scale_arcsec
+        .or(frame.wcs.map(|w| w.pixel_scale_arcsec()));
+    let (psf_fwhm_px, psf_source) = match (opts.optics.psf_fwhm_px, opts.optics.psf_fwhm_arcsec) {
+        (Some(px), _) => (px, "--psf-fwhm-px"),
+        (None, Some(arcsec)) => match pixel_scale {
+            Some(s) => (
+                arcsec / s,
+                if opts.optics.pixel_scale_arcsec.is_some() {
+                    "--psf-fwhm-arcsec / --pixel-scale-arcsec"
+                } else {
+                    "--psf-fwhm-arcsec / the WCS's pixel scale"
+                },
+            ),
+            None => bail!(
+                "{}: --psf-fwhm-arcsec needs a pixel scale: the frame has no WCS; give --pixel-scale-arcsec",
+                frame.path.display()
+            ),
+        },
+        (None, None) => (
+            opts.streak.psf_sigma_px * FWHM_PER_SIGMA,
+            "the streak detector's psf_sigma_px (not the frame's optics: give --psf-fwhm-px)",
+        ),
+    };
+    let mut found = Vec::new();
+    let (ox, oy) = (frame.region.x0 as f64, frame.region.y0 as f64);
+    let shift = |d: &Detection| [d.x1 + ox, d.y1 + oy, d.x2 + ox, d.y2 + oy];
+    if opts.which != Which::Yolo {
+        let params = StreakParams {
+            psf_sigma_px: psf_fwhm_px / FWHM_PER_SIGMA,
+            ..opts.streak.clone()
+        };
+        for c in detect_streaks(&enhanced.pixels, rw, rh, &params, opts.star_trail_angle_deg) {
+            let ends = c.ends.map(|[x, y]| [x + ox, y + oy]);
+            found.push(Found {
+                detector: "streak",
+                confidence: c.detection.score,
+                pixel_box: shift(&c.detection),
+                ends: Some(ends),
+                centre_radec: None,
+                ends_radec: None,
+            });
+        }
+    }
+    if let Some(y) = yolo {
+        for d in y
+            .detect(&enhanced.pixels, rw, rh)
+            .with_context(|| format!("YOLO on {}", frame.path.display()))?
+        {
+            found.push(Found {
+                detector: "yolo",
+                confidence: d.score,
+                pixel_box: shift(&d),
+                ends: None,
+                centre_radec: None,
+                ends_radec: None,
+            });
+        }
+    }
+    if let Some(w) = &frame.wcs {
+        // Pixel-edge coordinates to the WCS's 0-based pixel centres: minus half a pixel.
+        let sky = |[x, y]: [f64; 2]| {
+            let (ra, dec) = w.sky(x - 0.5, y - 0.5);
+            [ra, dec]
+        };
+        for f in &mut found {
+            let b = f.pixel_box;
+            f.centre_radec = Some(sky([(b[0] + b[2]) / 2.0, (b[1] + b[3]) / 2.0]));
+            f.ends_radec = f.ends.map(|e| e.map(sky));
+        }
+    }
+    Ok(FrameResult {
+        file: frame.path.display().to_string(),
+        sha256: crate::hash::sha256_file(&frame.path)?.0,
+        format,
+        width: frame.width,
+        height: frame.height,
+        region: frame.region,
+        region_keyword: frame.region_keyword,
+        wcs: frame.wcs,
+        wcs_problem: frame.wcs_problem.clone(),
+        pixel_scale_arcsec: pixel_scale,
+        psf_fwhm_px,
+        psf_source,
+        non_finite_pixels: non_finite,
+        pedestal,
+        detections: found,
+        enhanced,
+    })
+}
+
+/// A FITS region ready for the enhancement: non-finite values set to the median of the
+/// finite ones, and, before a square root, the minimum raised to 0 when it is negative
+/// (values the square root would clip). Returns (values, non-finite count, pedestal added).
+fn prepare(values: &[f32], sqrt: bool) -> (Vec<f32>, usize, f64) {
+    let mut finite: Vec<f32> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    let non_finite = values.len() - finite.len();
+    let median = if finite.is_empty() {
+        0.0
+    } else {
+        let mid = finite.len() / 2;
+        *finite.select_nth_unstable_by(mid, f32::total_cmp).1
+    };
+    let mut out: Vec<f32> = values
+        .iter()
+        .map(|&v| if v.is_finite() { v } else { median })
+        .collect();
+    let min = out.iter().copied().fold(f32::INFINITY, f32::min);
+    let pedestal = if sqrt && min < 0.0 {
+        -(min as f64)
+    } else {
+        0.0
+    };
+    if pedestal > 0.0 {
+        out.iter_mut()
+            .for_each(|v| *v = (*v as f64 + pedestal) as f32);
+    }
+    (out, non_finite, pedestal)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prepare_fills_non_finite_and_lifts_negative_frames_for_the_square_root() {
+        let (v, n, p) = prepare(&[-2.0, f32::NAN, 1.0, 5.0, f32::INFINITY], true);
+        assert_eq!((n, p), (2, 2.0));
+        // The NaN and the infinity take the median of the finite values, 1, then the pedestal.
+        assert_eq!(v, vec![0.0, 3.0, 3.0, 7.0, 3.0]);
+        let (v, _, p) = prepare(&[-2.0, 1.0], false);
+        assert_eq!((v, p), (vec![-2.0, 1.0], 0.0));
+    }
+}
