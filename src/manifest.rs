@@ -34,6 +34,10 @@ pub struct Manifest {
     /// The training run (`soig train`): model sha256, Ultralytics and torch versions, log.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub training: Option<serde_json::Value>,
+    /// A shard's place in its campaign (`soig run --shard`; see `shard`): index, count, the
+    /// images it holds and the campaign's folder. None for a whole campaign.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<serde_json::Value>,
     /// Values the run resolved late from several fields (effective SNR gate, frame size,
     /// training size and batch, PSF in pixels): a function of the resolved campaign and the
     /// tool version, both hashed, so they are recorded but not part of the digest.
@@ -58,7 +62,8 @@ pub fn list_files(dir: &Path) -> std::io::Result<Vec<String>> {
                     .map(|c| c.as_os_str().to_string_lossy().into_owned())
                     .collect::<Vec<_>>()
                     .join("/");
-                if rel != MANIFEST {
+                // The journal of a run in progress is no artifact (see `journal`).
+                if rel != MANIFEST && !rel.starts_with(crate::journal::FILE) {
                     out.push(rel);
                 }
             }
@@ -107,6 +112,7 @@ impl Manifest {
             files,
             volatile: volatile.to_vec(),
             training: None,
+            shard: None,
             effective: None,
             digest: String::new(),
         };
