@@ -23,7 +23,7 @@ use crate::hash::sha256_file;
 use crate::manifest::{self, MANIFEST, Manifest};
 
 /// The journal's file name in a staging directory.
-pub const FILE: &str = ".soig-journal.jsonl";
+pub const FILE: &str = manifest::JOURNAL;
 
 /// What a staging directory is being written for: a run resumes only its own.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]

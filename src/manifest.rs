@@ -11,6 +11,8 @@ use crate::error::Error;
 use crate::hash::{hex, sha256_file};
 
 pub const MANIFEST: &str = "manifest.json";
+/// The journal of a run in progress (see `journal`): in a staging directory, and no artifact.
+pub const JOURNAL: &str = ".soig-journal.jsonl";
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct FileEntry {
@@ -62,8 +64,8 @@ pub fn list_files(dir: &Path) -> std::io::Result<Vec<String>> {
                     .map(|c| c.as_os_str().to_string_lossy().into_owned())
                     .collect::<Vec<_>>()
                     .join("/");
-                // The journal of a run in progress is no artifact (see `journal`).
-                if rel != MANIFEST && !rel.starts_with(crate::journal::FILE) {
+                // The journal (and its temporary copy) are no artifacts.
+                if rel != MANIFEST && !rel.starts_with(JOURNAL) {
                     out.push(rel);
                 }
             }
@@ -94,13 +96,29 @@ impl Manifest {
         campaign: serde_json::Value,
         volatile: &[String],
     ) -> std::io::Result<Manifest> {
+        Manifest::build_knowing(dir, campaign_hash, campaign, volatile, &BTreeMap::new())
+    }
+
+    /// [`Manifest::build`], taking the sha256 of the files in `known` (relative path -> sha256,
+    /// hashed by the run as it wrote them: see `journal`) rather than reading them again.
+    pub fn build_knowing(
+        dir: &Path,
+        campaign_hash: &str,
+        campaign: serde_json::Value,
+        volatile: &[String],
+        known: &BTreeMap<&str, &str>,
+    ) -> std::io::Result<Manifest> {
         use rayon::prelude::*;
         // Hashed in parallel: a 4000-image run has ~12000 files.
         let files = list_files(dir)?
             .into_par_iter()
             .filter(|rel| !volatile.contains(rel))
             .map(|rel| {
-                let (sha256, bytes) = sha256_file(&dir.join(&rel))?;
+                let path = dir.join(&rel);
+                let (sha256, bytes) = match known.get(rel.as_str()) {
+                    Some(sha) => (sha.to_string(), std::fs::metadata(&path)?.len()),
+                    None => sha256_file(&path)?,
+                };
                 Ok((rel, FileEntry { sha256, bytes }))
             })
             .collect::<std::io::Result<BTreeMap<_, _>>>()?;

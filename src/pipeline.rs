@@ -6,6 +6,7 @@
 //! half-written output. A shard run (`shard`) renders its share of the images only and seals
 //! it with a shard manifest; `shard::merge` gathers the shards and finishes here.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -170,6 +171,17 @@ fn seal_manifest(
     training: Option<serde_json::Value>,
 ) -> anyhow::Result<Manifest> {
     let mut m = Manifest::build(dir, &campaign.hash, resolved, volatile)?;
+    seal(&mut m, dir, campaign, training)?;
+    Ok(m)
+}
+
+/// Add the effective values and the training record to `m`, seal it and write it into `dir`.
+fn seal(
+    m: &mut Manifest,
+    dir: &Path,
+    campaign: &Campaign,
+    training: Option<serde_json::Value>,
+) -> anyhow::Result<()> {
     m.effective = Some(serde_json::to_value(
         Experiment::new(campaign).effective(campaign),
     )?);
@@ -178,7 +190,7 @@ fn seal_manifest(
     }
     m.seal();
     m.write(dir)?;
-    Ok(m)
+    Ok(())
 }
 
 /// Write the campaign (or its shard) into staging directory `dir`, resuming what its journal
@@ -373,8 +385,14 @@ pub(crate) fn finish(
     journal::abort_if_testing("dataset");
     // The dataset's own digest goes into the report: taken before training and detection add
     // their files.
+    // The images' files were hashed as they were written (or checked at a resume or merge).
+    let known: BTreeMap<&str, &str> = records
+        .iter()
+        .flat_map(|r| r.files.iter().map(|(f, sha)| (f.as_str(), sha.as_str())))
+        .collect();
     let dataset_digest = if stages.contains(&Stage::Detect) {
-        Manifest::build(dir, &campaign.hash, serde_json::to_value(c)?, &[])?.digest
+        let resolved = serde_json::to_value(c)?;
+        Manifest::build_knowing(dir, &campaign.hash, resolved, &[], &known)?.digest
     } else {
         String::new()
     };
@@ -405,13 +423,14 @@ pub(crate) fn finish(
     if trained.is_some() {
         volatile.extend(volatile_files(dir)?);
     }
-    let manifest = seal_manifest(
+    let mut manifest = Manifest::build_knowing(
         dir,
-        campaign,
+        &campaign.hash,
         serde_json::to_value(c)?,
         &volatile,
-        trained.map(|t| t.record),
+        &known,
     )?;
+    seal(&mut manifest, dir, campaign, trained.map(|t| t.record))?;
     journal::abort_if_testing("manifest");
     Ok(manifest.digest)
 }

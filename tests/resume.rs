@@ -4,7 +4,7 @@
 //! the uninterrupted run's digest and leaves no staging directory or lock.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 mod common;
