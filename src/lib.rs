@@ -7,9 +7,10 @@
 //! Imports go one way, top to bottom (no module imports one above it, and there is no cycle):
 //!
 //! ```text
-//! verbs          pipeline (run, train)   shard (split, merge)   study   main.rs: the CLI
+//! verbs          merge (of shards)   pipeline (run, train)   study   main.rs: the CLI
 //! config layer   campaign (file, defaults, compose, validate, resolve)  experiment (-> values)
 //! product        simulate (one image in memory)   artifacts (its files)   dataset   train
+//!                shard (a share of the images)
 //! core           render -> scene -> sensor -> background     geometry (frames, label box)
 //!                enhance (+ clahe)   detect (streak, yolo)   metrics   report
 //! leaves         sky (orbit, frames, ephemeris, stars, projection, photometry, vec3)
@@ -61,6 +62,7 @@ pub(crate) mod hash;
 pub mod imaging;
 pub mod journal;
 pub mod manifest;
+pub mod merge;
 pub mod metrics;
 pub mod output;
 pub mod pipeline;

@@ -204,7 +204,7 @@ fn main() -> ExitCode {
             python,
             quiet,
         } => user_errors(|| {
-            let s = soig::shard::merge(&shards, &out, python.as_deref(), &*progress(quiet))?;
+            let s = soig::merge::merge(&shards, &out, python.as_deref(), &*progress(quiet))?;
             println!(
                 "{} images of {} shards merged in {:.1} s -> {}\ndigest {}",
                 s.resumed,

@@ -4,7 +4,7 @@
 //! `journal`: a killed run resumes), adds `data.yaml`, trains when the campaign has a `train`
 //! stage, detects and reports, and writes the manifest last, so a failed run never leaves a
 //! half-written output. A shard run (`shard`) renders its share of the images only and seals
-//! it with a shard manifest; `shard::merge` gathers the shards and finishes here.
+//! it with a shard manifest; `merge` gathers the shards and finishes here.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
