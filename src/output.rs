@@ -131,7 +131,10 @@ pub fn interrupt() -> Vec<PathBuf> {
     let mut kept = Vec::new();
     for (p, resumable) in paths {
         if resumable {
-            kept.push(p);
+            // Gone when the signal came after the move into place.
+            if p.is_dir() {
+                kept.push(p);
+            }
         } else if p.is_dir() {
             let _ = std::fs::remove_dir_all(&p);
         } else {

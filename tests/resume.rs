@@ -4,15 +4,15 @@
 //! the uninterrupted run's digest and leaves no staging directory or lock.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 mod common;
 use common::{CampaignToml, ELEMENTS_40649, digest, tle_object};
 
 /// `images` small images (fixed pointing, the detect stage with the streak detector), written
-/// as `dir/resume.toml`.
-fn campaign(dir: &Path, images: u32) -> PathBuf {
+/// as `dir/NAME.toml`.
+fn campaign(dir: &Path, name: &str, images: u32) -> PathBuf {
     CampaignToml::new("resume", 21, images)
         .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
         .debris(&tle_object(37476))
@@ -20,7 +20,7 @@ fn campaign(dir: &Path, images: u32) -> PathBuf {
         .tables(
             "[sensor]\nwidth_px = 128\nheight_px = 128\nfov_radius_deg = 0.0125\n[render]\ntrajectory_samples = 300\n[split]\ntrain = 0.5\nval = 0.2\ntest = 0.3\n[artifacts]\nnoise_free_fits = true\n",
         )
-        .write(&dir.join("resume.toml"))
+        .write(&dir.join(format!("{name}.toml")))
 }
 
 fn command(campaign: &Path, out: &Path) -> Command {
@@ -49,14 +49,14 @@ fn journaled(out: &Path, pid: u32) -> usize {
     std::fs::read_to_string(journal).map_or(0, |t| t.lines().count().saturating_sub(1))
 }
 
-/// Spawn the run, wait until it has journaled `images` images, and signal it.
-fn stop_after(
-    campaign: &Path,
-    out: &Path,
-    images: usize,
-    signal: &str,
-) -> std::process::ExitStatus {
-    let mut child = command(campaign, out).spawn().unwrap();
+/// Spawn the run on one thread (so that it is still rendering when the signal comes, on any
+/// machine), wait until it has journaled `images` images, signal it, and wait for its end.
+fn stop_after(campaign: &Path, out: &Path, images: usize, signal: &str) -> Output {
+    let child = command(campaign, out)
+        .env("RAYON_NUM_THREADS", "1")
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
     let started = Instant::now();
     while journaled(out, child.id()) < images && started.elapsed() < Duration::from_secs(60) {
         std::thread::sleep(Duration::from_millis(10));
@@ -70,28 +70,30 @@ fn stop_after(
         .status()
         .unwrap();
     assert!(sent.success());
-    child.wait().unwrap()
+    child.wait_with_output().unwrap()
 }
 
 #[test]
 fn killed_at_any_phase_a_run_resumes_to_the_same_digest() {
     let tmp = tempfile::tempdir().unwrap();
     let t = tmp.path();
-    let c = campaign(t, 24);
-    let reference = digest(&command(&c, &t.join("reference")).output().unwrap());
-
     // kill -9 while rendering, then resume: only the missing images are rendered.
+    let long = campaign(t, "long", 150);
     let out = t.join("out");
-    let status = stop_after(&c, &out, 3, "-KILL");
-    assert_eq!(status.code(), None, "{status:?}");
-    let resumed = command(&c, &out).output().unwrap();
+    let stopped = stop_after(&long, &out, 3, "-KILL");
+    assert_eq!(stopped.status.code(), None, "{stopped:?}");
+    let resumed = command(&long, &out).output().unwrap();
+    let reference = digest(&command(&long, &t.join("reference")).output().unwrap());
     assert_eq!(digest(&resumed), reference);
     let said = String::from_utf8_lossy(&resumed.stdout);
     assert!(
-        said.contains("resumed)") && !said.starts_with("24 images"),
+        said.contains("resumed)") && !said.starts_with("150 images"),
         "{said}"
     );
     assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
+
+    let c = campaign(t, "short", 24);
+    let reference = digest(&command(&c, &t.join("reference")).output().unwrap());
 
     // Aborted (as by kill -9) at each later phase; `rename` both with and without an old
     // output in place.
@@ -139,23 +141,9 @@ fn killed_at_any_phase_a_run_resumes_to_the_same_digest() {
 fn sigterm_keeps_the_work_and_the_same_command_resumes_it() {
     let tmp = tempfile::tempdir().unwrap();
     let t = tmp.path();
-    let c = campaign(t, 40);
+    let c = campaign(t, "resume", 150);
     let out = t.join("out");
-    let child = command(&c, &out)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let started = Instant::now();
-    while journaled(&out, child.id()) < 2 && started.elapsed() < Duration::from_secs(60) {
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    let sent = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(sent.success());
-    let staging = t.join(format!(".out.partial-{}", child.id()));
-    let stopped = child.wait_with_output().unwrap();
+    let stopped = stop_after(&c, &out, 2, "-TERM");
     assert_eq!(stopped.status.code(), Some(143), "{stopped:?}");
     let err = String::from_utf8_lossy(&stopped.stderr);
     assert!(
@@ -163,6 +151,7 @@ fn sigterm_keeps_the_work_and_the_same_command_resumes_it() {
         "{err}"
     );
     // The work is kept, the lock is not.
+    let staging = t.join(&leftovers(&out)[0]);
     assert!(staging.join(".soig-journal.jsonl").is_file());
     assert_eq!(
         leftovers(&out),
