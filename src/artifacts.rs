@@ -39,6 +39,12 @@ pub struct WrittenPng {
     pub seconds: f64,
 }
 
+/// What an image wrote: its files (paths relative to the output, '/' separated) and its PNG.
+pub struct WrittenImage {
+    pub files: Vec<String>,
+    pub png: Option<WrittenPng>,
+}
+
 /// Write the files of image `index` into `dir` (the PNG and label into `subset`'s folders
 /// when there is a split).
 pub fn write_image(
@@ -49,16 +55,18 @@ pub fn write_image(
     artifacts: &Artifacts,
     provenance: &Provenance,
     sensor: &Sensor,
-) -> anyhow::Result<Option<WrittenPng>> {
+) -> anyhow::Result<WrittenImage> {
     let stem = stem(index);
+    let mut files = Vec::new();
     let exposure = &products.exposure;
     let (w, h) = (exposure.width, exposure.height);
     let cards = provenance_cards(provenance, sensor, &products.scene, exposure);
     // Both FITS carry the same keywords but their unit.
-    let write_fits = |file: String, pixels: Pixels, unit: &str, comment: &str| {
+    let mut write_fits = |file: String, pixels: Pixels, unit: &str, comment: &str| {
         let mut cards = cards.clone();
         cards.push(("BUNIT".into(), Card::Str(unit.into()), comment.into()));
-        let path = dir.join("fits").join(file);
+        let path = dir.join("fits").join(&file);
+        files.push(format!("fits/{file}"));
         fits::write_image(&path, w, h, pixels, &cards)
             .with_context(|| format!("writing {}", path.display()))
     };
@@ -84,6 +92,7 @@ pub fn write_image(
         )?;
     }
     if artifacts.star_list {
+        files.push(format!("truth/{stem}_stars.csv"));
         let path = dir.join("truth").join(format!("{stem}_stars.csv"));
         let mut w =
             csv::Writer::from_path(&path).with_context(|| format!("writing {}", path.display()))?;
@@ -98,8 +107,9 @@ pub fn write_image(
         serde_json::to_string_pretty(&exposure.truth)? + "\n",
     )?;
 
+    files.push(format!("truth/{stem}.json"));
     let Some(product) = &products.product else {
-        return Ok(None);
+        return Ok(WrittenImage { files, png: None });
     };
     let started = Instant::now();
     let frame = &product.frame;
@@ -107,27 +117,38 @@ pub fn write_image(
         .label
         .map(|b| b.yolo_line(frame.width, frame.height))
         .unwrap_or_default();
-    let (img_dir, lbl_dir) = match subset {
-        Some(s) => (
-            dir.join("images").join(s.name()),
-            dir.join("labels").join(s.name()),
-        ),
-        None => (dir.join("images"), dir.join("labels")),
-    };
-    let png_path = img_dir.join(format!("{stem}.png"));
+    let (png_rel, label_rel) = dataset_paths(index, subset);
+    let png_path = dir.join(&png_rel);
     enhance::write_png(&png_path, &product.png)?;
-    std::fs::write(lbl_dir.join(format!("{stem}.txt")), label_line)?;
+    std::fs::write(dir.join(&label_rel), label_line)?;
+    files.extend([png_rel, label_rel]);
     // Pixel-edge coordinates: pixel i spans [i, i + 1).
     let edges = product
         .label
         .map(|b| [b.x_min + 0.5, b.y_min + 0.5, b.x_max + 0.5, b.y_max + 0.5]);
-    Ok(Some(WrittenPng {
-        path: png_path,
-        width: frame.width,
-        height: frame.height,
-        label: edges,
-        seconds: started.elapsed().as_secs_f64(),
-    }))
+    Ok(WrittenImage {
+        files,
+        png: Some(WrittenPng {
+            path: png_path,
+            width: frame.width,
+            height: frame.height,
+            label: edges,
+            seconds: started.elapsed().as_secs_f64(),
+        }),
+    })
+}
+
+/// The PNG and label of image `index`, relative to the output: in `subset`'s folders when
+/// there is a split.
+pub fn dataset_paths(index: u64, subset: Option<Subset>) -> (String, String) {
+    let stem = stem(index);
+    match subset {
+        Some(s) => (
+            format!("images/{}/{stem}.png", s.name()),
+            format!("labels/{}/{stem}.txt", s.name()),
+        ),
+        None => (format!("images/{stem}.png"), format!("labels/{stem}.txt")),
+    }
 }
 
 /// WCS and provenance keywords of an image.

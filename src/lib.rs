@@ -7,14 +7,15 @@
 //! Imports go one way, top to bottom (no module imports one above it, and there is no cycle):
 //!
 //! ```text
-//! verbs          pipeline (run, train)   study   compare   tables   detect_frames   main.rs: the CLI
+//! verbs          merge (of shards)   pipeline (run, train)   study   compare   tables   detect_frames   main.rs: the CLI
 //! config layer   campaign (file, defaults, compose, validate, resolve)  experiment (-> values)
 //! product        simulate (one image in memory)   artifacts (its files)   dataset   train
+//!                shard (a share of the images)
 //! core           render -> scene -> sensor -> background     geometry (frames, label box)
 //!                enhance (+ clahe)   detect (streak, yolo)   metrics   report
-//! leaves         sky (orbit, frames, ephemeris, stars, projection, photometry, vec3)
+//! leaves         sky (orbit, frames, ephemeris, stars, projection, photometry, vec3, wcs)
 //!                imaging   rng   fits   frames   hash   python   plot   progress
-//! at the side    manifest   output (whole-or-nothing directories)   error
+//! at the side    manifest   output (whole-or-nothing directories)   journal (resume)   error
 //! ```
 //!
 //! The core never sees the campaign file: the config layer builds a [`Sensor`], a
@@ -42,7 +43,7 @@
 pub use campaign::{Campaign, CampaignError};
 pub use error::{Error, Result};
 pub use manifest::{Manifest, verify};
-pub use pipeline::{RunSummary, run, train};
+pub use pipeline::{RunOptions, RunSummary, run, run_with, train};
 pub use progress::{Progress, Silent};
 pub use sensor::Sensor;
 pub use simulate::{Experiment, ImageProducts};
@@ -62,7 +63,9 @@ pub mod frames;
 pub mod geometry;
 pub(crate) mod hash;
 pub mod imaging;
+pub mod journal;
 pub mod manifest;
+pub mod merge;
 pub mod metrics;
 pub mod output;
 pub mod pipeline;
@@ -74,6 +77,7 @@ pub mod report;
 pub mod rng;
 pub mod scene;
 pub mod sensor;
+pub mod shard;
 pub mod simulate;
 pub mod sky;
 pub mod study;

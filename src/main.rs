@@ -20,13 +20,25 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a campaign: render, enhance, split, and write the manifest.
+    /// Run a campaign: render, enhance, split, and write the manifest. A run that was killed or
+    /// interrupted is resumed by running the same command again: the images it finished are
+    /// checked against their hashes and only the missing ones rendered (same digest).
     Run {
         /// The campaign TOML file.
         campaign: PathBuf,
-        /// Output directory (default: the campaign's `output`, else `runs/<name>` beside it).
+        /// Output directory (default: the campaign's `output`, else `runs/<name>` beside it;
+        /// with --shard, that with `-shard-K-of-N` appended).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Render only shard K of N (0 <= K < N): the contiguous block of images K*n/N ..
+        /// (K+1)*n/N, into a shard output for `soig merge`. `auto` takes K and N from a Slurm
+        /// job array (SLURM_ARRAY_TASK_ID, SLURM_ARRAY_TASK_COUNT); `auto/N` takes K from a
+        /// Kubernetes Indexed Job (JOB_COMPLETION_INDEX) with N its completions.
+        #[arg(long, value_name = "K/N|auto|auto/N")]
+        shard: Option<String>,
+        /// Do not resume: discard the work a killed run of this output left, and start afresh.
+        #[arg(long)]
+        fresh: bool,
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
@@ -37,6 +49,23 @@ enum Command {
         /// value (`512`, `true`, `[8, 8]`) or else a string. Repeatable.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+    },
+    /// Merge the shard outputs of one campaign (`soig run --shard`) into the output a single
+    /// run would write, same digest: checks that they are one campaign and soig version, that
+    /// each verifies, and that every shard 0..N is given once; then writes data.yaml, runs the
+    /// train and detect stages and the report, and writes the manifest.
+    Merge {
+        /// The shard outputs, in any order.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// Output directory of the merged run.
+        #[arg(long)]
+        out: PathBuf,
+        /// Python with Ultralytics, for a `train` stage (default: .venv-train/bin/python3).
+        #[arg(long)]
+        python: Option<PathBuf>,
+        #[arg(long, short)]
+        quiet: bool,
     },
     /// Train a YOLOv8 model on the campaign's dataset through Ultralytics, export ONNX, and
     /// record the run in the manifest (needs `scripts/setup-train.sh`).
@@ -194,25 +223,56 @@ enum EvalMode {
 }
 
 fn main() -> ExitCode {
+    stop_cleanly_on_signals();
     let cli = Cli::parse();
-    // Ctrl-C and SIGTERM (Slurm's scancel, Kubernetes' pod stop) leave no staging directory or
-    // lock behind; 130 is the shells' exit status for an interrupted command.
-    let _ = ctrlc::set_handler(|| {
-        soig::output::abandon();
-        std::process::exit(130);
-    });
     match cli.command {
         Command::Run {
             campaign,
             out,
+            shard,
+            fresh,
             quiet,
             python,
             set,
         } => user_errors(|| {
             let campaign = Campaign::load_with_overrides(&campaign, &set)?;
-            let output = out.unwrap_or_else(|| campaign.output_dir.clone());
-            let s = soig::pipeline::run(&campaign, &output, python.as_deref(), &*progress(quiet))?;
+            let shard = shard
+                .map(|s| soig::shard::Shard::parse(&s, |k| std::env::var(k).ok()))
+                .transpose()
+                .map_err(anyhow::Error::msg)?;
+            let output = out.unwrap_or_else(|| match shard {
+                Some(s) => s.output_dir(&campaign.output_dir),
+                None => campaign.output_dir.clone(),
+            });
+            let options = soig::RunOptions { shard, fresh };
+            let s = soig::run_with(
+                &campaign,
+                &output,
+                options,
+                python.as_deref(),
+                &*progress(quiet),
+            )?;
+            if let Some(k) = shard {
+                print!("shard {} of {}: ", k.index, k.count);
+            }
             print!("{}", s.final_lines());
+            Ok(())
+        }),
+        Command::Merge {
+            shards,
+            out,
+            python,
+            quiet,
+        } => user_errors(|| {
+            let s = soig::merge::merge(&shards, &out, python.as_deref(), &*progress(quiet))?;
+            println!(
+                "{} images of {} shards merged in {:.1} s -> {}\ndigest {}",
+                s.resumed,
+                shards.len(),
+                s.seconds,
+                s.output.display(),
+                s.digest
+            );
             Ok(())
         }),
         Command::Train {
@@ -383,6 +443,30 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
     }
+}
+
+/// Ctrl-C and SIGTERM (Slurm's scancel, a Kubernetes pod stop) stop cleanly: a thread waits
+/// for them (blocked in every other thread, which inherit the mask; children get an empty one
+/// from std), removes the locks and non-resumable staging directories, keeps a run's staging
+/// directory and says how to resume it, and exits 128 + the signal: 130 and 143, the shells'.
+fn stop_cleanly_on_signals() {
+    use nix::sys::signal::{SigSet, Signal};
+    let mut set = SigSet::empty();
+    set.add(Signal::SIGINT);
+    set.add(Signal::SIGTERM);
+    if set.thread_block().is_err() {
+        return;
+    }
+    std::thread::spawn(move || {
+        let Ok(signal) = set.wait() else { return };
+        for dir in soig::output::interrupt() {
+            eprintln!(
+                "interrupted ({signal}): the images finished so far are kept in {}; run the same command again to resume (only the missing images are rendered)",
+                dir.display()
+            );
+        }
+        std::process::exit(128 + signal as i32);
+    });
 }
 
 /// Progress bars on stderr, or nothing with `--quiet`.

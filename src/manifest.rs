@@ -11,6 +11,8 @@ use crate::error::Error;
 use crate::hash::{hex, sha256_file};
 
 pub const MANIFEST: &str = "manifest.json";
+/// The journal of a run in progress (see `journal`): in a staging directory, and no artifact.
+pub const JOURNAL: &str = ".soig-journal.jsonl";
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct FileEntry {
@@ -34,6 +36,10 @@ pub struct Manifest {
     /// The training run (`soig train`): model sha256, Ultralytics and torch versions, log.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub training: Option<serde_json::Value>,
+    /// A shard's place in its campaign (`soig run --shard`; see `shard`): index, count, the
+    /// images it holds and the campaign's folder. None for a whole campaign.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<serde_json::Value>,
     /// Values the run resolved late from several fields (effective SNR gate, frame size,
     /// training size and batch, PSF in pixels): a function of the resolved campaign and the
     /// tool version, both hashed, so they are recorded but not part of the digest.
@@ -62,7 +68,8 @@ pub fn list_files(dir: &Path) -> std::io::Result<Vec<String>> {
                     .map(|c| c.as_os_str().to_string_lossy().into_owned())
                     .collect::<Vec<_>>()
                     .join("/");
-                if rel != MANIFEST {
+                // The journal (and its temporary copy) are no artifacts.
+                if rel != MANIFEST && !rel.starts_with(JOURNAL) {
                     out.push(rel);
                 }
             }
@@ -94,13 +101,29 @@ impl Manifest {
         campaign: serde_json::Value,
         volatile: &[String],
     ) -> std::io::Result<Manifest> {
+        Manifest::build_knowing(dir, campaign_hash, campaign, volatile, &BTreeMap::new())
+    }
+
+    /// [`Manifest::build`], taking the sha256 of the files in `known` (relative path -> sha256,
+    /// hashed by the run as it wrote them: see `journal`) rather than reading them again.
+    pub fn build_knowing(
+        dir: &Path,
+        campaign_hash: &str,
+        campaign: serde_json::Value,
+        volatile: &[String],
+        known: &BTreeMap<&str, &str>,
+    ) -> std::io::Result<Manifest> {
         use rayon::prelude::*;
         // Hashed in parallel: a 4000-image run has ~12000 files.
         let files = list_files(dir)?
             .into_par_iter()
             .filter(|rel| !volatile.contains(rel))
             .map(|rel| {
-                let (sha256, bytes) = sha256_file(&dir.join(&rel))?;
+                let path = dir.join(&rel);
+                let (sha256, bytes) = match known.get(rel.as_str()) {
+                    Some(sha) => (sha.to_string(), std::fs::metadata(&path)?.len()),
+                    None => sha256_file(&path)?,
+                };
                 Ok((rel, FileEntry { sha256, bytes }))
             })
             .collect::<std::io::Result<BTreeMap<_, _>>>()?;
@@ -112,6 +135,7 @@ impl Manifest {
             files,
             volatile: volatile.to_vec(),
             training: None,
+            shard: None,
             effective: None,
             debris_mix: None,
             digest: String::new(),

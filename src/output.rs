@@ -9,10 +9,12 @@
 //!   that parses as one (another tool's `manifest.json` does not count);
 //! - a lock `.NAME.lock` (holding the writer's PID) keeps two runs from writing one output: the
 //!   second is refused while the first lives, and takes over a lock whose process is gone;
-//! - staging directories left by runs that were killed (`kill -9`, a lost machine) are removed.
+//! - staging directories left by runs that were killed (`kill -9`, a lost machine) are removed,
+//!   or, by [`write_resumable`], the one that its caller can resume is taken over (see
+//!   `journal`).
 //!
-//! On Ctrl-C or SIGTERM the command line calls [`abandon`], which removes this process's
-//! staging directory and lock.
+//! On Ctrl-C or SIGTERM the command line calls [`interrupt`], which removes this process's locks
+//! and its staging directories, but keeps a resumable one for the next run.
 
 use std::path::{Component, Path, PathBuf};
 use std::sync::Mutex;
@@ -21,8 +23,17 @@ use anyhow::{Context, bail};
 
 use crate::manifest::Manifest;
 
-/// Staging directories and locks of this process, removed by [`abandon`].
-static IN_PROGRESS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// Staging directories (with whether they are resumable) and locks (false) of this process,
+/// handled by [`interrupt`].
+static IN_PROGRESS: Mutex<Vec<(PathBuf, bool)>> = Mutex::new(Vec::new());
+
+/// How a writer resumes the work of a run that was killed.
+pub struct Resume<'a> {
+    /// Whether a staging directory left by a dead process is one this writer can resume.
+    pub matches: &'a (dyn Fn(&Path) -> bool + Sync),
+    /// Says what was resumed or removed.
+    pub note: &'a dyn Fn(&str),
+}
 
 /// Write a soig output directory whole or not at all: `write` fills a hidden staging directory
 /// beside `output`, which replaces `output` only when it succeeds and is deleted when it fails.
@@ -30,6 +41,28 @@ static IN_PROGRESS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 pub fn write_replacing<T>(
     output: &Path,
     keep: &[&Path],
+    write: impl FnOnce(&Path) -> anyhow::Result<T>,
+) -> anyhow::Result<T> {
+    write_staged(output, keep, None, write)
+}
+
+/// [`write_replacing`], resuming: a staging directory of this output left by a process that is
+/// gone, and that `resume` matches, becomes this run's staging directory (the others are
+/// removed, and said so); an interrupt (not a failure) leaves this run's staging directory for
+/// the next run to resume.
+pub fn write_resumable<T>(
+    output: &Path,
+    keep: &[&Path],
+    resume: &Resume,
+    write: impl FnOnce(&Path) -> anyhow::Result<T>,
+) -> anyhow::Result<T> {
+    write_staged(output, keep, Some(resume), write)
+}
+
+fn write_staged<T>(
+    output: &Path,
+    keep: &[&Path],
+    resume: Option<&Resume>,
     write: impl FnOnce(&Path) -> anyhow::Result<T>,
 ) -> anyhow::Result<T> {
     let target = resolve(output)?;
@@ -54,18 +87,28 @@ pub fn write_replacing<T>(
         .with_context(|| format!("cannot create {}", parent.display()))?;
 
     let lock = Lock::take(parent, &name, output)?;
-    remove_stale_staging(parent, &name);
     let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+    let resumed = take_stale_staging(parent, &name, resume);
     if staging.exists() {
         std::fs::remove_dir_all(&staging)?;
     }
-    register(&staging);
+    if let Some(old) = resumed {
+        std::fs::rename(&old, &staging).with_context(|| {
+            format!(
+                "cannot take over {} as {}",
+                old.display(),
+                staging.display()
+            )
+        })?;
+    }
+    register(&staging, resume.is_some());
     let result = match write(&staging) {
         Ok(value) => {
             if target.exists() {
                 std::fs::remove_dir_all(&target)
                     .with_context(|| format!("cannot replace {}", output.display()))?;
             }
+            crate::journal::abort_if_testing("rename");
             std::fs::rename(&staging, &target).with_context(|| {
                 format!("cannot move {} to {}", staging.display(), output.display())
             })?;
@@ -81,30 +124,38 @@ pub fn write_replacing<T>(
     result
 }
 
-/// Remove this process's staging directories and locks (on Ctrl-C or SIGTERM).
-pub fn abandon() {
+/// On Ctrl-C or SIGTERM: remove this process's locks and staging directories but the
+/// resumable ones, which are returned (the next run of the same command resumes them).
+pub fn interrupt() -> Vec<PathBuf> {
     let paths = std::mem::take(&mut *IN_PROGRESS.lock().unwrap_or_else(|e| e.into_inner()));
-    for p in paths {
-        if p.is_dir() {
+    let mut kept = Vec::new();
+    for (p, resumable) in paths {
+        if resumable {
+            // Gone when the signal came after the move into place.
+            if p.is_dir() {
+                kept.push(p);
+            }
+        } else if p.is_dir() {
             let _ = std::fs::remove_dir_all(&p);
         } else {
             let _ = std::fs::remove_file(&p);
         }
     }
+    kept
 }
 
-fn register(path: &Path) {
+fn register(path: &Path, resumable: bool) {
     IN_PROGRESS
         .lock()
         .unwrap_or_else(|e| e.into_inner())
-        .push(path.to_path_buf());
+        .push((path.to_path_buf(), resumable));
 }
 
 fn unregister(path: &Path) {
     IN_PROGRESS
         .lock()
         .unwrap_or_else(|e| e.into_inner())
-        .retain(|p| p != path);
+        .retain(|(p, _)| p != path);
 }
 
 /// The absolute path of `output`, `.` and `..` taken literally (so `new/..` is the folder
@@ -174,24 +225,48 @@ fn alive(pid: u32) -> bool {
     Path::new("/proc").join(pid.to_string()).exists()
 }
 
-/// Remove `.NAME.partial-PID` directories whose process is gone.
-fn remove_stale_staging(parent: &Path, name: &str) {
+/// The staging directories `.NAME.partial-PID` whose process is gone: the one with the most
+/// work that `resume` matches is returned, the others removed (and said so, when resuming).
+fn take_stale_staging(parent: &Path, name: &str, resume: Option<&Resume>) -> Option<PathBuf> {
     let prefix = format!(".{name}.partial-");
     let Ok(entries) = std::fs::read_dir(parent) else {
-        return;
+        return None;
     };
-    for entry in entries.flatten() {
-        let file = entry.file_name().to_string_lossy().into_owned();
-        let Some(pid) = file
-            .strip_prefix(&prefix)
-            .and_then(|p| p.parse::<u32>().ok())
-        else {
-            continue;
-        };
-        if pid != std::process::id() && !alive(pid) {
-            let _ = std::fs::remove_dir_all(entry.path());
+    let stale: Vec<PathBuf> = entries
+        .flatten()
+        .filter(|entry| {
+            let file = entry.file_name().to_string_lossy().into_owned();
+            file.strip_prefix(&prefix)
+                .and_then(|p| p.parse::<u32>().ok())
+                .is_some_and(|pid| pid != std::process::id() && !alive(pid))
+        })
+        .map(|entry| entry.path())
+        .collect();
+    let size = |p: &PathBuf| crate::manifest::list_files(p).map_or(0, |f| f.len());
+    let chosen = resume.and_then(|r| {
+        stale
+            .iter()
+            .filter(|p| (r.matches)(p))
+            .max_by_key(|p| size(p))
+            .cloned()
+    });
+    for p in stale.iter().filter(|p| Some(*p) != chosen.as_ref()) {
+        let _ = std::fs::remove_dir_all(p);
+        if let Some(r) = resume {
+            (r.note)(&format!(
+                "removed {}, left by a soig process that is gone, which this run cannot resume",
+                p.display()
+            ));
         }
     }
+    if let (Some(p), Some(r)) = (&chosen, resume) {
+        (r.note)(&format!(
+            "resuming the run killed earlier, from {} ({} files)",
+            p.display(),
+            size(p)
+        ));
+    }
+    chosen
 }
 
 /// The lock of an output directory, released when dropped.
@@ -211,7 +286,7 @@ impl Lock {
                 Ok(mut f) => {
                     write!(f, "{}", std::process::id())
                         .with_context(|| format!("cannot write {}", path.display()))?;
-                    register(&path);
+                    register(&path, false);
                     return Ok(Lock(path));
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {

@@ -1,9 +1,12 @@
 //! The scheduler: runs every image of a campaign (in parallel with rayon; each image a pure
 //! function of the experiment and its index, see `simulate`), writes the artifacts into a
-//! fresh directory beside the output (see `output`), adds `data.yaml`, trains when the
-//! campaign has a `train` stage, detects and reports, and writes the manifest last, so a
-//! failed run never leaves a half-written output.
+//! staging directory beside the output (see `output`), journaling each finished image (see
+//! `journal`: a killed run resumes), adds `data.yaml`, trains when the campaign has a `train`
+//! stage, detects and reports, and writes the manifest last, so a failed run never leaves a
+//! half-written output. A shard run (`shard`) renders its share of the images only and seals
+//! it with a shard manifest; `merge` gathers the shards and finishes here.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -18,11 +21,13 @@ use crate::detect::streak::{StreakParams, detect_streaks};
 use crate::detect::yolo::{YoloDetector, YoloParams};
 use crate::experiment::{self, Experiment};
 use crate::geometry::FrameKind;
+use crate::journal::{self, Identity, Journal, PngRecord, Record};
 use crate::manifest::{self, MANIFEST, Manifest};
-use crate::output::write_replacing;
+use crate::output::{Resume, write_resumable};
 use crate::progress::Progress;
 use crate::report::{self, DetectorRun, TestImage};
 use crate::scene::Pointing;
+use crate::shard::Shard;
 use crate::simulate;
 use crate::train::{TRAIN_DIR, find_python, fit, volatile_files};
 
@@ -31,7 +36,10 @@ use crate::train::{TRAIN_DIR, find_python, fit, volatile_files};
 pub struct RunSummary {
     pub output: PathBuf,
     pub digest: String,
+    /// Images rendered by this run.
     pub images: usize,
+    /// Images a killed run had finished, which this one resumed.
+    pub resumed: usize,
     pub seconds: f64,
     /// The realised debris mix: images of each object, in the campaign's order.
     pub mix: Vec<DebrisCount>,
@@ -62,6 +70,15 @@ fn debris_mix(campaign: &Campaign, shown: impl Iterator<Item = usize>) -> Vec<De
     mix
 }
 
+/// How [`run_with`] runs a campaign.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RunOptions {
+    /// Render only this shard's images, into a shard output (see `shard`).
+    pub shard: Option<Shard>,
+    /// Start afresh rather than resume the staging directory a killed run left.
+    pub fresh: bool,
+}
+
 /// Run the campaign into `output`. An existing `output` is replaced only if it is a soig output
 /// (it holds a manifest). A `train` stage trains with `python` (default: `find_python`).
 pub fn run(
@@ -70,9 +87,27 @@ pub fn run(
     python: Option<&Path>,
     progress: &dyn Progress,
 ) -> anyhow::Result<RunSummary> {
+    run_with(campaign, output, RunOptions::default(), python, progress)
+}
+
+/// [`run`], as a shard or without resuming (`options`). The staging directory of a run of the
+/// same campaign (and shard) that was killed is resumed: its journaled images are checked
+/// against their hashes and only the missing ones rendered.
+pub fn run_with(
+    campaign: &Campaign,
+    output: &Path,
+    options: RunOptions,
+    python: Option<&Path>,
+    progress: &dyn Progress,
+) -> anyhow::Result<RunSummary> {
+    if let Some(s) = options.shard {
+        s.check_against(campaign.resolved.images.into())?;
+    }
     // Find the training Python and load the campaign's model before rendering anything, so a
-    // missing interpreter or a bad model fails at once, not after every image.
-    let python = if campaign.resolved.stages.contains(&Stage::Train) {
+    // missing interpreter or a bad model fails at once, not after every image. A shard neither
+    // trains nor detects (its merge does).
+    let whole = options.shard.is_none();
+    let python = if whole && campaign.resolved.stages.contains(&Stage::Train) {
         Some(find_python(python)?)
     } else {
         None
@@ -85,12 +120,26 @@ pub fn run(
         YoloDetector::load(&path, yolo_params(campaign))
             .with_context(|| format!("loading model {}", path.display()))?;
     }
-    write_replacing(output, &[&campaign.base_dir], |staging| {
-        write_all(campaign, staging, python.as_deref(), progress)
-    })
-    .map(|s| RunSummary {
+    let id = Identity::new(&campaign.hash, options.shard.map(|s| (s.index, s.count)));
+    let matches = |dir: &Path| !options.fresh && journal::resumable(dir, &id);
+    let note = |message: &str| progress.note(message);
+    let resume = Resume {
+        matches: &matches,
+        note: &note,
+    };
+    let summary = write_resumable(output, &[&campaign.base_dir], &resume, |staging| {
+        write_all(
+            campaign,
+            staging,
+            &id,
+            options.shard,
+            python.as_deref(),
+            progress,
+        )
+    })?;
+    Ok(RunSummary {
         output: output.to_path_buf(),
-        ..s
+        ..summary
     })
 }
 
@@ -148,6 +197,17 @@ fn seal_manifest(
 ) -> anyhow::Result<Manifest> {
     let mut m = Manifest::build(dir, &campaign.hash, resolved, volatile)?;
     m.debris_mix = debris_mix;
+    seal(&mut m, dir, campaign, training)?;
+    Ok(m)
+}
+
+/// Add the effective values and the training record to `m`, seal it and write it into `dir`.
+fn seal(
+    m: &mut Manifest,
+    dir: &Path,
+    campaign: &Campaign,
+    training: Option<serde_json::Value>,
+) -> anyhow::Result<()> {
     m.effective = Some(serde_json::to_value(
         Experiment::new(campaign).effective(campaign),
     )?);
@@ -156,20 +216,69 @@ fn seal_manifest(
     }
     m.seal();
     m.write(dir)?;
-    Ok(m)
+    Ok(())
 }
 
+/// Write the campaign (or its shard) into staging directory `dir`, resuming what its journal
+/// holds. The summary's `output` is `dir`.
 fn write_all(
     campaign: &Campaign,
     dir: &Path,
+    id: &Identity,
+    shard: Option<Shard>,
     python: Option<&Path>,
     progress: &dyn Progress,
 ) -> anyhow::Result<RunSummary> {
+    // Killed while moving a finished output into place: it only needs the move.
+    if let Some(m) = journal::complete(dir, id) {
+        progress.note("the run killed earlier had finished; moving its output into place");
+        let mix = m
+            .debris_mix
+            .and_then(|v| serde_json::from_value(v).ok())
+            .unwrap_or_default();
+        return Ok(RunSummary {
+            output: dir.to_path_buf(),
+            digest: m.digest,
+            images: 0,
+            resumed: 0,
+            seconds: 0.0,
+            mix,
+        });
+    }
+    let (journal, done) = Journal::open(dir, id)?;
+    let resumed = done.len();
+    let n = u64::from(campaign.resolved.images);
+    let share = shard.map_or(0..n, |s| s.images(n));
+    let (records, rendered, seconds) = render(campaign, dir, &journal, done, share, progress)?;
+    let (digest, mix) = match shard {
+        Some(s) => (crate::shard::seal(campaign, dir, s, &records)?, Vec::new()),
+        None => finish(campaign, dir, &records, python, progress)?,
+    };
+    journal::remove(dir)?;
+    Ok(RunSummary {
+        output: dir.to_path_buf(),
+        digest,
+        images: rendered,
+        resumed,
+        seconds,
+        mix,
+    })
+}
+
+/// Render the images of `share` that `done` lacks into `dir`, journaling each. Returns the
+/// records of every image of `share`, by index, how many were rendered and the time taken.
+fn render(
+    campaign: &Campaign,
+    dir: &Path,
+    journal: &Journal,
+    mut done: Vec<Record>,
+    share: std::ops::Range<u64>,
+    progress: &dyn Progress,
+) -> anyhow::Result<(Vec<Record>, usize, f64)> {
     let c = &campaign.resolved;
     let n = c.images as usize;
-    let stages = &c.stages;
-    let enhance_stage = stages.contains(&Stage::Enhance);
-    let dataset_stage = stages.contains(&Stage::Dataset);
+    let enhance_stage = c.stages.contains(&Stage::Enhance);
+    let dataset_stage = c.stages.contains(&Stage::Dataset);
     let subsets = dataset::assign(c.seed, n, c.split.train, c.split.val);
 
     let mut dirs = vec![dir.join("truth")];
@@ -199,11 +308,14 @@ fn write_all(
         seed: c.seed,
         observer: campaign.observer.name.clone(),
     };
-    progress.start("render", n as u64);
+    let have: std::collections::BTreeSet<u64> = done.iter().map(|r| r.index).collect();
+    let todo: Vec<u64> = share.filter(|i| !have.contains(i)).collect();
+    progress.start("render", todo.len() as u64);
+    let journaled = std::sync::atomic::AtomicUsize::new(0);
     let started = Instant::now();
-    let written: Vec<Written> = (0..n as u64)
-        .into_par_iter()
-        .map(|i| -> anyhow::Result<Written> {
+    let rendered: Vec<Record> = todo
+        .par_iter()
+        .map(|&i| -> anyhow::Result<Record> {
             let subset = dataset_stage.then(|| subsets[i as usize]);
             let products = simulate::image(&x, &inputs, i).map_err(|e| {
                 // Draws meet the checks in turn, so a rare reason can be the one that matters.
@@ -233,7 +345,7 @@ fn write_all(
                     c.background
                 );
             }
-            let png = artifacts::write_image(
+            let image = artifacts::write_image(
                 dir,
                 i,
                 &products,
@@ -243,24 +355,73 @@ fn write_all(
                 &x.sensor,
             )?;
             let conversion_s = products.product.as_ref().map_or(0.0, |p| p.seconds)
-                + png.as_ref().map_or(0.0, |p| p.seconds);
-            let trail_angle_deg = match (products.scene.pointing, c.enhance.geometry) {
+                + image.png.as_ref().map_or(0.0, |p| p.seconds);
+            let trail_angle_deg: Option<f64> = match (products.scene.pointing, c.enhance.geometry)
+            {
                 (Pointing::Survey(_), FrameKind::Rotated) => Some(0.0),
                 (Pointing::Survey(t), _) => Some(t.trail_angle_deg),
                 (Pointing::Fixed { .. }, _) => None,
             };
-            progress.advance();
-            Ok(Written {
+            let record = Record {
+                index: i,
                 debris_index: products.scene.debris_index,
-                subset,
-                png,
-                conversion_s,
-                trail_angle_deg,
-            })
+                files: journal::hash_files(dir, &image.files)?,
+                png: image.png.map(|p| PngRecord {
+                    width: p.width,
+                    height: p.height,
+                    label_bits: p.label.map(|b| b.map(f64::to_bits)),
+                }),
+                trail_angle_bits: trail_angle_deg.map(f64::to_bits),
+                conversion_s: Some(conversion_s),
+            };
+            journal.append(&record)?;
+            let k = journaled.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+            journal::abort_if_testing(&format!("render:{k}"));
+            progress.advance();
+            Ok(record)
         })
         .collect::<anyhow::Result<_>>()?;
     progress.finish();
     let seconds = started.elapsed().as_secs_f64();
+    let count = rendered.len();
+    done.extend(rendered);
+    done.sort_by_key(|r| r.index);
+    Ok((done, count, seconds))
+}
+
+/// The steps after rendering, on the images of `records` (every image of the campaign, by
+/// index) in `dir`: `data.yaml`, training, detection and report, and the manifest, whose
+/// digest is returned. A single run and a merge of shards both end here.
+pub(crate) fn finish(
+    campaign: &Campaign,
+    dir: &Path,
+    records: &[Record],
+    python: Option<&Path>,
+    progress: &dyn Progress,
+) -> anyhow::Result<(String, Vec<DebrisCount>)> {
+    let c = &campaign.resolved;
+    let stages = &c.stages;
+    let dataset_stage = stages.contains(&Stage::Dataset);
+    let subsets = dataset::assign(c.seed, c.images as usize, c.split.train, c.split.val);
+    let written: Vec<Written> = records
+        .iter()
+        .map(|r| {
+            let subset = dataset_stage.then(|| subsets[r.index as usize]);
+            Written {
+                debris_index: r.debris_index,
+                subset,
+                png: r.png.as_ref().map(|p| WrittenPng {
+                    path: dir.join(artifacts::dataset_paths(r.index, subset).0),
+                    width: p.width,
+                    height: p.height,
+                    label: p.label_bits.map(|b| b.map(f64::from_bits)),
+                    seconds: 0.0,
+                }),
+                conversion_s: r.conversion_s,
+                trail_angle_deg: r.trail_angle_bits.map(f64::from_bits),
+            }
+        })
+        .collect();
 
     if dataset_stage {
         std::fs::write(
@@ -268,10 +429,17 @@ fn write_all(
             dataset::data_yaml(&c.name, &campaign.hash),
         )?;
     }
+    journal::abort_if_testing("dataset");
     // The dataset's own digest goes into the report: taken before training and detection add
     // their files.
+    // The images' files were hashed as they were written (or checked at a resume or merge).
+    let known: BTreeMap<&str, &str> = records
+        .iter()
+        .flat_map(|r| r.files.iter().map(|(f, sha)| (f.as_str(), sha.as_str())))
+        .collect();
     let dataset_digest = if stages.contains(&Stage::Detect) {
-        Manifest::build(dir, &campaign.hash, serde_json::to_value(c)?, &[])?.digest
+        let resolved = serde_json::to_value(c)?;
+        Manifest::build_knowing(dir, &campaign.hash, resolved, &[], &known)?.digest
     } else {
         String::new()
     };
@@ -303,21 +471,17 @@ fn write_all(
         volatile.extend(volatile_files(dir)?);
     }
     let mix = debris_mix(campaign, written.iter().map(|w| w.debris_index));
-    let manifest = seal_manifest(
+    let mut manifest = Manifest::build_knowing(
         dir,
-        campaign,
+        &campaign.hash,
         serde_json::to_value(c)?,
         &volatile,
-        trained.map(|t| t.record),
-        Some(serde_json::to_value(&mix)?),
+        &known,
     )?;
-    Ok(RunSummary {
-        output: dir.to_path_buf(),
-        digest: manifest.digest,
-        images: n,
-        seconds,
-        mix,
-    })
+    manifest.debris_mix = Some(serde_json::to_value(&mix)?);
+    seal(&mut manifest, dir, campaign, trained.map(|t| t.record))?;
+    journal::abort_if_testing("manifest");
+    Ok((manifest.digest, mix))
 }
 
 /// The campaign fields that decide a scene-draw rejection reason (`scene::try_draw`).
@@ -362,8 +526,9 @@ struct Written {
     debris_index: usize,
     subset: Option<Subset>,
     png: Option<WrittenPng>,
-    /// FITS -> PNG conversion time (frame, enhancement, encoding), seconds.
-    conversion_s: f64,
+    /// FITS -> PNG conversion time (frame, enhancement, encoding), seconds; None when a shard
+    /// did not record it.
+    conversion_s: Option<f64>,
     /// Direction of star trails in the PNG (survey), degrees.
     trail_angle_deg: Option<f64>,
 }
@@ -481,7 +646,7 @@ fn detect_and_report(
         PointingMode::Fixed => "fixed",
         PointingMode::Survey => "survey",
     };
-    let conversion: Vec<f64> = written.iter().map(|w| w.conversion_s).collect();
+    let conversion: Vec<f64> = written.iter().filter_map(|w| w.conversion_s).collect();
     report::write(
         dir,
         &c.name,

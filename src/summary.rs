@@ -27,8 +27,12 @@ impl RunSummary {
     /// What `soig run` ends with. The `digest HEX` line is for scripts and stays as it is.
     pub fn final_lines(&self) -> String {
         let out = clean_path(&self.output);
+        let resumed = match self.resumed {
+            0 => String::new(),
+            r => format!(" (and {r} resumed)"),
+        };
         let mut s = format!(
-            "{} images in {:.1} s ({:.2} images/s) -> {}\ndigest {}\n",
+            "{} images{resumed} in {:.1} s ({:.2} images/s) -> {}\ndigest {}\n",
             self.images,
             self.seconds,
             self.images as f64 / self.seconds,

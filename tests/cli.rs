@@ -611,38 +611,6 @@ fn one_writer_per_output_and_no_junk_from_killed_runs() {
 }
 
 #[test]
-fn sigterm_leaves_no_staging_directory_or_lock() {
-    let tmp = tempfile::tempdir().unwrap();
-    let campaign = small_with(3, 400).write(&tmp.path().join("long.toml"));
-    let out = tmp.path().join("out");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_soig"))
-        .args(["run", campaign.to_str().unwrap(), "--quiet", "--out"])
-        .arg(&out)
-        .spawn()
-        .unwrap();
-    let staging = tmp.path().join(format!(".out.partial-{}", child.id()));
-    let started = std::time::Instant::now();
-    while !staging.exists() && started.elapsed().as_secs() < 30 {
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    assert!(staging.exists(), "the run never started writing");
-    let killed = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success());
-    let status = child.wait().unwrap();
-    assert_eq!(status.code(), Some(130), "{status:?}");
-    let left: Vec<String> = std::fs::read_dir(tmp.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.starts_with(".out"))
-        .collect();
-    assert!(left.is_empty(), "{left:?}");
-    assert!(!out.exists());
-}
-
-#[test]
 fn verify_against_a_pinned_digest_catches_a_consistent_forgery() {
     let tmp = tempfile::tempdir().unwrap();
     let campaign = small_campaign(tmp.path(), "");

@@ -124,6 +124,27 @@ impl Campaign {
         })
     }
 
+    /// The campaign whose resolved form (`resolved`, as a manifest records it) is given, its
+    /// relative paths (model, frames) read from `base_dir`: `soig merge` rebuilds a shard's
+    /// campaign this way. Resolving a resolved campaign changes nothing, so the hash is the
+    /// original's; the caller compares it.
+    pub fn from_resolved(
+        resolved: &serde_json::Value,
+        base_dir: &Path,
+    ) -> Result<Campaign, CampaignError> {
+        let source = base_dir.join("(resolved campaign of a manifest)");
+        let fail = |message: String| CampaignError {
+            file: source.clone(),
+            line: None,
+            field: None,
+            message,
+        };
+        let file: CampaignFile = serde_json::from_value(resolved.clone())
+            .map_err(|e| fail(format!("not a campaign of this soig version: {e}")))?;
+        let text = toml::to_string(&file).map_err(|e| fail(format!("cannot write it: {e}")))?;
+        Campaign::compose(&text, &source, &[])
+    }
+
     /// The signal-to-noise gate for this campaign's pointing mode.
     pub fn snr_min(&self) -> f64 {
         self.resolved
@@ -164,6 +185,22 @@ mod tests {
         format!(
             "name = \"t\"\n[observer]\nnorad = 1\n{ELEMENTS}\n[[debris]]\nnorad = 40649\n{ELEMENTS}\n{extra}"
         )
+    }
+
+    #[test]
+    fn a_resolved_campaign_resolves_to_itself() {
+        let tle = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/campaigns/data/catalog-2022-01-22.tle"
+        );
+        let text = format!(
+            "name = \"t\"\nseed = 3\n[observer]\ntle_file = \"{tle}\"\nnorad = 41335\n[[debris]]\nnorad = 40649\n{ELEMENTS}\n[sensor]\nwidth_px = 256\n[detect.streak]\nmin_snr = 4.0\n"
+        );
+        let c = load(&text).unwrap();
+        let json = serde_json::to_value(&c.resolved).unwrap();
+        let again = Campaign::from_resolved(&json, Path::new("/elsewhere")).unwrap();
+        assert_eq!(again.hash, c.hash);
+        assert_eq!(again.base_dir, Path::new("/elsewhere"));
     }
 
     #[test]

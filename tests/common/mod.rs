@@ -6,6 +6,7 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
+use std::process::Output;
 
 use soig::campaign::Campaign;
 
@@ -99,4 +100,19 @@ impl CampaignToml {
         std::fs::write(path, self.text()).unwrap();
         path.to_path_buf()
     }
+}
+
+/// The digest a `soig` command that must succeed printed.
+pub fn digest(o: &Output) -> String {
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("digest "))
+        .unwrap_or_else(|| panic!("no digest in {stdout}"))
+        .to_string()
 }

@@ -1,0 +1,296 @@
+//! The journal of a run in progress, which makes it resumable. A run writes `.soig-journal.jsonl`
+//! into its staging directory: a header line naming what it writes (campaign hash, soig
+//! version, shard), then one line per finished image, appended and synced after the image's
+//! files are written, with their sha256. A run killed at any point leaves a journal whose
+//! lines are all true (a torn last line is dropped); the next run of the same campaign into the
+//! same output takes the staging directory over ([`Journal::open`]), keeps every image whose
+//! files still hash as recorded, and renders only the rest. Each image is a function of (seed,
+//! index) alone (`rng`), so the resumed run's files, and digest, are the uninterrupted run's.
+//!
+//! The journal is no artifact: `manifest::list_files` skips it, and the run removes it just
+//! before moving the staging directory into place.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::io::Write;
+use std::path::Path;
+use std::sync::Mutex;
+
+use anyhow::Context;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::hash::sha256_file;
+use crate::manifest::{self, MANIFEST, Manifest};
+
+/// The journal's file name in a staging directory.
+pub const FILE: &str = manifest::JOURNAL;
+
+/// What a staging directory is being written for: a run resumes only its own.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Identity {
+    pub campaign_hash: String,
+    pub version: String,
+    /// (index, count) of a shard run; None for a whole campaign.
+    pub shard: Option<(u64, u64)>,
+}
+
+impl Identity {
+    pub fn new(campaign_hash: &str, shard: Option<(u64, u64)>) -> Identity {
+        Identity {
+            campaign_hash: campaign_hash.into(),
+            version: env!("CARGO_PKG_VERSION").into(),
+            shard,
+        }
+    }
+}
+
+/// One finished image: its files with their sha256, and what the detect stage needs of it.
+/// Floats are kept as their bit patterns, so that a resumed or merged run's report is built
+/// from exactly the values an uninterrupted run holds in memory.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Record {
+    pub index: u64,
+    /// The debris object the image shows (index in the campaign's debris), for the mix.
+    pub debris_index: usize,
+    /// sha256 of each file the image wrote, by path relative to the output ('/' separated).
+    pub files: BTreeMap<String, String>,
+    pub png: Option<PngRecord>,
+    /// `f64::to_bits` of the direction of star trails in the PNG (survey pointing).
+    pub trail_angle_bits: Option<u64>,
+    /// FITS -> PNG conversion time, seconds (a timing: kept out of anything hashed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub conversion_s: Option<f64>,
+}
+
+/// The PNG of an image: its size and its label box (pixel edges, `f64::to_bits`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PngRecord {
+    pub width: usize,
+    pub height: usize,
+    pub label_bits: Option<[u64; 4]>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Header {
+    soig_journal: Identity,
+}
+
+/// An open journal, appended to by the rendering threads.
+pub struct Journal {
+    file: Mutex<std::fs::File>,
+}
+
+impl Journal {
+    /// Open the journal of staging directory `dir` for `id`. When `dir` holds a journal of the
+    /// same identity, its records whose files are all present and hash as recorded are kept
+    /// and returned; every other file in `dir` (a half-written image, a report or manifest of a
+    /// later phase) is removed, and the journal is rewritten with the kept records (written to
+    /// a temporary file and renamed, so it is whole at every instant). Otherwise `dir` is
+    /// emptied and a fresh journal started.
+    pub fn open(dir: &Path, id: &Identity) -> anyhow::Result<(Journal, Vec<Record>)> {
+        let kept = if identity_of(dir).as_ref() == Some(id) {
+            verified_records(dir)?
+        } else {
+            Vec::new()
+        };
+        let keep: BTreeSet<&str> = kept
+            .iter()
+            .flat_map(|r| r.files.keys().map(String::as_str))
+            .collect();
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        let mut present =
+            manifest::list_files(dir).with_context(|| format!("cannot list {}", dir.display()))?;
+        present.push(MANIFEST.into());
+        for rel in present.iter().filter(|rel| !keep.contains(rel.as_str())) {
+            let path = dir.join(rel);
+            if path.exists() {
+                std::fs::remove_file(&path)
+                    .with_context(|| format!("cannot remove {}", path.display()))?;
+            }
+        }
+        let mut text = serde_json::to_string(&Header {
+            soig_journal: id.clone(),
+        })? + "\n";
+        for r in &kept {
+            text += &(serde_json::to_string(r)? + "\n");
+        }
+        let temp = dir.join(format!("{FILE}.new"));
+        write_synced(&temp, text.as_bytes())?;
+        let path = dir.join(FILE);
+        std::fs::rename(&temp, &path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        let file = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&path)
+            .with_context(|| format!("cannot open {}", path.display()))?;
+        Ok((
+            Journal {
+                file: Mutex::new(file),
+            },
+            kept,
+        ))
+    }
+
+    /// Record a finished image: one line, appended and synced to disk before returning.
+    pub fn append(&self, record: &Record) -> anyhow::Result<()> {
+        let line = serde_json::to_string(record)? + "\n";
+        let mut f = self.file.lock().unwrap_or_else(|e| e.into_inner());
+        f.write_all(line.as_bytes())
+            .and_then(|()| f.sync_data())
+            .context("cannot append to the run's journal")
+    }
+}
+
+/// The sha256 of each of `files` (paths relative to `dir`).
+pub fn hash_files(dir: &Path, files: &[String]) -> anyhow::Result<BTreeMap<String, String>> {
+    files
+        .iter()
+        .map(|rel| {
+            let (sha, _) = sha256_file(&dir.join(rel))
+                .with_context(|| format!("cannot read {}", dir.join(rel).display()))?;
+            Ok((rel.clone(), sha))
+        })
+        .collect()
+}
+
+/// Remove the journal of `dir` (the last step before the staging directory moves into place).
+pub fn remove(dir: &Path) -> anyhow::Result<()> {
+    let path = dir.join(FILE);
+    std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))
+}
+
+/// Whether staging directory `dir`, left by a process that is gone, is one a run of `id` can
+/// take over: its journal is `id`'s, or it is complete (no journal, a manifest of `id` that
+/// verifies: the run was killed while moving it into place).
+pub fn resumable(dir: &Path, id: &Identity) -> bool {
+    match identity_of(dir) {
+        Some(found) => found == *id,
+        None => complete(dir, id).is_some(),
+    }
+}
+
+/// The manifest of a staging directory that is complete: no journal, and a manifest of `id`
+/// that verifies without a problem.
+pub fn complete(dir: &Path, id: &Identity) -> Option<Manifest> {
+    if dir.join(FILE).exists() {
+        return None;
+    }
+    let (m, problems) = manifest::verify(dir).ok()?;
+    let shard = m
+        .shard
+        .as_ref()
+        .and_then(|s| Some((s.get("index")?.as_u64()?, s.get("count")?.as_u64()?)));
+    (problems.is_empty()
+        && m.tool == "soig"
+        && m.campaign_hash == id.campaign_hash
+        && m.version == id.version
+        && shard == id.shard)
+        .then_some(m)
+}
+
+/// The identity in the header of `dir`'s journal, if it has a readable one.
+fn identity_of(dir: &Path) -> Option<Identity> {
+    let text = std::fs::read_to_string(dir.join(FILE)).ok()?;
+    let header: Header = serde_json::from_str(text.lines().next()?).ok()?;
+    Some(header.soig_journal)
+}
+
+/// The records of `dir`'s journal whose files all hash as recorded, by index. A line that does
+/// not parse can only be the last, torn by a kill: it is dropped, as is a record given twice.
+fn verified_records(dir: &Path) -> anyhow::Result<Vec<Record>> {
+    let text = std::fs::read_to_string(dir.join(FILE))?;
+    let mut records: BTreeMap<u64, Record> = BTreeMap::new();
+    for line in text.lines().skip(1) {
+        if let Ok(r) = serde_json::from_str::<Record>(line) {
+            records.insert(r.index, r);
+        }
+    }
+    Ok(records
+        .into_values()
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .filter(|r| {
+            r.files
+                .iter()
+                .all(|(rel, sha)| sha256_file(&dir.join(rel)).is_ok_and(|(found, _)| found == *sha))
+        })
+        .collect())
+}
+
+/// Write `bytes` to `path` and sync them to disk.
+fn write_synced(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let mut f =
+        std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
+    f.write_all(bytes)
+        .and_then(|()| f.sync_all())
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Test hook, for the tests of resumption only: when the environment variable
+/// `SOIG_TEST_ABORT_AT` names `phase`, the process aborts here, as a `kill -9` would stop it
+/// (no clean-up, no message). Phases: `render:N` (after the N-th image this process journals),
+/// `dataset` (after `data.yaml`), `manifest` (after the manifest), `rename` (after the journal
+/// is removed, before the staging directory moves into place).
+pub fn abort_if_testing(phase: &str) {
+    if std::env::var("SOIG_TEST_ABORT_AT").is_ok_and(|p| p == phase) {
+        std::process::abort();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(dir: &Path, index: u64, content: &[u8]) -> Record {
+        let rel = format!("truth/img_{index:06}.json");
+        std::fs::create_dir_all(dir.join("truth")).unwrap();
+        std::fs::write(dir.join(&rel), content).unwrap();
+        Record {
+            index,
+            debris_index: 0,
+            files: hash_files(dir, &[rel]).unwrap(),
+            png: Some(PngRecord {
+                width: 3,
+                height: 4,
+                label_bits: Some([0.1f64.to_bits(), 1, 2, 3]),
+            }),
+            trail_angle_bits: None,
+            conversion_s: Some(0.5),
+        }
+    }
+
+    #[test]
+    fn keeps_what_verifies_and_removes_the_rest() {
+        let tmp = tempfile::tempdir().unwrap();
+        let d = tmp.path();
+        let id = Identity::new("abc", None);
+        let (j, kept) = Journal::open(d, &id).unwrap();
+        assert!(kept.is_empty());
+        let (r0, r1) = (record(d, 0, b"zero"), record(d, 1, b"one"));
+        j.append(&r0).unwrap();
+        j.append(&r1).unwrap();
+        drop(j);
+        // Image 1's file changes after it was journaled; image 2 was half written; a torn line.
+        std::fs::write(d.join("truth/img_000001.json"), b"0ne").unwrap();
+        std::fs::write(d.join("truth/img_000002.json"), b"tw").unwrap();
+        std::fs::write(d.join(MANIFEST), b"{}").unwrap();
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(d.join(FILE))
+            .unwrap();
+        f.write_all(b"{\"index\": 2, \"fil").unwrap();
+        drop(f);
+        assert!(resumable(d, &id));
+        assert!(!resumable(d, &Identity::new("abc", Some((0, 2)))));
+        let (_, kept) = Journal::open(d, &id).unwrap();
+        assert_eq!(kept, vec![r0.clone()]);
+        assert_eq!(
+            manifest::list_files(d).unwrap(),
+            vec!["truth/img_000000.json"]
+        );
+        // Another campaign's journal is not resumed: the directory starts afresh.
+        let (_, kept) = Journal::open(d, &Identity::new("other", None)).unwrap();
+        assert!(kept.is_empty());
+        assert!(manifest::list_files(d).unwrap().is_empty());
+    }
+}
