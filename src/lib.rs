@@ -10,9 +10,9 @@
 //! verbs          pipeline (run, train)   study                      main.rs: the CLI
 //! config layer   campaign (file, defaults, compose, validate, resolve)  experiment (-> values)
 //! product        simulate (one image in memory)   artifacts (its files)   dataset   train
-//! core           render -> scene -> sensor -> background     geometry (frames, label box)
+//! core           render -> scene -> sighting, sensor -> background     geometry (frames, label box)
 //!                enhance (+ clahe)   detect (streak, yolo)   metrics   report
-//! leaves         sky (orbit, frames, ephemeris, stars, projection, photometry, vec3)
+//! leaves         sky (orbit, frames, ephemeris, apparent, stars, projection, photometry, vec3)
 //!                imaging   rng   fits   hash   python   plot   progress
 //! at the side    manifest   output (whole-or-nothing directories)   error
 //! ```
@@ -71,6 +71,7 @@ pub mod report;
 pub mod rng;
 pub mod scene;
 pub mod sensor;
+pub mod sighting;
 pub mod simulate;
 pub mod sky;
 pub mod study;
