@@ -5,14 +5,12 @@
 
 use hifitime::Epoch;
 use soig::campaign::Campaign;
-use soig::experiment::{self, Experiment};
 use soig::scene::Pointing;
-use soig::simulate::{self, ImageProducts};
 use soig::sky::apparent::{C_KM_S, earth_velocity_km_s};
 use soig::sky::{angle_deg, dot, radec_unit, scale, sub, unit};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, rendered, tle_object};
 
 fn campaign(render: &str) -> Campaign {
     CampaignToml::new("apparent", 5, 3)
@@ -22,18 +20,6 @@ fn campaign(render: &str) -> Campaign {
             "[sensor]\nwidth_px = 256\nheight_px = 256\nfov_radius_deg = 0.025\n[render]\ntrajectory_samples = 500\n{render}"
         ))
         .load("apparent.toml")
-}
-
-/// Images 0..n as `soig run` renders them, in memory, without the 8-bit product.
-fn rendered(c: &Campaign, n: u64) -> Vec<ImageProducts> {
-    let x = Experiment {
-        product: None,
-        ..Experiment::new(c)
-    };
-    let inputs = experiment::inputs(c).unwrap();
-    (0..n)
-        .map(|i| simulate::image(&x, &inputs, i).unwrap())
-        .collect()
 }
 
 fn boresight(p: &Pointing) -> (f64, f64) {

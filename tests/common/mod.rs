@@ -8,6 +8,8 @@
 use std::path::{Path, PathBuf};
 
 use soig::campaign::Campaign;
+use soig::experiment::{self, Experiment};
+use soig::simulate::{self, ImageProducts};
 
 fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
@@ -99,4 +101,16 @@ impl CampaignToml {
         std::fs::write(path, self.text()).unwrap();
         path.to_path_buf()
     }
+}
+
+/// Images 0..n of a campaign as `soig run` renders them, in memory, without the 8-bit product.
+pub fn rendered(c: &Campaign, n: u64) -> Vec<ImageProducts> {
+    let x = Experiment {
+        product: None,
+        ..Experiment::new(c)
+    };
+    let inputs = experiment::inputs(c).unwrap();
+    (0..n)
+        .map(|i| simulate::image(&x, &inputs, i).unwrap())
+        .collect()
 }
