@@ -512,8 +512,8 @@ fn with_checksum(line: &str) -> String {
 
 /// An orbit whose perigee is inside the Earth cannot exist: a TLE (inline or in a file) or an
 /// element set with a(1 - e) below 6378.137 km is refused at load, naming the campaign file,
-/// line and field, and for a file the TLE's line in it. `DECAYING_TLE` with e = 0.1: a = 6597
-/// km from 16.2 rev/day, perigee radius 5937 km. Elements: period 1% short of what apogee
+/// line and field, and for a file the TLE's line in it. `DECAYING_TLE` with e = 0.1: a = 6598
+/// km from 16.2 rev/day, perigee radius 5938 km. Elements: period 1% short of what apogee
 /// 1000 km and perigee 10 km give (the 1% the period check allows), so a = 6842 km and
 /// a(1 - e) = 6350 km, 28 km below the surface although `perigee_km` is positive.
 #[test]
