@@ -96,6 +96,7 @@ impl Experiment {
             },
             star_cone_deg: c.stars.cone_radius_deg(),
             trajectory_samples: c.render.trajectory_samples as usize,
+            apparent_positions: c.render.apparent_positions,
         };
         let render = render::Settings {
             method: c.render.method,

@@ -11,9 +11,9 @@
 //! config layer   campaign (file, defaults, compose, validate, resolve)  experiment (-> values)
 //! product        simulate (one image in memory)   artifacts (its files)   dataset   train
 //!                shard (a share of the images)
-//! core           render -> scene -> sensor -> background     geometry (frames, label box)
+//! core           render -> scene -> sighting, sensor -> background     geometry (frames, label box)
 //!                enhance (+ clahe)   detect (streak, yolo)   metrics   report
-//! leaves         sky (orbit, frames, ephemeris, stars, projection, photometry, vec3, wcs)
+//! leaves         sky (orbit, frames, ephemeris, apparent, stars, projection, photometry, vec3, wcs)
 //!                imaging   rng   fits   frames   hash   python   plot   progress
 //! at the side    manifest   output (whole-or-nothing directories)   journal (resume)   error
 //! ```
@@ -78,6 +78,7 @@ pub mod rng;
 pub mod scene;
 pub mod sensor;
 pub mod shard;
+pub mod sighting;
 pub mod simulate;
 pub mod sky;
 pub mod study;

@@ -17,8 +17,8 @@ use serde::Serialize;
 use crate::background::{BackgroundModel, FrameChoice, RealFrame};
 use crate::rng::{Purpose, stream};
 use crate::sensor::Sensor;
+use crate::sighting::{Ephemeris, Sighting};
 use crate::sky::ephemeris::{moon_position_km, sun_position_km};
-use crate::sky::frames::teme_to_gcrs_matrix;
 use crate::sky::orbit::Propagator;
 use crate::sky::photometry::{debris_magnitude, photon_rate};
 use crate::sky::projection::Tan;
@@ -146,6 +146,8 @@ pub struct Spec {
     pub star_cone_deg: f64,
     /// Points the debris trajectory is cut into (a minimum, see `try_draw`).
     pub trajectory_samples: usize,
+    /// Light-time and aberration (`sighting`); off in the paper's model.
+    pub apparent_positions: bool,
 }
 
 /// Julian year (TT) of an instant, e.g. 2016.0 for the Gaia DR3 epoch.
@@ -257,6 +259,9 @@ pub struct Scene {
     pub area_m2: f64,
     pub tumble: Option<Tumble>,
     pub geometry: Geometry,
+    /// The debris' place at start, middle and end and the states at mid-exposure (None for a
+    /// hand-made scene).
+    pub ephemeris: Option<Ephemeris>,
     pub trajectory: Vec<TrajectorySample>,
     pub stars: Vec<Star>,
     /// The real background frame of a semisynthetic image.
@@ -333,6 +338,7 @@ impl Scene {
                 moon_angle_deg: 90.0,
                 magnitude: debris_mag,
             },
+            ephemeris: None,
             trajectory,
             stars,
             background: None,
@@ -499,8 +505,15 @@ fn try_draw(
     });
 
     // Visibility at mid-exposure (paper 3.2.2).
-    let frame = teme_to_gcrs_matrix(mid);
-    let (obs, deb) = positions(inputs, debris_index, mid, &frame).ok_or("propagation failed")?;
+    let sighting = Sighting::new(
+        &inputs.observer.propagator,
+        &inputs.debris[debris_index].propagator,
+        mid,
+        spec.apparent_positions,
+    );
+    let frame = *sighting.teme_to_gcrs();
+    let sight = sighting.at(mid).ok_or("propagation failed")?;
+    let (obs, deb) = (sight.observer_km, sight.debris_km);
     let los = sub(deb, obs);
     let sun = sun_position_km(mid);
     let moon = moon_position_km(mid);
@@ -531,7 +544,7 @@ fn try_draw(
     }
 
     // Pointing: the debris at mid-exposure lands at a random place in the field.
-    let (ra_mid, dec_mid) = radec_deg(los);
+    let (ra_mid, dec_mid) = radec_deg(sight.direction);
     let scale = sensor.pixel_scale_deg();
     let around_debris = sensor.projection(ra_mid, dec_mid);
     let half_w = sensor.width_px as f64 / 2.0;
@@ -585,9 +598,10 @@ fn try_draw(
         for k in 0..n {
             let t_s = (k as f64 + 0.5) * dt;
             let t = start + Duration::from_seconds(t_s);
-            let (o, d) = positions(inputs, debris_index, t, &frame).ok_or("propagation failed")?;
+            let sight = sighting.at(t).ok_or("propagation failed")?;
+            let (o, d) = (sight.observer_km, sight.debris_km);
             let los = sub(d, o);
-            let (ra_deg, dec_deg) = radec_deg(los);
+            let (ra_deg, dec_deg) = radec_deg(sight.direction);
             let phase = angle_deg(sub(sun, d), sub(o, d)).to_radians();
             let mut mag = debris_magnitude(area_m2, spec.albedo, phase, norm(los));
             if let Some(tb) = tumble {
@@ -656,6 +670,7 @@ fn try_draw(
         return Err("signal to noise below the gate");
     }
 
+    let ephemeris = sighting.ephemeris(start, exposure_s);
     let debris = &inputs.debris[debris_index];
     Ok(Scene {
         image_index: image,
@@ -675,6 +690,7 @@ fn try_draw(
             moon_angle_deg,
             magnitude,
         },
+        ephemeris,
         trajectory,
         stars: field,
         background,

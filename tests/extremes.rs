@@ -495,6 +495,68 @@ fn invalid_tle_errors_name_file_and_line() {
     assert!(msg.contains("TLE line 2: bad checksum"), "{msg}");
 }
 
+/// A TLE line with its checksum (column 69) made right: digits summed, '-' counting 1.
+fn with_checksum(line: &str) -> String {
+    let sum: u32 = line[..68]
+        .chars()
+        .map(|c| c.to_digit(10).unwrap_or(u32::from(c == '-')))
+        .sum();
+    format!("{}{}", &line[..68], sum % 10)
+}
+
+/// An orbit whose perigee is inside the Earth cannot exist: a TLE (inline or in a file) or an
+/// element set with a(1 - e) below 6378.137 km is refused at load, naming the campaign file,
+/// line and field, and for a file the TLE's line in it. `DECAYING_TLE` with e = 0.1: a = 6598
+/// km from 16.2 rev/day, perigee radius 5938 km. Elements: period 1% short of what apogee
+/// 1000 km and perigee 10 km give (the 1% the period check allows), so a = 6842 km and
+/// a(1 - e) = 6350 km, 28 km below the surface although `perigee_km` is positive.
+#[test]
+fn orbits_below_the_surface_are_refused_naming_file_and_line() {
+    let l2 = with_checksum(&DECAYING_TLE[1].replace(" 0005000 ", " 1000000 "));
+    assert_ne!(l2, DECAYING_TLE[1]);
+    let inline = format!("tle = [\"{}\", \"{l2}\"]", DECAYING_TLE[0]);
+    let e = Campaign::from_toml(&campaign_text(&inline, ""), Path::new("low.toml")).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.starts_with("low.toml:8: field `debris[0].tle`: NORAD 99999: perigee radius 593"),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("below the Earth's surface (6378.137 km)"),
+        "{msg}"
+    );
+
+    // The same TLE in a file, third of two sets: its line 5 and the file are named.
+    let dir = tempfile::tempdir().unwrap();
+    let tles = dir.path().join("low.tle");
+    let catalogue = std::fs::read_to_string(tle_file()).unwrap();
+    let first: Vec<&str> = catalogue.lines().take(3).collect();
+    let text = format!("{}\nLOW\n{}\n{l2}\n", first.join("\n"), DECAYING_TLE[0]);
+    std::fs::write(&tles, text).unwrap();
+    let debris = format!("tle_file = \"{}\"\nnorad = 99999", tles.display());
+    let e = Campaign::from_toml(&campaign_text(&debris, ""), Path::new("low.toml")).unwrap_err();
+    let msg = e.to_string();
+    assert_eq!(e.field.as_deref(), Some("debris[0].tle_file"), "{msg}");
+    assert_eq!(e.line, Some(8), "{msg}");
+    assert!(msg.contains("perigee radius 593"), "{msg}");
+    assert!(
+        msg.contains(&format!("line 5 of {}", tles.display())),
+        "{msg}"
+    );
+
+    // An element set: the field `debris[0].elements` on its line.
+    let elements = "norad = 90002\nelements = { period_min = 93.87, inclination_deg = 51.6, apogee_km = 1000.0, perigee_km = 10.0 }";
+    let e = Campaign::from_toml(&campaign_text(elements, ""), Path::new("low.toml")).unwrap_err();
+    let msg = e.to_string();
+    assert_eq!(e.field.as_deref(), Some("debris[0].elements"), "{msg}");
+    assert_eq!(e.line, Some(9), "{msg}");
+    assert!(msg.contains("perigee radius 63"), "{msg}");
+    assert!(msg.contains("below the Earth's surface"), "{msg}");
+    // The same element set with the period apogee and perigee give (94.72 min) is kept.
+    let fine = elements.replace("93.87", "94.72");
+    Campaign::from_toml(&campaign_text(&fine, ""), Path::new("ok.toml")).unwrap();
+}
+
 /// Near perigee at high speed: a Molniya-like orbit (apogee 39,700 km, perigee 1500 km) in
 /// the observer's orbital plane, with its perigee passage (9.3 km/s) right above the observer
 /// at the window start, on the day side. The trajectory crosses the 0.025 deg field in a

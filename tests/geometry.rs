@@ -2,13 +2,12 @@
 
 use rand_chacha::ChaCha12Rng;
 use soig::campaign::Campaign;
-use soig::experiment::{self, Experiment};
+use soig::experiment::Experiment;
 use soig::geometry::{self, Fill, Frame, FrameKind, LABEL_SHARE};
 use soig::scene::Pointing;
-use soig::simulate::{self, ImageProducts};
 
 mod common;
-use common::{CampaignToml, neossat_frame, tle_object};
+use common::{CampaignToml, neossat_frame, rendered, tle_object};
 
 fn campaign(mode: &str) -> Campaign {
     CampaignToml::new("geom", 11, 4)
@@ -18,18 +17,6 @@ fn campaign(mode: &str) -> Campaign {
             "[pointing]\nmode = \"{mode}\"\n[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n[render]\ntrajectory_samples = 800\n"
         ))
         .load("geom.toml")
-}
-
-/// Images 0..n of a campaign as `soig run` renders them, in memory, without the 8-bit product.
-fn rendered(c: &Campaign, n: u64) -> Vec<ImageProducts> {
-    let x = Experiment {
-        product: None,
-        ..Experiment::new(c)
-    };
-    let inputs = experiment::inputs(c).unwrap();
-    (0..n)
-        .map(|i| simulate::image(&x, &inputs, i).unwrap())
-        .collect()
 }
 
 #[test]

@@ -340,6 +340,11 @@ pub struct Render {
     /// when it is the default, so existing campaign hashes stay.
     #[serde(default, skip_serializing_if = "RenderMethod::is_photon_mapping")]
     pub method: RenderMethod,
+    /// Apparent positions: the debris at its light-time position, stars and debris aberrated by
+    /// the observer's motion, placed in the stars' catalogue frame (the image's WCS). Off in the
+    /// paper's model; omitted from the resolved campaign when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub apparent_positions: bool,
 }
 
 /// FITS -> PNG enhancement (paper 3.3).

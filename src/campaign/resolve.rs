@@ -229,6 +229,13 @@ fn resolve_object(
                     format!("NORAD {norad} is not in {}", full.display()),
                 )
             })?;
+        // An orbit that cannot exist is refused here, where the file and its line are known.
+        Propagator::from_tle(&tle).map_err(|e| {
+            (
+                ".tle_file".to_string(),
+                format!("{e} (the TLE at line {} of {})", tle.line, full.display()),
+            )
+        })?;
         if spec.name.is_none() {
             spec.name = tle.name.clone();
         }

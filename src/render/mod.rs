@@ -226,6 +226,7 @@ pub fn render_with_jitter(
         background_frame: frame.map(|f| f.path.display().to_string()),
         attempts: scene.attempts,
         rejections: scene.rejections.clone(),
+        ephemeris: scene.ephemeris,
     };
     Exposure {
         width,

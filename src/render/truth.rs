@@ -56,13 +56,29 @@ pub struct Truth {
     pub background_frame: Option<String>,
     pub attempts: u32,
     pub rejections: std::collections::BTreeMap<&'static str, u32>,
+    /// The debris' RA/Dec at start, middle and end, and the GCRS states at mid-exposure.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ephemeris: Option<crate::sighting::Ephemeris>,
 }
 
-/// ISO 8601 UTC with milliseconds, e.g. `2022-03-04T05:06:07.891`.
+/// ISO 8601 UTC with microseconds, e.g. `2022-03-04T05:06:07.891234` (a millisecond is 6 px
+/// of LEO motion; the FITS `DATE-OBS` and the truth's `start_utc`). Truncated, not rounded, so
+/// the second never rolls over.
 pub(crate) fn iso_utc(t: hifitime::Epoch) -> String {
     let (y, mo, d, h, mi, s, ns) = t.to_gregorian_utc();
     format!(
-        "{y:04}-{mo:02}-{d:02}T{h:02}:{mi:02}:{s:02}.{:03}",
-        ns / 1_000_000
+        "{y:04}-{mo:02}-{d:02}T{h:02}:{mi:02}:{s:02}.{:06}",
+        ns / 1_000
     )
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn iso_utc_keeps_microseconds() {
+        let t = hifitime::Epoch::from_gregorian_utc(2022, 3, 4, 5, 6, 7, 891_234_567);
+        assert_eq!(super::iso_utc(t), "2022-03-04T05:06:07.891234");
+        let t = hifitime::Epoch::from_gregorian_utc(2022, 12, 31, 23, 59, 59, 999_999_999);
+        assert_eq!(super::iso_utc(t), "2022-12-31T23:59:59.999999");
+    }
 }

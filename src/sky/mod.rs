@@ -1,6 +1,7 @@
 //! The sky: time, orbits, Sun and Moon, stars, projection onto the detector and photometry.
 //! Geometry is in f64, positions in km, angles in degrees unless a name says otherwise.
 
+pub mod apparent;
 pub mod ephemeris;
 pub mod frames;
 pub mod orbit;

@@ -9,6 +9,8 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use soig::campaign::Campaign;
+use soig::experiment::{self, Experiment};
+use soig::simulate::{self, ImageProducts};
 
 fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
@@ -115,4 +117,16 @@ pub fn digest(o: &Output) -> String {
         .find_map(|l| l.strip_prefix("digest "))
         .unwrap_or_else(|| panic!("no digest in {stdout}"))
         .to_string()
+}
+
+/// Images 0..n of a campaign as `soig run` renders them, in memory, without the 8-bit product.
+pub fn rendered(c: &Campaign, n: u64) -> Vec<ImageProducts> {
+    let x = Experiment {
+        product: None,
+        ..Experiment::new(c)
+    };
+    let inputs = experiment::inputs(c).unwrap();
+    (0..n)
+        .map(|i| simulate::image(&x, &inputs, i).unwrap())
+        .collect()
 }

@@ -9,6 +9,8 @@ use crate::sky::norm;
 
 /// WGS72 equatorial radius (km): the radius SGP4 uses with the WGS72 constants.
 const EARTH_RADIUS_KM: f64 = 6378.135;
+/// WGS84 equatorial radius (km): a perigee below it is inside the Earth.
+const SURFACE_RADIUS_KM: f64 = 6378.137;
 /// WGS72 gravitational parameter (km^3/s^2), for the period check of [`OrbitalElements`].
 const MU_KM3_S2: f64 = 398_600.8;
 /// SGP4 switches to the deep-space (SDP4) branch for periods of 225 min and more.
@@ -64,6 +66,15 @@ pub enum OrbitError {
         norad_id: u64,
         minutes: f64,
         radius_km: f64,
+    },
+    #[error(
+        "NORAD {norad_id}: perigee radius {perigee_radius_km:.1} km (a(1 - e) with a = {semi_major_km:.1} km from the mean motion, e = {eccentricity}) is below the Earth's surface ({SURFACE_RADIUS_KM} km): this orbit cannot exist"
+    )]
+    PerigeeBelowSurface {
+        norad_id: u64,
+        perigee_radius_km: f64,
+        semi_major_km: f64,
+        eccentricity: f64,
     },
     #[error("NORAD {norad_id}: SGP4 gives a non-finite position {minutes} min after the epoch")]
     NonFinite { norad_id: u64, minutes: f64 },
@@ -185,6 +196,20 @@ impl Propagator {
             elements.mean_motion * (std::f64::consts::PI / 720.0),
         )
         .map_err(|e| init(e.into()))?;
+        // An orbit whose perigee is inside the Earth cannot exist (SGP4 would propagate it
+        // through the ground): the mean semi-major axis from the Brouwer mean motion (Kepler's
+        // third law, WGS72) times (1 - e).
+        let n_rad_s = orbit.mean_motion / 60.0;
+        let semi_major_km = (MU_KM3_S2 / (n_rad_s * n_rad_s)).cbrt();
+        let perigee_radius_km = semi_major_km * (1.0 - orbit.eccentricity);
+        if perigee_radius_km < SURFACE_RADIUS_KM {
+            return Err(OrbitError::PerigeeBelowSurface {
+                norad_id,
+                perigee_radius_km,
+                semi_major_km,
+                eccentricity: orbit.eccentricity,
+            });
+        }
         let regime = if orbit.mean_motion > 2.0 * std::f64::consts::PI / DEEP_SPACE_PERIOD_MIN {
             Regime::NearEarth
         } else {
@@ -215,6 +240,12 @@ impl Propagator {
     /// Errors (never NaN) when SGP4 diverges or the object is below the Earth's surface (decayed,
     /// python-sgp4's error 6).
     pub fn position_teme_km(&self, t: Epoch) -> Result<[f64; 3], OrbitError> {
+        Ok(self.state_teme(t)?.0)
+    }
+
+    /// Position (km) and velocity (km/s) in the TEME frame at UTC instant t; errors as
+    /// [`Self::position_teme_km`].
+    pub fn state_teme(&self, t: Epoch) -> Result<([f64; 3], [f64; 3]), OrbitError> {
         let norad_id = self.norad_id;
         let minutes = (t - self.epoch).to_seconds() / 60.0;
         if !minutes.is_finite() {
@@ -228,8 +259,8 @@ impl Propagator {
                 minutes,
                 source,
             })?;
-        let r = prediction.position;
-        if !r.iter().all(|x| x.is_finite()) {
+        let (r, v) = (prediction.position, prediction.velocity);
+        if !r.iter().chain(v.iter()).all(|x| x.is_finite()) {
             return Err(OrbitError::NonFinite { norad_id, minutes });
         }
         let radius_km = norm(r);
@@ -240,7 +271,7 @@ impl Propagator {
                 radius_km,
             });
         }
-        Ok(r)
+        Ok((r, v))
     }
 
     /// Geocentric position in GCRS (ICRF axes, J2000 mean equator is fine at the 0.1 arcsec level), km.

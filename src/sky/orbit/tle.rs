@@ -13,6 +13,8 @@ pub struct Tle {
     pub norad_id: u64,
     pub line1: String,
     pub line2: String,
+    /// 1-based number of its line 1 in the text it was read from.
+    pub line: usize,
     pub(super) elements: sgp4::Elements,
     pub(super) epoch: Epoch,
 }
@@ -325,6 +327,7 @@ fn parse_one(
         norad_id: elements.norad_id,
         line1: l1.to_string(),
         line2: l2.to_string(),
+        line: n1,
         elements,
         epoch,
     })
