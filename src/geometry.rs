@@ -426,7 +426,10 @@ mod tests {
     fn contrast(img: &[f32], width: usize, keep: impl Fn(usize, usize) -> bool) -> (f64, f64, f64) {
         let std = |v: &[f64]| {
             let m = v.iter().sum::<f64>() / v.len() as f64;
-            (m, (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / v.len() as f64).sqrt())
+            (
+                m,
+                (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / v.len() as f64).sqrt(),
+            )
         };
         let height = img.len() / width;
         let mut values = Vec::new();
@@ -479,7 +482,10 @@ mod tests {
                 (cf / ci - 1.0).abs() < 0.02,
                 "{angle} deg: contrast inside {ci:.3}, fill {cf:.3}"
             );
-            assert!((mf - mi).abs() < 0.05 * si, "{angle} deg: mean {mi} vs {mf}");
+            assert!(
+                (mf - mi).abs() < 0.05 * si,
+                "{angle} deg: mean {mi} vs {mf}"
+            );
             assert!(
                 (sf / si - 1.0).abs() < 0.02,
                 "{angle} deg: sigma inside {si:.3}, fill {sf:.3}"

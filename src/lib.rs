@@ -61,6 +61,7 @@ pub(crate) mod hash;
 pub mod imaging;
 pub mod manifest;
 pub mod metrics;
+pub mod noise;
 pub mod output;
 pub mod pipeline;
 pub(crate) mod plot;

@@ -21,6 +21,13 @@ pub enum Purpose {
     Split = 4,
     /// Enhancement (noise fill of padded areas).
     Enhance = 5,
+    /// The physical noise model's components (`noise`), one stream each.
+    Sky = 6,
+    Dark = 7,
+    ReadNoise = 8,
+    /// Hot pixels: their charge per image; their positions from the sensor's own index.
+    HotPixels = 9,
+    CosmicRays = 10,
 }
 
 /// The stream for (seed, image index, purpose).

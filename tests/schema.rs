@@ -94,6 +94,10 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "5be59e182afa5a167f37fd704188187a195938452629b255cfa9941bc1b17337",
     ),
     (
+        "campaigns/physical-noise.toml",
+        "2d8913b8ea331c661832c0d5a1d20ce7f77b6086e8d5b04b3b5bcc49daa5edfc",
+    ),
+    (
         "campaigns/quickstart.toml",
         "1bb7b5cef0d88dc06ab3db6dbd77e171c7fb8d2583ad46ca98fe192467123fca",
     ),
