@@ -187,13 +187,13 @@ fn noise_of(c: &crate::campaign::CampaignFile, sensor: &Sensor) -> Noise {
         bias_adu: p.bias_adu,
         full_well_e: p.full_well_e,
         adc_max_adu: p.adc_max_adu,
-        hot_pixels: (p.hot_pixel_fraction > 0.0 && p.hot_pixel_dark_e_per_s > 0.0).then(|| {
+        hot_pixels: (p.hot_pixel_fraction > 0.0 && p.hot_pixel_dark_e_per_s > 0.0).then_some(
             noise::HotPixels {
                 fraction: p.hot_pixel_fraction,
                 dark_e_per_s: p.hot_pixel_dark_e_per_s,
-            }
-        }),
-        cosmic_rays: (p.cosmic_rate_per_cm2_s > 0.0).then(|| noise::CosmicRays {
+            },
+        ),
+        cosmic_rays: (p.cosmic_rate_per_cm2_s > 0.0).then_some(noise::CosmicRays {
             rate_per_cm2_s: p.cosmic_rate_per_cm2_s,
             pixel_size_um: p.pixel_size_um,
         }),

@@ -134,9 +134,8 @@ impl Frame {
     pub fn resamples(&self) -> bool {
         let m = &self.matrix;
         let whole = |v: f64| v == v.round();
-        !(m[0][0] == 1.0 && m[0][1] == 0.0 && m[1][0] == 0.0 && m[1][1] == 1.0)
-            || !whole(m[0][2])
-            || !whole(m[1][2])
+        let copies = m[0][0] == 1.0 && m[0][1] == 0.0 && m[1][0] == 0.0 && m[1][1] == 1.0;
+        !(copies && whole(m[0][2]) && whole(m[1][2]))
     }
 }
 
