@@ -9,10 +9,11 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::background::BackgroundModel;
-use crate::campaign::{Background, Campaign, LightCurve, Stars};
+use crate::campaign::{self, Background, Campaign, LightCurve, Stars};
 use crate::enhance;
 use crate::error::Error;
 use crate::geometry::Frame;
+use crate::noise::{self, Noise};
 use crate::render;
 use crate::scene::{self, Gate, Inputs, PointingMode, StarField, TumbleRange};
 use crate::sensor::{AduRange, Sensor};
@@ -35,6 +36,10 @@ pub struct Effective {
     /// Training image size and batch (`train.imgsz` / `train.batch` or the paper's).
     pub train_imgsz: u32,
     pub train_batch: u32,
+    /// The physical noise model's sky, photo-electrons per second per pixel (absent for the
+    /// paper's model).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sky_e_per_s: Option<f64>,
 }
 
 impl Experiment {
@@ -59,6 +64,11 @@ impl Experiment {
                 max_adu: s.background_max_adu,
             },
             background_exposure_s: s.background_exposure_s,
+            noise: Noise::Paper,
+        };
+        let sensor = Sensor {
+            noise: noise_of(c, &sensor),
+            ..sensor
         };
         let v = &c.visibility;
         let scene = scene::Spec {
@@ -149,8 +159,48 @@ impl Experiment {
             frame_px: frame,
             train_imgsz,
             train_batch,
+            sky_e_per_s: match &self.sensor.noise {
+                Noise::Physical(p) => Some(p.sky_e_per_s),
+                Noise::Paper => None,
+            },
         }
     }
+}
+
+/// The detector's noise model; a physical sky given in mag/arcsec^2 becomes e-/s per pixel
+/// with the sensor's zero point and pixel scale.
+fn noise_of(c: &crate::campaign::CampaignFile, sensor: &Sensor) -> Noise {
+    let campaign::Noise::Physical(p) = &c.noise else {
+        return Noise::Paper;
+    };
+    let sky = match (p.sky_e_per_s, p.sky_mag_per_arcsec2) {
+        (Some(e), _) => e,
+        (None, Some(mag)) => noise::sky_e_per_s(
+            mag,
+            sensor.zero_point_mag,
+            sensor.pixel_scale_deg() * 3600.0,
+        ),
+        (None, None) => 0.0,
+    };
+    Noise::Physical(noise::Physical {
+        seed: c.seed,
+        sky_e_per_s: sky,
+        dark_e_per_s: p.dark_e_per_s,
+        read_noise_e: p.read_noise_e,
+        bias_adu: p.bias_adu,
+        full_well_e: p.full_well_e,
+        adc_max_adu: p.adc_max_adu,
+        hot_pixels: (p.hot_pixel_fraction > 0.0 && p.hot_pixel_dark_e_per_s > 0.0).then_some(
+            noise::HotPixels {
+                fraction: p.hot_pixel_fraction,
+                dark_e_per_s: p.hot_pixel_dark_e_per_s,
+            },
+        ),
+        cosmic_rays: (p.cosmic_rate_per_cm2_s > 0.0).then_some(noise::CosmicRays {
+            rate_per_cm2_s: p.cosmic_rate_per_cm2_s,
+            pixel_size_um: p.pixel_size_um,
+        }),
+    })
 }
 
 /// Image size and batch of a campaign's training: the paper's (frame width; batch 16, 10 for

@@ -67,6 +67,7 @@ pub mod journal;
 pub mod manifest;
 pub mod merge;
 pub mod metrics;
+pub mod noise;
 pub mod output;
 pub mod pipeline;
 pub(crate) mod plot;

@@ -23,6 +23,13 @@ pub enum Purpose {
     Enhance = 5,
     /// Which debris object an image shows, drawn once before the scene's retries.
     Debris = 6,
+    /// The physical noise model's components (`noise`), one stream each.
+    Sky = 7,
+    Dark = 8,
+    ReadNoise = 9,
+    /// Hot pixels: their charge per image; their positions from the sensor's own index.
+    HotPixels = 10,
+    CosmicRays = 11,
 }
 
 /// The stream for (seed, image index, purpose).

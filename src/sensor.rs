@@ -4,6 +4,7 @@
 //! the scene draw and the renderers read it and never the campaign file.
 
 use crate::background::RealFrame;
+use crate::noise::Noise;
 use crate::sky::projection::Tan;
 
 /// A uniform range of ADU per pixel, drawn uniformly (the paper's background and bias).
@@ -34,6 +35,8 @@ pub struct Sensor {
     /// The paper's sky background for `background_exposure_s`, scaled linearly with exposure.
     pub background: AduRange,
     pub background_exposure_s: f64,
+    /// The noise model: the paper's (the ranges above) or a physical one.
+    pub noise: Noise,
 }
 
 impl Sensor {
@@ -83,14 +86,24 @@ impl Sensor {
     /// real frame adds to it; both plus the mean bias. The paper's signal-to-noise gate divides
     /// by this (see `scene::SnrDefinition`).
     pub fn noise_level_adu(&self, exposure_s: f64, frame: Option<&RealFrame>) -> f64 {
+        // A physical detector's noise matrices are its bias and its sky and dark charge.
+        if let Noise::Physical(p) = &self.noise {
+            return p.bias_adu
+                + (p.sky_e_per_s + p.dark_e_per_s) * exposure_s / self.gain_e_per_adu;
+        }
         let bias = (self.bias.min_adu + self.bias.max_adu) / 2.0;
         let frame = frame.map_or(0.0, |f| f.level_adu(exposure_s));
         self.sky_level_adu(exposure_s) + frame + bias
     }
 
     /// Background plus bias noise standard deviation per pixel, ADU, for an exposure: the
-    /// uniform model's, or the real frame's robust sigma scaled by exposure.
+    /// uniform model's, or the real frame's robust sigma scaled by exposure; for a physical
+    /// detector, its sky and dark shot noise and read noise.
     pub fn background_sigma_adu(&self, exposure_s: f64, frame: Option<&RealFrame>) -> f64 {
+        if let Noise::Physical(p) = &self.noise {
+            let variance_e = (p.sky_e_per_s + p.dark_e_per_s) * exposure_s + p.read_noise_e.powi(2);
+            return variance_e.sqrt() / self.gain_e_per_adu;
+        }
         let bias = self.bias.max_adu - self.bias.min_adu;
         let bias_var = bias * bias / 12.0;
         match frame {

@@ -94,6 +94,10 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "e97a974ba7f161056a3874fd7b4339c59dbc7b9c8d2c88965c15f4a5f3d1a445",
     ),
     (
+        "campaigns/physical-noise.toml",
+        "2d8913b8ea331c661832c0d5a1d20ce7f77b6086e8d5b04b3b5bcc49daa5edfc",
+    ),
+    (
         "campaigns/quickstart.toml",
         "e1240fa7c096a9809228d0e1866e00d39ba22496da028f54cc2a38d257e5c7e9",
     ),

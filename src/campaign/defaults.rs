@@ -171,3 +171,23 @@ pub fn detect_iou() -> f64 {
 pub fn max_det() -> u32 {
     crate::detect::yolo::DEFAULT_MAX_DET
 }
+// The physical noise model's detector: TELEDYNE CCD47-20 (13 um pixels, 100,000 e- full well,
+// a few e- read noise), a 16-bit ADC.
+pub fn read_noise() -> f64 {
+    5.0
+}
+pub fn bias_level() -> f64 {
+    100.0
+}
+pub fn full_well() -> f64 {
+    100_000.0
+}
+pub fn adc_max() -> f64 {
+    65_535.0
+}
+pub fn hot_pixel_dark() -> f64 {
+    50.0
+}
+pub fn pixel_size() -> f64 {
+    13.0
+}

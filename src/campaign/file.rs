@@ -4,7 +4,7 @@
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::{FrameKind, PointingMode, RenderMethod, SnrDefinition, defaults};
+use super::{FrameKind, Noise, PointingMode, RenderMethod, SnrDefinition, defaults};
 use crate::detect::streak::StreakParams;
 
 /// A campaign as written in TOML. Every section is optional and defaults to the paper's values.
@@ -40,6 +40,10 @@ pub struct CampaignFile {
     pub stars: Stars,
     #[serde(default)]
     pub background: Background,
+    /// `[noise]`: the paper's noise model (default; left out of the resolved campaign) or a
+    /// physical one.
+    #[serde(default, skip_serializing_if = "Noise::is_paper")]
+    pub noise: Noise,
     #[serde(default)]
     pub photometry: Photometry,
     #[serde(default)]

@@ -10,6 +10,7 @@ mod compose;
 pub mod defaults;
 mod file;
 mod lines;
+mod noise;
 mod resolve;
 mod validate;
 
@@ -18,6 +19,7 @@ use std::path::{Path, PathBuf};
 use hifitime::Epoch;
 
 pub use file::*;
+pub use noise::{Noise, PhysicalNoise};
 pub use resolve::{MAX_SURVEY_DRIFT_DEG, parse_epoch};
 
 pub use crate::geometry::FrameKind;

@@ -158,6 +158,9 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
             ),
         ));
     }
+    c.noise
+        .check(&c.background)
+        .map_err(|(field, msg)| (format!("noise.{field}"), msg))?;
     if let Stars::Catalog { epoch_jyear, .. } = c.stars {
         check(
             (1000.0..=3000.0).contains(&epoch_jyear),

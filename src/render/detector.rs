@@ -1,11 +1,13 @@
 //! The detector (paper Eq. 11): ADU = photo-electrons / gain + background + bias, the
 //! background the paper's uniform one (its range scaled linearly with exposure) or a real
-//! frame's fluctuations on the sensor's sky level, the bias uniform per pixel.
+//! frame's fluctuations on the sensor's sky level, the bias uniform per pixel; or the physical
+//! model of `noise`.
 
 use rand::RngExt;
 use rand_chacha::ChaCha12Rng;
 
 use crate::background::RealFrame;
+use crate::noise::Noise;
 use crate::scene::Scene;
 use crate::sensor::Sensor;
 
@@ -20,6 +22,17 @@ pub(super) fn adu(
     let s = sensor;
     let (width, height) = (s.width_px, s.height_px);
     let t_exp = scene.exposure_s;
+    // A physical detector has its own sky (validation keeps real frames to the paper's model).
+    if let Noise::Physical(p) = &s.noise {
+        return p.adu(
+            electrons,
+            width,
+            height,
+            t_exp,
+            s.gain_e_per_adu,
+            scene.image_index,
+        );
+    }
     let (b_lo, b_hi) = (s.bias.min_adu, s.bias.max_adu);
     let uniform = |r: &mut ChaCha12Rng, lo: f64, hi: f64| {
         if hi > lo { r.random_range(lo..hi) } else { lo }

@@ -33,6 +33,7 @@ fn fixture(jitter_deg_per_sqrt_s: f64) -> Fixture {
                 max_adu: 210.0,
             },
             background_exposure_s: 5.0,
+            noise: crate::noise::Noise::Paper,
         },
         render: Settings {
             method: RenderMethod::PhotonMapping,
