@@ -95,7 +95,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/physical-noise.toml",
-        "2d8913b8ea331c661832c0d5a1d20ce7f77b6086e8d5b04b3b5bcc49daa5edfc",
+        "146412cddedd798597320a56f8e9e8d371be2f0d2429af5d6d60b196e3e97beb",
     ),
     (
         "campaigns/quickstart.toml",
