@@ -219,7 +219,8 @@ pub fn render_with_jitter(
         stars_in_cone: scene.stars.len(),
         stars_traced: traced.len(),
         background_sigma_adu: sensor.background_sigma_adu(t_exp, frame),
-        background_frame: frame.map(|f| f.path.display().to_string()),
+        background_frame: frame.map(|f| f.name.clone()),
+        background_frame_sha256: frame.map(|f| f.sha256.clone()),
         attempts: scene.attempts,
         rejections: scene.rejections.clone(),
     };
