@@ -88,9 +88,9 @@ impl RealFrame {
             .iter()
             .find_map(|k| text(k).map(|s| (*k, s)));
         let dark = text("SHUTTER").is_some_and(|s| s.trim_start().starts_with('1'))
-            || ["OBJECT", "IMAGETYP"].iter().any(|k| {
-                text(k).is_some_and(|s| s.trim().eq_ignore_ascii_case("dark"))
-            });
+            || ["OBJECT", "IMAGETYP"]
+                .iter()
+                .any(|k| text(k).is_some_and(|s| s.trim().eq_ignore_ascii_case("dark")));
         if rows < 2 || cols < 2 {
             return Err(err(&format!("a {cols} x {rows} frame is too small")));
         }
@@ -103,7 +103,9 @@ impl RealFrame {
         }
         let data = match section {
             Some((key, s)) => Region::from_fits_section(&s, cols, rows).ok_or_else(|| {
-                err(&format!("{key} = '{s}' is not a section of its {cols} x {rows} image"))
+                err(&format!(
+                    "{key} = '{s}' is not a section of its {cols} x {rows} image"
+                ))
             })?,
             None => Region {
                 x0: 0,
@@ -390,7 +392,11 @@ mod tests {
         for x in 0..f.width {
             let col: Vec<f32> = (0..f.height).map(|y| f.pixels[y * f.width + x]).collect();
             let m = robust_stats(&col).0;
-            assert!((m - f.median).abs() < 60.0, "column {x}: {m} vs {}", f.median);
+            assert!(
+                (m - f.median).abs() < 60.0,
+                "column {x}: {m} vs {}",
+                f.median
+            );
         }
         assert!((f.median - 2080.0).abs() < 40.0, "{}", f.median);
         assert_flat(&f, 0.1);
@@ -403,7 +409,10 @@ mod tests {
     fn the_science_frame_is_trimmed_flattened_and_masked() {
         let f = fixture("NEOSSAT_240__30_2026025124741.fits");
         assert!(!f.dark);
-        assert_eq!((f.kept.x0, f.kept.x1, f.width, f.height), (40, 1064, 1024, 1020));
+        assert_eq!(
+            (f.kept.x0, f.kept.x1, f.width, f.height),
+            (40, 1064, 1024, 1020)
+        );
         assert_flat(&f, 0.1);
         let share = f.masked as f64 / f.pixels.len() as f64;
         // Its 3-sigma pixels (hot pixels, mostly) are ~6%; the trails and streak ~10%.
@@ -412,6 +421,11 @@ mod tests {
         // pixel is a noise pixel within the pixel mask's cut, 3 robust sigma of the unmasked
         // frame (1684 ADU, 4.6 sigma of the masked one's 1107) plus the second flattening.
         let max = f.pixels.iter().cloned().fold(f32::MIN, f32::max) as f64;
-        assert!(max - f.median < 6.0 * f.sigma, "{max} {} {}", f.median, f.sigma);
+        assert!(
+            max - f.median < 6.0 * f.sigma,
+            "{max} {} {}",
+            f.median,
+            f.sigma
+        );
     }
 }

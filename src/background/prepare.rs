@@ -47,7 +47,11 @@ impl Region {
     /// The pixels of this region of a `width`-wide frame.
     pub fn crop(&self, pixels: &[f32], width: usize) -> Vec<f32> {
         (self.y0..self.y1)
-            .flat_map(|y| pixels[y * width + self.x0..y * width + self.x1].iter().copied())
+            .flat_map(|y| {
+                pixels[y * width + self.x0..y * width + self.x1]
+                    .iter()
+                    .copied()
+            })
             .collect()
     }
 }
@@ -99,10 +103,7 @@ pub fn edge_columns(pixels: &[f32], width: usize, height: usize) -> (usize, usiz
             })
             .count()
     };
-    (
-        side(&|d| medians[d]),
-        side(&|d| medians[width - 1 - d]),
-    )
+    (side(&|d| medians[d]), side(&|d| medians[width - 1 - d]))
 }
 
 /// Cell size of the large-scale structure removed from a frame, pixels.
@@ -219,7 +220,8 @@ fn box_mean(v: &[f32], width: usize, height: usize, r: usize) -> Vec<f32> {
         let (y0, y1) = (y.saturating_sub(r), (y + r + 1).min(height));
         for x in 0..width {
             let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(width));
-            let s = sat[y1 * (width + 1) + x1] - sat[y0 * (width + 1) + x1]
+            let s = sat[y1 * (width + 1) + x1]
+                - sat[y0 * (width + 1) + x1]
                 - sat[y1 * (width + 1) + x0]
                 + sat[y0 * (width + 1) + x0];
             out.push((s / ((x1 - x0) * (y1 - y0)) as f64) as f32);
