@@ -82,8 +82,8 @@ impl Sensor {
 
     /// The mean level of the background and bias noise matrices per pixel, ADU, for an
     /// exposure: what the detector (`render::detector`) adds to every pixel besides the
-    /// photo-electrons. The uniform model's mean, or the sensor's sky level plus the mean the
-    /// real frame adds to it; both plus the mean bias. The paper's signal-to-noise gate divides
+    /// photo-electrons. The uniform model's mean, or the real frame's scaled level; both plus
+    /// the mean bias. The paper's signal-to-noise gate divides
     /// by this (see `scene::SnrDefinition`).
     pub fn noise_level_adu(&self, exposure_s: f64, frame: Option<&RealFrame>) -> f64 {
         // A physical detector's noise matrices are its bias and its sky and dark charge.
@@ -92,8 +92,12 @@ impl Sensor {
                 + (p.sky_e_per_s + p.dark_e_per_s) * exposure_s / self.gain_e_per_adu;
         }
         let bias = (self.bias.min_adu + self.bias.max_adu) / 2.0;
-        let frame = frame.map_or(0.0, |f| f.level_adu(exposure_s));
-        self.sky_level_adu(exposure_s) + frame + bias
+        // A real frame's noise matrix, level included, replaces the uniform background.
+        let background = frame.map_or_else(
+            || self.sky_level_adu(exposure_s),
+            |f| f.level_adu(exposure_s),
+        );
+        background + bias
     }
 
     /// Background plus bias noise standard deviation per pixel, ADU, for an exposure: the

@@ -640,3 +640,25 @@ fn verify_against_a_pinned_digest_catches_a_consistent_forgery() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("is not the pinned"));
 }
+
+/// Issue #11: a semisynthetic campaign's digest depends on its content only, not on the
+/// directory soig starts from (the truth names its frame by file name and sha256, not path).
+#[test]
+fn semisynthetic_digest_is_the_same_from_any_working_directory() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let digest = |cwd: &Path, campaign: &str, out: &str| {
+        let o = Command::new(env!("CARGO_BIN_EXE_soig"))
+            .current_dir(cwd)
+            .args(["run", campaign, "--set", "images=1", "--quiet", "--out"])
+            .arg(dir.path().join(out))
+            .output()
+            .expect("soig runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        digest_of(&o)
+    };
+    let name = "paper-fixed-original-semisynthetic-small.toml";
+    let from_root = digest(&root, &format!("campaigns/{name}"), "a");
+    let from_campaigns = digest(&root.join("campaigns"), name, "b");
+    assert_eq!(from_root, from_campaigns);
+}

@@ -31,11 +31,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/paper-fixed-original-semisynthetic-small.toml",
-        "4c6f850f58ba9f91e4c330a3d3c354e080dea278a26f493069b0dbba6efa8a83",
+        "a60600a73b2c277c67511b3ac110c5b85d18eec5ba0e635aa4de9a08b9bed04f",
     ),
     (
         "campaigns/paper-fixed-original-semisynthetic.toml",
-        "34f24086bc7b39672a2aa0dfcf5acb4e2e1002b3738c3939aa9af251af0ae45b",
+        "b8c98ba73ac1da95983fbedbabbd5e696badfa8365f4b5d1b0e2c660d88c7f35",
     ),
     (
         "campaigns/paper-fixed-original-small.toml",
@@ -47,11 +47,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/paper-fixed-padded-semisynthetic-small.toml",
-        "f91fb0e13797fd64fcadcf23ff16f1c6d67a833b30e792cf48b21f8de2099016",
+        "67faa28aea8275435fee8c3cafd4cf3dffb46ec47325ccfac6ae36a6799c2c20",
     ),
     (
         "campaigns/paper-fixed-padded-semisynthetic.toml",
-        "460898c3e912cc44c4138bc46ac4e4cd034b7f8628393b879fc491708a84b7b0",
+        "b62612561cc3b65fd45b18a93fd947c501895afbd733ef95babca3343d248c4d",
     ),
     (
         "campaigns/paper-fixed-padded-small.toml",
@@ -63,11 +63,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/paper-survey-original-semisynthetic-small.toml",
-        "05b4ed67ca617b3cd72ff2d64d4ace4f5a4323eee488e2979b2e2dfe56183a3e",
+        "eeeade10c5011c5e295b33466bade425fc5faf2c0cd1cd420371b1be68b68aae",
     ),
     (
         "campaigns/paper-survey-original-semisynthetic.toml",
-        "91af64e6b91771e333e37f260e690165a39879e747ff781db1c109d3c8bf31f9",
+        "9f0ddc29ac76930caab9b71060c0d81b8cf108f7ac85054bd312f620b6ed01c0",
     ),
     (
         "campaigns/paper-survey-original-small.toml",
@@ -79,11 +79,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/paper-survey-rotated-semisynthetic-small.toml",
-        "e20beef358c1fc42f755909b5043aa604302b576dc25021c016266f4a8468560",
+        "6a01cf0d7da4d03519376f3a6844fb0ce4012b70528fd634a5d66cfb72300af7",
     ),
     (
         "campaigns/paper-survey-rotated-semisynthetic.toml",
-        "43f1f9d9cf858a06cb906b5174e6e73b5828720d75a80b0086276ab58e9648fe",
+        "3138126c9c661d499f14b33e5a0ce215dbc9c9b859db88d5b1b47db9991ce987",
     ),
     (
         "campaigns/paper-survey-rotated-small.toml",
@@ -107,7 +107,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-fixed-original-semisynthetic.toml",
-        "d7e8a7dec56c27671aac176e60050b03afc3d6ea32dfb1d6762c813dd5df8dbb",
+        "02913a66621efb1a44f050b535c3ba969779ef8a631216b00d2684f4a68c21f2",
     ),
     (
         "results/campaigns/results-fixed-original-synthetic.toml",
@@ -115,7 +115,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-fixed-padded-semisynthetic.toml",
-        "de72276e1a369ca1f215328851565044330dbc8182f5f6ea400b532f04ba9b97",
+        "cf90a5e57b45c8d3dfc58c99db34ca0a9e627f8da468584e16af824c11badc11",
     ),
     (
         "results/campaigns/results-fixed-padded-synthetic.toml",
@@ -123,7 +123,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-survey-original-semisynthetic.toml",
-        "a68be3fb87f49e250c1abbc779981e0640ce662a9a9bb6dcd69e501daab03f31",
+        "772503dbe08cdffad3c5d2da13053651e8e20f866cd67a123f19f7fef116b3a6",
     ),
     (
         "results/campaigns/results-survey-original-synthetic.toml",
@@ -131,7 +131,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-survey-rotated-semisynthetic.toml",
-        "f295d92e762bfa9e4b90cacabddda2e62c5fd02bee5f78e8022166ae867a9103",
+        "40ec27a66996f2bd32573abd958de3b540994206fd1bf225e3e63db92d025bfd",
     ),
     (
         "results/campaigns/results-survey-rotated-synthetic.toml",

@@ -1,7 +1,7 @@
 //! The detector (paper Eq. 11): ADU = photo-electrons / gain + background + bias, the
 //! background the paper's uniform one (its range scaled linearly with exposure) or a real
-//! frame's fluctuations on the sensor's sky level, the bias uniform per pixel; or the physical
-//! model of `noise`.
+//! frame's noise matrix scaled by exposure (`background`), the bias uniform per pixel; or the
+//! physical model of `noise`.
 
 use rand::RngExt;
 use rand_chacha::ChaCha12Rng;
@@ -39,8 +39,7 @@ pub(super) fn adu(
     };
     match (frame, scene.background) {
         (Some(f), Some(choice)) => {
-            let level = s.sky_level_adu(t_exp);
-            let bg = f.background(width, height, t_exp, choice.offset, level);
+            let bg = f.background(width, height, t_exp, choice.offset, noise_rng);
             electrons
                 .iter()
                 .zip(bg)

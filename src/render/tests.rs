@@ -417,7 +417,7 @@ fn noise_level_is_the_mean_the_detector_adds() {
     use crate::background::{FrameChoice, RealFrame};
     let c = fixture(0.0);
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/neossat/NEOS_SCI_2024239174545_cord.fits");
+        .join("tests/fixtures/neossat/NEOSSAT_240__30_2020214095318.fits");
     let frame = RealFrame::load(&path).unwrap();
     let mut big = fixture(0.0);
     big.sensor.width_px = 512;
@@ -443,13 +443,16 @@ fn noise_level_is_the_mean_the_detector_adds() {
         let n = e.adu.len() as f64;
         let mean = e.adu.iter().map(|&v| v as f64).sum::<f64>() / n;
         let level = c.sensor.noise_level_adu(t, f);
-        // Five standard errors of the mean of n uniform draws (background plus bias); the
-        // frame's whole period has exactly its mean, so only the bias draws and float32
-        // rounding (~1e-5 relative) are left.
-        let tolerance = 5.0 * c.sensor.background_sigma_adu(t, None) / n.sqrt() + 1e-4 * level;
+        // Five standard errors of the mean of n uniform draws (background plus bias), float32
+        // rounding (~1e-5 relative), and for the real (dark) frame the sampling of its
+        // flattened noise matrix by the image's ~9 random 256 px blocks: their means differ
+        // from the frame's by a fraction of its sigma (measured 0.08% of its level at 3 s).
+        let sampling = if f.is_some() { 5e-3 * level } else { 0.0 };
+        let tolerance =
+            5.0 * c.sensor.background_sigma_adu(t, None) / n.sqrt() + 1e-4 * level + sampling;
         assert!(
             (mean - level).abs() < tolerance,
-            "{t} s, frame {}: mean {mean} vs level {level}",
+            "{t} s, frame {}: mean {mean} vs level {level} (tolerance {tolerance})",
             f.is_some()
         );
     }

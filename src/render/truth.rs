@@ -52,8 +52,11 @@ pub struct Truth {
     pub stars_in_cone: usize,
     pub stars_traced: usize,
     pub background_sigma_adu: f64,
-    /// The real frame of a semisynthetic image.
+    /// The real frame of a semisynthetic image: its file name and sha256 (not its path, which
+    /// depends on the directory soig runs from).
     pub background_frame: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub background_frame_sha256: Option<String>,
     pub attempts: u32,
     pub rejections: std::collections::BTreeMap<&'static str, u32>,
     /// The debris' RA/Dec at start, middle and end, and the GCRS states at mid-exposure.
