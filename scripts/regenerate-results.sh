@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Reruns every committed reference run in results/ and copies back what is committed of each
-# (digest, metrics, reports, PR curve; the images stay in the scratch folder), then the study.
+# (digest, metrics, reports, PR curve; the images stay in the scratch folder), then the study,
+# the CI baseline (results/ci-quickstart) and the tables of results/README.md.
 # Run after any change that moves a digest, on a quiet machine; results/README.md says when
 # it was last done. Usage: bash scripts/regenerate-results.sh [SCRATCH_DIR]
 set -euo pipefail
@@ -21,4 +22,6 @@ done
 "$soig" study campaigns/quickstart.toml --seeds 16 --out "$scratch/study"
 rm -rf results/study && mkdir -p results/study
 cp "$scratch/study/"{errors.csv,manifest.json,study.csv,study.json,study.md,study.png} results/study/
+SOIG="$soig" OUT="$scratch/ci-quickstart" bash scripts/ci.sh --pin
+"$soig" tables results/results-* --readme results/README.md > /dev/null
 echo "results regenerated (scratch: $scratch)"

@@ -31,11 +31,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/paper-fixed-original-semisynthetic-small.toml",
-        "a60600a73b2c277c67511b3ac110c5b85d18eec5ba0e635aa4de9a08b9bed04f",
+        "306b688dab717de8219d278fcba0b15850d508f4818e7687e365be701007c8a6",
     ),
     (
         "campaigns/paper-fixed-original-semisynthetic.toml",
-        "b8c98ba73ac1da95983fbedbabbd5e696badfa8365f4b5d1b0e2c660d88c7f35",
+        "1a3a8812f1035f7c071103ecd8b2cddb6ca4966bf4a48d0a15cfb85a2b9b8c55",
     ),
     (
         "campaigns/paper-fixed-original-small.toml",
@@ -47,11 +47,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/paper-fixed-padded-semisynthetic-small.toml",
-        "67faa28aea8275435fee8c3cafd4cf3dffb46ec47325ccfac6ae36a6799c2c20",
+        "b46fc3495cbfd950b59020b3a0ee0f1c00499bf67c404d60c97a6cfb4f3820f7",
     ),
     (
         "campaigns/paper-fixed-padded-semisynthetic.toml",
-        "b62612561cc3b65fd45b18a93fd947c501895afbd733ef95babca3343d248c4d",
+        "bfe4798140a593e86be38e20f0790610b59298315eb6dab9c3ff08ee95eb305e",
     ),
     (
         "campaigns/paper-fixed-padded-small.toml",
@@ -63,11 +63,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/paper-survey-original-semisynthetic-small.toml",
-        "eeeade10c5011c5e295b33466bade425fc5faf2c0cd1cd420371b1be68b68aae",
+        "4b92bb1dc7bededfb1291221821f61c3dad82b8e01c0dde9a2a4e7da5354ce33",
     ),
     (
         "campaigns/paper-survey-original-semisynthetic.toml",
-        "9f0ddc29ac76930caab9b71060c0d81b8cf108f7ac85054bd312f620b6ed01c0",
+        "55915590697b2c218757457354ac75a4e80c220c7b10509f54fbfb79932d43d0",
     ),
     (
         "campaigns/paper-survey-original-small.toml",
@@ -79,11 +79,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/paper-survey-rotated-semisynthetic-small.toml",
-        "6a01cf0d7da4d03519376f3a6844fb0ce4012b70528fd634a5d66cfb72300af7",
+        "2b454f84ad7ddf297f420e4980a2e4cedcccb5ef14984791d81df60edea1704c",
     ),
     (
         "campaigns/paper-survey-rotated-semisynthetic.toml",
-        "3138126c9c661d499f14b33e5a0ce215dbc9c9b859db88d5b1b47db9991ce987",
+        "36721ffd5571686f7da1b878baa0d51339a674ea06297eb5e003ad4d44a56515",
     ),
     (
         "campaigns/paper-survey-rotated-small.toml",
@@ -107,7 +107,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-fixed-original-semisynthetic.toml",
-        "02913a66621efb1a44f050b535c3ba969779ef8a631216b00d2684f4a68c21f2",
+        "eafe86166e0a0b430830cb2d2eeb1616656dca34447abbee5d9f3510fe31f3ab",
     ),
     (
         "results/campaigns/results-fixed-original-synthetic.toml",
@@ -115,7 +115,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-fixed-padded-semisynthetic.toml",
-        "cf90a5e57b45c8d3dfc58c99db34ca0a9e627f8da468584e16af824c11badc11",
+        "d74e433a1239ec109914b896f7ee518f49cdbe672657d0f7d24bfbb11af4aad1",
     ),
     (
         "results/campaigns/results-fixed-padded-synthetic.toml",
@@ -123,7 +123,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-survey-original-semisynthetic.toml",
-        "772503dbe08cdffad3c5d2da13053651e8e20f866cd67a123f19f7fef116b3a6",
+        "608b355d5def09c34d8a5c7935286bc391b827c72cb59dc0a83fc9853146a5ca",
     ),
     (
         "results/campaigns/results-survey-original-synthetic.toml",
@@ -131,7 +131,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-survey-rotated-semisynthetic.toml",
-        "40ec27a66996f2bd32573abd958de3b540994206fd1bf225e3e63db92d025bfd",
+        "73c606fe7381f96d1d8876f5c4cb1081a9f279c9a27c428fbfa52318b511dc04",
     ),
     (
         "results/campaigns/results-survey-rotated-synthetic.toml",
