@@ -31,11 +31,18 @@ impl RunSummary {
             0 => String::new(),
             r => format!(" (and {r} resumed)"),
         };
+        // A run that only finished what a killed one left has no rate to speak of.
+        let rate = match self.images {
+            0 => String::new(),
+            n => format!(
+                " in {:.1} s ({:.2} images/s)",
+                self.seconds,
+                n as f64 / self.seconds
+            ),
+        };
         let mut s = format!(
-            "{} images{resumed} in {:.1} s ({:.2} images/s) -> {}\ndigest {}\n",
+            "{} images{resumed}{rate} -> {}\ndigest {}\n",
             self.images,
-            self.seconds,
-            self.images as f64 / self.seconds,
             out.display(),
             self.digest
         );
