@@ -204,7 +204,7 @@ fn finds_a_rendered_streak_on_the_pixel_grid_and_the_sky() {
 /// frame (README, "Detecting on real frames"), within 5 px at each end.
 #[test]
 fn finds_the_bright_streak_of_the_raw_neossat_frame() {
-    let frame = repo("../shared/data/neossat/NEOSSAT_240__30_2026025124741.fits");
+    let frame = repo("tests/fixtures/neossat/NEOSSAT_240__30_2026025124741.fits");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("det");
     ok(soig(&[
