@@ -24,8 +24,8 @@ use crate::sky::photometry::{debris_magnitude, photon_rate};
 use crate::sky::projection::Tan;
 use crate::sky::stars::{ProceduralSky, Star, StarCatalog};
 use crate::sky::{
-    Mat3, Vec3, angle_deg, cross, dot, mat_vec, norm, radec_deg, radec_unit, rotate, scale,
-    segment_hits_sphere, sub, unit,
+    Vec3, angle_deg, cross, dot, norm, radec_deg, radec_unit, rotate, scale, segment_hits_sphere,
+    sub, unit,
 };
 
 /// WGS84 equatorial radius, km.
@@ -444,21 +444,6 @@ pub fn draw(
     })
 }
 
-/// Positions at time t (GCRS km) of observer and debris; None if either cannot be propagated.
-/// The TEME -> GCRS rotation changes by far less than a milliarcsecond over an exposure, so one
-/// matrix (at mid-exposure) serves the whole exposure.
-fn positions(
-    inputs: &Inputs,
-    debris: usize,
-    t: Epoch,
-    teme_to_gcrs: &Mat3,
-) -> Option<(Vec3, Vec3)> {
-    let obs = inputs.observer.propagator.position_teme_km(t).ok()?;
-    let deb = inputs.debris[debris].propagator.position_teme_km(t).ok()?;
-    let (obs, deb) = (mat_vec(teme_to_gcrs, obs), mat_vec(teme_to_gcrs, deb));
-    (obs.iter().chain(deb.iter()).all(|x| x.is_finite())).then_some((obs, deb))
-}
-
 fn try_draw(
     spec: &Spec,
     sensor: &Sensor,
@@ -511,7 +496,6 @@ fn try_draw(
         mid,
         spec.apparent_positions,
     );
-    let frame = *sighting.teme_to_gcrs();
     let sight = sighting.at(mid).ok_or("propagation failed")?;
     let (obs, deb) = (sight.observer_km, sight.debris_km);
     let los = sub(deb, obs);
@@ -562,16 +546,8 @@ fn try_draw(
             spec.star_cone_deg,
         ),
         PointingMode::Survey => {
-            let track = survey_track(
-                sensor,
-                inputs,
-                debris_index,
-                mid,
-                exposure_s,
-                (ra_p, dec_p),
-                &frame,
-            )
-            .ok_or("propagation failed")?;
+            let track = survey_track(sensor, &sighting, mid, exposure_s, (ra_p, dec_p))
+                .ok_or("propagation failed")?;
             // The star cone covers the field along the whole drift and nothing more.
             let half_diag_deg =
                 scale * (sensor.width_px as f64).hypot(sensor.height_px as f64) / 2.0;
@@ -760,18 +736,16 @@ const STAR_CONE_MARGIN_DEG: f64 = 0.01;
 /// The survey track of the observer at mid-exposure, with the boresight `(ra, dec)` then.
 fn survey_track(
     sensor: &Sensor,
-    inputs: &Inputs,
-    debris: usize,
+    sighting: &Sighting,
     mid: Epoch,
     exposure_s: f64,
     boresight: (f64, f64),
-    frame: &Mat3,
 ) -> Option<SurveyTrack> {
     // Orbit normal and rate from the observer's velocity by a central difference.
     let h = 0.5;
-    let (r0, _) = positions(inputs, debris, mid - Duration::from_seconds(h), frame)?;
-    let (r1, _) = positions(inputs, debris, mid + Duration::from_seconds(h), frame)?;
-    let (r, _) = positions(inputs, debris, mid, frame)?;
+    let r0 = sighting.observer_km(mid - Duration::from_seconds(h))?;
+    let r1 = sighting.observer_km(mid + Duration::from_seconds(h))?;
+    let r = sighting.observer_km(mid)?;
     let v = scale(sub(r1, r0), 1.0 / (2.0 * h));
     let n = cross(r, v);
     let rate_deg_s = (norm(n) / dot(r, r)).to_degrees();

@@ -80,6 +80,11 @@ impl<'a> Sighting<'a> {
             .then_some((r, v))
     }
 
+    /// The observer's GCRS position (km) at `t`; None if it cannot be propagated.
+    pub fn observer_km(&self, t: Epoch) -> Option<Vec3> {
+        self.state(self.observer, t).map(|(r, _)| r)
+    }
+
     /// The sight at `t`; None if either body cannot be propagated.
     pub fn at(&self, t: Epoch) -> Option<Sight> {
         let (observer_km, observer_km_s) = self.state(self.observer, t)?;
