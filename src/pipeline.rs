@@ -408,7 +408,6 @@ pub(crate) fn finish(
         .map(|r| {
             let subset = dataset_stage.then(|| subsets[r.index as usize]);
             Written {
-                debris_index: r.debris_index,
                 subset,
                 png: r.png.as_ref().map(|p| WrittenPng {
                     path: dir.join(artifacts::dataset_paths(r.index, subset).0),
@@ -470,7 +469,7 @@ pub(crate) fn finish(
     if trained.is_some() {
         volatile.extend(volatile_files(dir)?);
     }
-    let mix = debris_mix(campaign, written.iter().map(|w| w.debris_index));
+    let mix = debris_mix(campaign, records.iter().map(|r| r.debris_index));
     let mut manifest = Manifest::build_knowing(
         dir,
         &campaign.hash,
@@ -520,10 +519,8 @@ fn yolo_params(campaign: &Campaign) -> YoloParams {
     }
 }
 
-/// What an image left for the summary and the detect stage.
+/// What an image left for the detect stage.
 struct Written {
-    /// The debris object it shows (index in the campaign's debris).
-    debris_index: usize,
     subset: Option<Subset>,
     png: Option<WrittenPng>,
     /// FITS -> PNG conversion time (frame, enhancement, encoding), seconds; None when a shard
