@@ -89,17 +89,42 @@ pub fn read_f64(path: &Path) -> Result<(Vec<f64>, usize, usize), fitsio::errors:
 fn read<T: fitsio::images::ReadImage>(
     path: &Path,
 ) -> Result<(T, usize, usize), fitsio::errors::Error> {
-    let mut f = FitsFile::open(path)?;
-    let hdu = f.primary_hdu()?;
-    let (rows, cols) = match &hdu.info {
-        fitsio::hdu::HduInfo::ImageInfo { shape, .. } if shape.len() == 2 => (shape[0], shape[1]),
-        _ => {
-            return Err(fitsio::errors::Error::Message(format!(
-                "{}: not a 2-D image",
-                path.display()
-            )));
-        }
+    use fitsio::errors::Error;
+    let refuse = |m: &str| Error::Message(format!("{}: {m}", path.display()));
+    // cfitsio's own errors print as `FitsError { status: 108, .. }`: give its words instead.
+    let plain = |e: Error| match e {
+        Error::Fits(f) => refuse(&format!("{} (cfitsio status {})", f.message, f.status)),
+        other => other,
     };
-    let data = hdu.read_image(&mut f)?;
+    // Before cfitsio sees it: a device would never end, and a header that claims more pixels
+    // than the file holds would have cfitsio allocate them all.
+    let len = crate::input_file::regular(path).map_err(|why| refuse(&why))?;
+    let mut head = [0u8; 9];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read(&mut f, &mut head))
+        .map_err(|e| refuse(&e.to_string()))?;
+    if n < head.len() || &head != b"SIMPLE  =" {
+        return Err(refuse(&format!(
+            "not a FITS file ({len} bytes, not beginning with a SIMPLE card)"
+        )));
+    }
+    let mut f = FitsFile::open(path).map_err(plain)?;
+    let hdu = f.primary_hdu().map_err(plain)?;
+    let (rows, cols, bitpix) = match &hdu.info {
+        fitsio::hdu::HduInfo::ImageInfo { shape, image_type } if shape.len() == 2 => {
+            (shape[0], shape[1], i32::from(*image_type))
+        }
+        _ => return Err(refuse("not a 2-D image")),
+    };
+    let bytes = (rows as u64)
+        .checked_mul(cols as u64)
+        .and_then(|n| n.checked_mul(bitpix.unsigned_abs() as u64 / 8));
+    if bytes.is_none_or(|b| b > len) {
+        return Err(refuse(&format!(
+            "its header claims {cols} x {rows} pixels (BITPIX {bitpix}), more than its {len} \
+             bytes hold: truncated?"
+        )));
+    }
+    let data = hdu.read_image(&mut f).map_err(plain)?;
     Ok((data, rows, cols))
 }

@@ -178,6 +178,9 @@ fn read_fits(path: &Path) -> Result<Frame, String> {
     for y in region.y0..region.y1 {
         pixels.extend_from_slice(&values[y * width + region.x0..y * width + region.x1]);
     }
+    if !pixels.iter().any(|v| v.is_finite()) {
+        return Err("no pixel of its image is a finite number: nothing to detect on".into());
+    }
     // Some writers (NEOSSat's) append their own units to extra WCS keywords; a distortion
     // keyword means the plain TAN reader would be wrong.
     let (wcs, wcs_problem) = if header.contains_key("A_ORDER") || header.contains_key("PV2_1") {

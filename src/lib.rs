@@ -14,7 +14,7 @@
 //! core           render -> scene -> sighting, sensor -> background     geometry (frames, label box)
 //!                enhance (+ clahe)   detect (streak, yolo)   metrics   report
 //! leaves         sky (orbit, frames, ephemeris, apparent, stars, projection, photometry, vec3, wcs)
-//!                imaging   rng   fits   frames   hash   python   plot   progress
+//!                imaging   rng   fits   frames   hash   python   plot   progress   input_file
 //! at the side    manifest   output (whole-or-nothing directories)   journal (resume)   error
 //! ```
 //!
@@ -63,6 +63,7 @@ pub mod frames;
 pub mod geometry;
 pub(crate) mod hash;
 pub mod imaging;
+pub mod input_file;
 pub mod journal;
 pub mod manifest;
 pub mod merge;

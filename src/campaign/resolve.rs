@@ -99,16 +99,18 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
         }
         for (i, p) in paths.iter().enumerate() {
             let full = base_dir.join(p);
-            if !full.is_file() {
+            if let Err(why) = crate::input_file::regular(&full) {
                 return Err(fail(
                     &format!("background.paths[{i}]"),
-                    format!("background frame {} does not exist", full.display()),
+                    format!("background frame {}: {why}", full.display()),
                 ));
             }
         }
     }
     if let Some(model) = &resolved.detect.model {
         let full = base_dir.join(model);
+        crate::input_file::regular(&full)
+            .map_err(|why| fail("detect.model", format!("model {}: {why}", full.display())))?;
         let sha = sha256_file(&full)
             .map_err(|e| {
                 fail(
@@ -212,10 +214,10 @@ fn resolve_object(
             )
         })?;
         let full = base_dir.join(&file);
-        let text = std::fs::read_to_string(&full).map_err(|e| {
+        let text = crate::input_file::read_text(&full).map_err(|why| {
             (
                 ".tle_file".to_string(),
-                format!("cannot read {}: {e}", full.display()),
+                format!("{}: {why}", full.display()),
             )
         })?;
         let tles = orbit::parse_tles(&text)
