@@ -227,10 +227,10 @@ pub fn inputs(campaign: &Campaign) -> Result<Inputs, Error> {
         Stars::Procedural { sky_seed, .. } => StarField::Procedural(ProceduralSky::new(*sky_seed)),
         Stars::Catalog {
             path, epoch_jyear, ..
-        } => StarField::Catalog(StarCatalog::from_csv_path(
-            &campaign.base_dir.join(path),
-            *epoch_jyear,
-        )?),
+        } => StarField::Catalog(
+            StarCatalog::from_csv_path(&campaign.base_dir.join(path), *epoch_jyear)
+                .map_err(|e| campaign.error_at("stars.path", e.to_string()))?,
+        ),
     };
     let frames: Vec<PathBuf> = match &c.background {
         Background::Uniform => Vec::new(),
@@ -240,6 +240,7 @@ pub fn inputs(campaign: &Campaign) -> Result<Inputs, Error> {
         observer: campaign.observer.clone(),
         debris: campaign.debris.clone(),
         stars,
-        background: BackgroundModel::load(&frames)?,
+        background: BackgroundModel::load(&frames)
+            .map_err(|e| campaign.error_at("background.paths", e.to_string()))?,
     })
 }

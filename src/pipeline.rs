@@ -118,7 +118,7 @@ pub fn run_with(
     ) {
         let path = campaign.base_dir.join(m);
         YoloDetector::load(&path, yolo_params(campaign))
-            .with_context(|| format!("loading model {}", path.display()))?;
+            .map_err(|e| campaign.error_at("detect.model", e.to_string()))?;
     }
     let id = Identity::new(&campaign.hash, options.shard.map(|s| (s.index, s.count)));
     let matches = |dir: &Path| !options.fresh && journal::resumable(dir, &id);

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use toml::{Table, Value};
 
-use super::lines::{field_at_offset, field_keys, line_of_field, line_of_offset};
+use super::lines::{field_at_offset, field_keys, field_on_line, line_of_field, line_of_offset};
 use super::{CampaignError, CampaignFile, dir_of};
 
 /// Where a layer's values come from.
@@ -57,11 +57,14 @@ impl Layers {
         let mut seen = vec![canonical(path)];
         let (mut path, mut text) = (path.to_path_buf(), text.to_string());
         loop {
-            let mut table: Table = text.parse().map_err(|e: toml::de::Error| CampaignError {
-                file: path.clone(),
-                line: e.span().map(|s| line_of_offset(&text, s.start)),
-                field: None,
-                message: e.message().trim().to_string(),
+            let mut table: Table = text.parse().map_err(|e: toml::de::Error| {
+                let line = e.span().map(|s| line_of_offset(&text, s.start));
+                CampaignError {
+                    file: path.clone(),
+                    line,
+                    field: line.and_then(|l| field_on_line(&text, l)),
+                    message: e.message().trim().to_string(),
+                }
             })?;
             let extends = table.remove("extends");
             let at = |message: String| CampaignError {
@@ -95,8 +98,8 @@ impl Layers {
                     .collect();
                 return Err(at(format!("a cycle of `extends`: {}", cycle.join(" -> "))));
             }
-            let base_text = std::fs::read_to_string(&base)
-                .map_err(|e| at(format!("cannot read {}: {e}", base.display())))?;
+            let base_text = crate::input_file::read_text(&base)
+                .map_err(|why| at(format!("{}: {why}", base.display())))?;
             seen.push(key);
             chain.push(Layer {
                 source: Source::File { path, text },
@@ -128,7 +131,7 @@ impl Layers {
             return toml::from_str(text).map_err(|e| CampaignError {
                 file: path.clone(),
                 line: e.span().map(|s| line_of_offset(text, s.start)),
-                field: None,
+                field: e.span().and_then(|s| field_at_offset(text, s.start)),
                 message: e.message().trim().to_string(),
             });
         }
@@ -141,14 +144,14 @@ impl Layers {
         let text = toml::to_string(&merged).expect("a TOML table serialises");
         toml::from_str(&text).map_err(|e| {
             let field = e.span().and_then(|s| field_at_offset(&text, s.start));
-            let (file, line) = match field {
-                Some(f) => self.locate(&f),
+            let (file, line) = match &field {
+                Some(f) => self.locate(f),
                 None => (self.layers[self.leaf].source.label(), None),
             };
             CampaignError {
                 file,
                 line,
-                field: None,
+                field,
                 message: e.message().trim().to_string(),
             }
         })
@@ -371,10 +374,11 @@ mod tests {
         let e = Campaign::load(&dir.path().join("typo.toml")).unwrap_err();
         assert!(e.file.ends_with("typo.toml") && e.line == Some(4), "{e}");
         assert!(e.message.contains("unknown field `width`"), "{e}");
+        assert_eq!(e.field.as_deref(), Some("sensor.width"));
         let e = Campaign::load_with_overrides(&leaf, &["sensor.width=3".into()]).unwrap_err();
         assert!(
             e.to_string()
-                .starts_with("--set sensor.width=3: unknown field `width`"),
+                .starts_with("--set sensor.width=3: field `sensor.width`: unknown field `width`"),
             "{e}"
         );
     }

@@ -90,7 +90,12 @@ pub struct ObjectSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub norad: Option<u64>,
     /// The two TLE lines.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "two_tle_lines"
+    )]
+    #[schemars(with = "Option<[String; 2]>")]
     pub tle: Option<[String; 2]>,
     /// A file of 2- or 3-line TLE sets, relative to the campaign file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -500,4 +505,15 @@ impl Default for Stars {
             cone_radius_deg: defaults::star_cone(),
         }
     }
+}
+
+/// `tle`: exactly two lines (read as a fixed-size array, a third line would be dropped unseen).
+fn two_tle_lines<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[String; 2]>, D::Error> {
+    let lines: Option<Vec<String>> = Option::deserialize(d)?;
+    lines
+        .map(|l| {
+            <[String; 2]>::try_from(l)
+                .map_err(|l| serde::de::Error::invalid_length(l.len(), &"the two lines of a TLE"))
+        })
+        .transpose()
 }

@@ -86,3 +86,21 @@ pub(super) fn field_at_offset(text: &str, offset: usize) -> Option<String> {
     let doc = DeTable::parse(text).ok()?;
     in_table(doc.get_ref(), offset, "")
 }
+
+/// The field that line `line` (1-based) of `text` writes, `key = ...` under the last `[table]`
+/// header above it: for errors in text that does not parse (a duplicate key), where
+/// `field_at_offset` has no document to search.
+pub(super) fn field_on_line(text: &str, line: usize) -> Option<String> {
+    let lines: Vec<&str> = text.lines().take(line).collect();
+    let (key, _) = lines.last()?.split_once('=')?;
+    let key = key.trim().trim_matches('"');
+    let table = lines[..lines.len() - 1].iter().rev().find_map(|l| {
+        let l = l.trim();
+        l.starts_with('[')
+            .then(|| l.trim_matches(|c| c == '[' || c == ']').trim())
+    });
+    Some(match table {
+        Some(t) => format!("{t}.{key}"),
+        None => key.to_string(),
+    })
+}

@@ -57,7 +57,13 @@ pub struct Campaign {
     pub base_dir: PathBuf,
     /// The campaign file (or the name given to campaign text built in code), for messages.
     pub source: PathBuf,
+    /// Where each of `FILE_FIELDS` was written (file, line), for errors found when the files
+    /// they name are read (`Campaign::error_at`).
+    file_fields: Vec<(&'static str, PathBuf, Option<usize>)>,
 }
+
+/// The fields naming files that are read only when a campaign runs (frames, model, catalogue).
+const FILE_FIELDS: [&str; 3] = ["background.paths", "detect.model", "stars.path"];
 
 impl Campaign {
     /// Read, parse, validate and resolve a campaign file (and the files it `extends`).
@@ -70,11 +76,11 @@ impl Campaign {
         path: &Path,
         overrides: &[String],
     ) -> Result<Campaign, CampaignError> {
-        let text = std::fs::read_to_string(path).map_err(|e| CampaignError {
+        let text = crate::input_file::read_text(path).map_err(|why| CampaignError {
             file: path.to_path_buf(),
             line: None,
             field: None,
-            message: format!("cannot read campaign file: {e}"),
+            message: format!("campaign file: {why}"),
         })?;
         Campaign::compose(&text, path, overrides)
     }
@@ -123,7 +129,32 @@ impl Campaign {
             output_dir,
             base_dir,
             source: path.to_path_buf(),
+            file_fields: FILE_FIELDS
+                .iter()
+                .map(|f| {
+                    let e = layers.error(f, String::new());
+                    (*f, e.file, e.line)
+                })
+                .collect(),
         })
+    }
+
+    /// An error about `field` (one of the fields naming files: `background.paths`,
+    /// `detect.model`, `stars.path`), at the file and line that wrote it.
+    pub fn error_at(&self, field: &str, message: String) -> CampaignError {
+        let (file, line) = self
+            .file_fields
+            .iter()
+            .find(|(f, _, _)| *f == field)
+            .map_or((self.source.clone(), None), |(_, file, line)| {
+                (file.clone(), *line)
+            });
+        CampaignError {
+            file,
+            line,
+            field: Some(field.to_string()),
+            message,
+        }
     }
 
     /// The campaign whose resolved form (`resolved`, as a manifest records it) is given, its
