@@ -6,6 +6,12 @@ use super::{CampaignFile, FrameKind, LightCurve, PointingMode, Stage, Stars};
 /// Most model stars a scene's star cone may hold.
 const MAX_STARS_PER_CONE: f64 = 2e6;
 
+/// Highest background or bias level, ADU (see `validate`).
+const MAX_LEVEL_ADU: f64 = 1e9;
+
+/// Largest debris area, m^2 (see `validate`).
+const MAX_AREA_M2: f64 = 1e4;
+
 /// Field-level checks that need no files. Returns (field path, message).
 pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     fn check(ok: bool, field: &str, msg: &str) -> Result<(), (String, String)> {
@@ -24,6 +30,24 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
             .all(|ch| ch.is_ascii_alphanumeric() || "-_.".contains(ch)),
         "name",
         "use only letters, digits, '-', '_' and '.' (it names folders)",
+    )?;
+    check(
+        !c.name.starts_with('.'),
+        "name",
+        "must not begin with '.' (`.` and `..` name the folders around the output, and a hidden \
+         output is one a user does not see)",
+    )?;
+    // The output replaces a folder: `.`, `..` or `/` would be one that holds others (the
+    // campaign's among them).
+    check(
+        c.output.as_ref().is_none_or(|o| {
+            matches!(
+                std::path::Path::new(o).components().next_back(),
+                Some(std::path::Component::Normal(_))
+            )
+        }),
+        "output",
+        "must end in a folder name, not `.`, `..` or `/` (the output replaces that folder)",
     )?;
     check(
         (1..=10_000_000).contains(&c.images),
@@ -90,45 +114,53 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "sensor.gain_e_per_adu",
         "must be in [0.001, 10000] e-/ADU",
     )?;
+    // Levels in ADU: a 32-bit detector counts to 4.3e9, so 1e9 is beyond any real sky or
+    // bias, and beyond it the noise swamps every streak (no scene passes the SNR gate).
+    let adu = |x: f64| nonneg(x) && x <= MAX_LEVEL_ADU;
     check(
-        nonneg(s.background_min_adu),
+        adu(s.background_min_adu),
         "sensor.background_min_adu",
-        "must be >= 0",
+        "must be in [0, 1e9] ADU",
     )?;
     check(
-        nonneg(s.background_max_adu) && s.background_max_adu >= s.background_min_adu,
+        adu(s.background_max_adu) && s.background_max_adu >= s.background_min_adu,
         "sensor.background_max_adu",
-        "must be >= sensor.background_min_adu",
+        "must be in [sensor.background_min_adu, 1e9] ADU",
     )?;
+    // The exposure the background levels are for; an image scales them by t / this, which
+    // stays within the exposure bounds' 1 ms - 1 h.
     check(
-        pos(s.background_exposure_s),
+        (1e-3..=3600.0).contains(&s.background_exposure_s),
         "sensor.background_exposure_s",
-        "must be positive",
+        "must be in [0.001, 3600] seconds",
     )?;
     check(
-        nonneg(s.bias_min_adu),
+        adu(s.bias_min_adu),
         "sensor.bias_min_adu",
-        "must be >= 0",
+        "must be in [0, 1e9] ADU",
     )?;
     check(
-        nonneg(s.bias_max_adu) && s.bias_max_adu >= s.bias_min_adu,
+        adu(s.bias_max_adu) && s.bias_max_adu >= s.bias_min_adu,
         "sensor.bias_max_adu",
-        "must be >= sensor.bias_min_adu",
+        "must be in [sensor.bias_min_adu, 1e9] ADU",
     )?;
     check(
         s.mag_limit.is_finite() && s.mag_limit <= 30.0,
         "sensor.mag_limit",
         "must be a magnitude <= 30",
     )?;
+    // Far below any telescope's diffraction limit (0.05" for Hubble) a streak needs more
+    // samples than a scene may draw; beyond a degree the PSF is no longer a PSF.
     check(
-        pos(s.psf_sigma_arcsec),
+        (0.01..=3600.0).contains(&s.psf_sigma_arcsec),
         "sensor.psf_sigma_arcsec",
-        "must be positive",
+        "must be in [0.01, 3600] arcsec",
     )?;
+    // A pointing that wanders a degree in a second is a tumbling spacecraft, not jitter.
     check(
-        nonneg(s.jitter_deg_per_sqrt_s),
+        nonneg(s.jitter_deg_per_sqrt_s) && s.jitter_deg_per_sqrt_s <= 1.0,
         "sensor.jitter_deg_per_sqrt_s",
-        "must be >= 0",
+        "must be in [0, 1] deg/sqrt(s)",
     )?;
     check(
         pos(c.stars.cone_radius_deg()) && c.stars.cone_radius_deg() <= 10.0,
@@ -169,22 +201,28 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         )?;
     }
     let p = &c.photometry;
+    // The largest object in orbit, the ISS, presents a few thousand m^2.
     check(
-        p.rcs_mean_m2.is_finite(),
+        p.rcs_mean_m2.is_finite() && p.rcs_mean_m2.abs() <= MAX_AREA_M2,
         "photometry.rcs_mean_m2",
-        "must be finite",
+        "must be in [-1e4, 1e4] m^2",
     )?;
     check(
-        nonneg(p.rcs_std_m2),
+        nonneg(p.rcs_std_m2) && p.rcs_std_m2 <= MAX_AREA_M2,
         "photometry.rcs_std_m2",
-        "must be >= 0",
+        "must be in [0, 1e4] m^2",
     )?;
     check(
         p.rcs_mean_m2 != 0.0 || p.rcs_std_m2 > 0.0,
         "photometry.rcs_std_m2",
         "with rcs_mean_m2 = 0 the area is always 0: give a positive std",
     )?;
-    check(pos(p.albedo), "photometry.albedo", "must be positive")?;
+    // The diffuse sphere of Eq. 7 reflects at most what it receives.
+    check(
+        pos(p.albedo) && p.albedo <= 1.0,
+        "photometry.albedo",
+        "must be in (0, 1]",
+    )?;
     if let LightCurve::Tumbling {
         period_min_s,
         period_max_s,
@@ -246,10 +284,12 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     if let Some(snr) = v.snr_min {
         check(nonneg(snr), "visibility.snr_min", "must be >= 0")?;
     }
+    // A scene draw takes about 0.1 ms: 1e5 draws are ~10 s per image before an impossible
+    // scene is reported, where 4e9 would hang for days.
     check(
-        v.max_attempts >= 1,
+        (1..=100_000).contains(&v.max_attempts),
         "visibility.max_attempts",
-        "must be >= 1",
+        "must be between 1 and 100000",
     )?;
     let r = &c.render;
     check(
@@ -283,7 +323,13 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "enhance.clahe_tiles",
         "each must be between 1 and 64",
     )?;
-    check(pos(en.gamma), "enhance.gamma", "must be positive")?;
+    // O = I^gamma on 8 bits: beyond 20 (or below 1/20) every pixel but the brightest (or the
+    // darkest) rounds to 0 (or 255), an image with nothing left to see.
+    check(
+        (0.05..=20.0).contains(&en.gamma),
+        "enhance.gamma",
+        "must be in [0.05, 20]",
+    )?;
     check(en.pad_px <= 4096, "enhance.pad_px", "must be at most 4096")?;
     check(
         en.geometry != FrameKind::Rotated || c.pointing.mode == PointingMode::Survey,
