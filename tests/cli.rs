@@ -553,12 +553,18 @@ fn a_users_files_are_never_replaced() {
         std::fs::read_to_string(other.join("data.txt")).unwrap(),
         "keep me"
     );
-    // A name or an output that resolves to the campaign's folder.
-    for (file, c) in [
-        ("dots.toml", CampaignToml::new("..", 1, 2)),
+    // A name or an output that resolves to the campaign's folder: refused by validation, at
+    // the field (the output guard, behind it, refuses `--out .` below).
+    for (file, c, field) in [
+        (
+            "dots.toml",
+            CampaignToml::new("..", 1, 2),
+            "dots.toml:1: field `name`",
+        ),
         (
             "up.toml",
             CampaignToml::new("up", 1, 2).top("output = \"new-folder/..\"\n"),
+            "up.toml:4: field `output`",
         ),
     ] {
         let c = c
@@ -566,7 +572,7 @@ fn a_users_files_are_never_replaced() {
             .tables("[sensor]\nwidth_px = 64\nheight_px = 64\nfov_radius_deg = 0.00625\n")
             .write(&tmp.path().join(file));
         let o = soig(&["run", c.to_str().unwrap(), "--quiet"], None);
-        assert_refused(&o, "campaign's folder");
+        assert_refused(&o, field);
         assert!(
             c.is_file() && campaign.is_file(),
             "the campaign folder was touched"
