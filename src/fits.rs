@@ -90,7 +90,8 @@ fn read<T: fitsio::images::ReadImage>(
     path: &Path,
 ) -> Result<(T, usize, usize), fitsio::errors::Error> {
     use fitsio::errors::Error;
-    let refuse = |m: &str| Error::Message(format!("{}: {m}", path.display()));
+    // The callers name the file.
+    let refuse = |m: &str| Error::Message(m.to_string());
     // cfitsio's own errors print as `FitsError { status: 108, .. }`: give its words instead.
     let plain = |e: Error| match e {
         Error::Fits(f) => refuse(&format!("{} (cfitsio status {})", f.message, f.status)),

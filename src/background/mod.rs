@@ -68,8 +68,10 @@ impl RealFrame {
             path: path.to_path_buf(),
             message: e.to_string(),
         };
-        let (raw, rows, cols) = crate::fits::read_f32(path)
-            .map_err(|e| err(&format!("not a readable 2-D FITS image ({e})")))?;
+        let (raw, rows, cols) = crate::fits::read_f32(path).map_err(|e| match e {
+            fitsio::errors::Error::Message(m) => err(&m),
+            e => err(&format!("not a readable 2-D FITS image ({e})")),
+        })?;
         let mut f = FitsFile::open(path).map_err(|e| err(&e))?;
         let hdu = f.primary_hdu().map_err(|e| err(&e))?;
         let exposure_s: f64 = ["EXPTIME", "EXPOSURE", "AEXPTIME"]
@@ -317,7 +319,7 @@ mod tests {
         std::fs::write(&text, "not a FITS file").unwrap();
         let e = RealFrame::load(&text).unwrap_err().to_string();
         assert!(
-            e.contains("text.fits") && e.contains("not a readable"),
+            e.contains("text.fits") && e.contains("not a FITS file"),
             "{e}"
         );
         // A noisy frame loads.

@@ -13,6 +13,15 @@ use toml::{Table, Value};
 use super::lines::{field_at_offset, field_keys, field_on_line, line_of_field, line_of_offset};
 use super::{CampaignError, CampaignFile, dir_of};
 
+/// The field a toml error at `offset` is about; none for a missing field, whose error points
+/// at the table that lacks it (and names the field itself).
+fn field_of_error(text: &str, offset: usize, message: &str) -> Option<String> {
+    if message.starts_with("missing field") {
+        return None;
+    }
+    field_at_offset(text, offset)
+}
+
 /// Where a layer's values come from.
 enum Source {
     File {
@@ -131,7 +140,9 @@ impl Layers {
             return toml::from_str(text).map_err(|e| CampaignError {
                 file: path.clone(),
                 line: e.span().map(|s| line_of_offset(text, s.start)),
-                field: e.span().and_then(|s| field_at_offset(text, s.start)),
+                field: e
+                    .span()
+                    .and_then(|s| field_of_error(text, s.start, e.message())),
                 message: e.message().trim().to_string(),
             });
         }
@@ -143,7 +154,9 @@ impl Layers {
         // and the layer that wrote that field answers for it.
         let text = toml::to_string(&merged).expect("a TOML table serialises");
         toml::from_str(&text).map_err(|e| {
-            let field = e.span().and_then(|s| field_at_offset(&text, s.start));
+            let field = e
+                .span()
+                .and_then(|s| field_of_error(&text, s.start, e.message()));
             let (file, line) = match &field {
                 Some(f) => self.locate(f),
                 None => (self.layers[self.leaf].source.label(), None),
