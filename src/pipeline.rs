@@ -324,12 +324,14 @@ fn render(
                     .into_iter()
                     .map(|r| format!("{r}: {}", rejection_fields(r)))
                     .collect();
-                anyhow::anyhow!(
-                    "{e}; in {}, field `debris[{}]`: remove the object, lower its `weight` or relax the rules (an object no draw shows is an error, not a silently smaller share); what decides each rejection: {}",
-                    campaign.source.display(),
-                    e.debris_index,
-                    fields.join("; ")
-                )
+                let at = campaign.error_at(
+                    &format!("debris[{}]", e.debris_index),
+                    format!(
+                        "{e}; remove the object, lower its `weight` or relax the rules (an object no draw shows is an error, not a silently smaller share); what decides each rejection: {}",
+                        fields.join("; ")
+                    ),
+                );
+                anyhow::anyhow!("{at}")
             })?;
             // Never a non-finite pixel in an output (an extreme gain or frame could make one).
             let bad = products

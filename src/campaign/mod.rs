@@ -57,13 +57,13 @@ pub struct Campaign {
     pub base_dir: PathBuf,
     /// The campaign file (or the name given to campaign text built in code), for messages.
     pub source: PathBuf,
-    /// Where each of `FILE_FIELDS` was written (file, line), for errors found when the files
-    /// they name are read (`Campaign::error_at`).
-    file_fields: Vec<(&'static str, PathBuf, Option<usize>)>,
+    /// Where each of `RUN_FIELDS` and each `debris[i]` was written (file, line), for errors
+    /// found only when the campaign runs (`Campaign::error_at`).
+    run_fields: Vec<(String, PathBuf, Option<usize>)>,
 }
 
 /// The fields naming files that are read only when a campaign runs (frames, model, catalogue).
-const FILE_FIELDS: [&str; 3] = ["background.paths", "detect.model", "stars.path"];
+const RUN_FIELDS: [&str; 3] = ["background.paths", "detect.model", "stars.path"];
 
 impl Campaign {
     /// Read, parse, validate and resolve a campaign file (and the files it `extends`).
@@ -129,21 +129,23 @@ impl Campaign {
             output_dir,
             base_dir,
             source: path.to_path_buf(),
-            file_fields: FILE_FIELDS
+            run_fields: RUN_FIELDS
                 .iter()
+                .map(|f| f.to_string())
+                .chain((0..file.debris.len()).map(|i| format!("debris[{i}]")))
                 .map(|f| {
-                    let e = layers.error(f, String::new());
-                    (*f, e.file, e.line)
+                    let e = layers.error(&f, String::new());
+                    (f, e.file, e.line)
                 })
                 .collect(),
         })
     }
 
-    /// An error about `field` (one of the fields naming files: `background.paths`,
-    /// `detect.model`, `stars.path`), at the file and line that wrote it.
+    /// An error found while running about `field` (`background.paths`, `detect.model`,
+    /// `stars.path` or `debris[i]`), at the file and line that wrote it.
     pub fn error_at(&self, field: &str, message: String) -> CampaignError {
         let (file, line) = self
-            .file_fields
+            .run_fields
             .iter()
             .find(|(f, _, _)| *f == field)
             .map_or((self.source.clone(), None), |(_, file, line)| {
