@@ -64,6 +64,7 @@ pub mod geometry;
 pub(crate) mod hash;
 pub mod imaging;
 pub mod journal;
+pub mod launch;
 pub mod manifest;
 pub mod merge;
 pub mod metrics;
