@@ -65,6 +65,7 @@ pub(crate) mod hash;
 pub mod imaging;
 pub mod input_file;
 pub mod journal;
+pub mod launch;
 pub mod manifest;
 pub mod merge;
 pub mod metrics;

@@ -67,6 +67,25 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Write a Slurm job array that runs the campaign as N shards (`soig run --shard auto`), a
+    /// merge job that depends on it (afterok), and submit.sh, which submits the two.
+    Slurm {
+        #[command(flatten)]
+        launch: LaunchArgs,
+    },
+    /// Write a Kubernetes Indexed Job that runs the campaign as N shards (`soig run --shard
+    /// auto/N`) on a shared volume, a merge Job, and submit.sh, which applies them in turn.
+    K8s {
+        #[command(flatten)]
+        launch: LaunchArgs,
+        /// The container image holding `soig` (on its PATH) and the campaign's inputs.
+        #[arg(long, default_value = "soig:latest")]
+        image: String,
+        /// The PersistentVolumeClaim mounted at /data in every pod, the pods' working directory:
+        /// campaign and output paths are taken relative to it.
+        #[arg(long, default_value = "soig-data")]
+        claim: String,
+    },
     /// Train a YOLOv8 model on the campaign's dataset through Ultralytics, export ONNX, and
     /// record the run in the manifest (needs `scripts/setup-train.sh`).
     Train {
@@ -222,6 +241,64 @@ enum EvalMode {
     Coco,
 }
 
+/// What `soig slurm` and `soig k8s` take.
+#[derive(clap::Args)]
+struct LaunchArgs {
+    /// The campaign TOML file.
+    campaign: PathBuf,
+    /// How many shards (array tasks, completion indexes).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    shards: u64,
+    /// The merged output (default: the campaign's); shard K writes `OUT-shard-K-of-N`.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Where the job files are written (default: `OUT-slurm` or `OUT-k8s`).
+    #[arg(long)]
+    scripts: Option<PathBuf>,
+    /// Override a campaign setting in every shard, as `soig run --set`. Repeatable.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+/// Check the campaign loads, then write the launcher's files; `local` jobs (Slurm) get
+/// absolute paths and this `soig`, pods their paths as given and the `soig` on their PATH.
+fn launch(
+    a: LaunchArgs,
+    engine: &str,
+    local: bool,
+    files: impl FnOnce(&soig::launch::Launch) -> Vec<soig::launch::File>,
+) -> anyhow::Result<()> {
+    let campaign = Campaign::load_with_overrides(&a.campaign, &a.set)?;
+    let out = a.out.unwrap_or_else(|| campaign.output_dir.clone());
+    let path = |p: PathBuf| {
+        if local {
+            std::path::absolute(&p)
+        } else {
+            Ok(p)
+        }
+    };
+    let l = soig::launch::Launch {
+        soig: if local {
+            std::env::current_exe()?
+        } else {
+            "soig".into()
+        },
+        campaign: path(a.campaign)?,
+        sets: a.set,
+        out: path(out.clone())?,
+        shards: a.shards,
+        name: campaign.resolved.name.clone(),
+    };
+    let dir = a.scripts.unwrap_or_else(|| {
+        let mut d = out.into_os_string();
+        d.push(format!("-{engine}"));
+        d.into()
+    });
+    soig::launch::write(&dir, &files(&l))?;
+    println!("{}", dir.join("submit.sh").display());
+    Ok(())
+}
+
 fn main() -> ExitCode {
     stop_cleanly_on_signals();
     let cli = Cli::parse();
@@ -265,16 +342,17 @@ fn main() -> ExitCode {
             quiet,
         } => user_errors(|| {
             let s = soig::merge::merge(&shards, &out, python.as_deref(), &*progress(quiet))?;
-            println!(
-                "{} images of {} shards merged in {:.1} s -> {}\ndigest {}",
-                s.resumed,
-                shards.len(),
-                s.seconds,
-                s.output.display(),
-                s.digest
-            );
+            print!("{}", s.merge_lines(shards.len()));
             Ok(())
         }),
+        Command::Slurm { launch: a } => {
+            user_errors(|| launch(a, "slurm", true, soig::launch::slurm))
+        }
+        Command::K8s {
+            launch: a,
+            image,
+            claim,
+        } => user_errors(|| launch(a, "k8s", false, |l| soig::launch::k8s(l, &image, &claim))),
         Command::Train {
             campaign,
             out,

@@ -26,7 +26,6 @@ pub fn clean_path(dir: &Path) -> PathBuf {
 impl RunSummary {
     /// What `soig run` ends with. The `digest HEX` line is for scripts and stays as it is.
     pub fn final_lines(&self) -> String {
-        let out = clean_path(&self.output);
         let resumed = match self.resumed {
             0 => String::new(),
             r => format!(" (and {r} resumed)"),
@@ -40,12 +39,24 @@ impl RunSummary {
                 n as f64 / self.seconds
             ),
         };
-        let mut s = format!(
-            "{} images{resumed}{rate} -> {}\ndigest {}\n",
-            self.images,
-            out.display(),
-            self.digest
+        let head = format!("{} images{resumed}{rate}", self.images);
+        self.lines(&head)
+    }
+
+    /// What `soig merge` of `shards` shard outputs ends with: `final_lines`, its first line
+    /// counting the images merged (all of them `resumed`: none rendered here).
+    pub fn merge_lines(&self, shards: usize) -> String {
+        let head = format!(
+            "{} images of {shards} shards merged in {:.1} s",
+            self.resumed, self.seconds
         );
+        self.lines(&head)
+    }
+
+    /// `head -> OUTPUT`, the digest, the report's headline and the debris mix.
+    fn lines(&self, head: &str) -> String {
+        let out = clean_path(&self.output);
+        let mut s = format!("{head} -> {}\ndigest {}\n", out.display(), self.digest);
         let report = self.output.join("report/report.json");
         if let Ok(r) = Report::read(&report) {
             let _ = writeln!(

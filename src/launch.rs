@@ -1,0 +1,464 @@
+//! Launchers: the files that run a campaign as N shards on a cluster engine and merge them.
+//! `slurm` writes a Slurm job array (one `soig run --shard auto` per task), a merge job and a
+//! `submit.sh` that chains them with `afterok`; `k8s` writes a Kubernetes Indexed Job (one
+//! `soig run --shard auto/N` per completion index, outputs on a shared volume), a merge Job
+//! and a `submit.sh` that applies the second once the first is complete. Every shard output
+//! is named as `soig run --shard` names it (`OUT-shard-K-of-N`), so the merge lists them.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use serde_json::{Value, json};
+
+use crate::shard::Shard;
+
+/// What the jobs run: `soig run CAMPAIGN --set ...` as `shards` shards, merged into `out`.
+pub struct Launch {
+    /// The `soig` the jobs call.
+    pub soig: PathBuf,
+    pub campaign: PathBuf,
+    /// `--set key=value` overrides, passed on to every shard.
+    pub sets: Vec<String>,
+    /// The merged output; shard K writes `OUT-shard-K-of-N`.
+    pub out: PathBuf,
+    pub shards: u64,
+    /// The campaign's name, from which job names are made.
+    pub name: String,
+}
+
+/// One file a launcher writes.
+pub struct File {
+    pub name: &'static str,
+    pub text: String,
+    /// Runnable (`submit.sh`).
+    pub executable: bool,
+}
+
+impl Launch {
+    fn shard_dirs(&self) -> Vec<PathBuf> {
+        (0..self.shards)
+            .map(|index| {
+                Shard {
+                    index,
+                    count: self.shards,
+                }
+                .output_dir(&self.out)
+            })
+            .collect()
+    }
+
+    /// `soig run CAMPAIGN --quiet --set ...` (without `--shard` and `--out`).
+    fn run_args(&self) -> Vec<String> {
+        let mut args = vec![
+            self.soig.display().to_string(),
+            "run".into(),
+            self.campaign.display().to_string(),
+            "--quiet".into(),
+        ];
+        for s in &self.sets {
+            args.extend(["--set".into(), s.clone()]);
+        }
+        args
+    }
+
+    /// `soig merge SHARD... --out OUT --quiet`.
+    fn merge_args(&self) -> Vec<String> {
+        let mut args = vec![self.soig.display().to_string(), "merge".into()];
+        args.extend(self.shard_dirs().iter().map(|d| d.display().to_string()));
+        args.extend([
+            "--out".into(),
+            self.out.display().to_string(),
+            "--quiet".into(),
+        ]);
+        args
+    }
+}
+
+/// `word` as one shell word: as it is when it holds only characters the shell leaves alone,
+/// else in single quotes (a `'` inside written `'\''`).
+pub fn shell_word(word: &str) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "_./,:=+@%-".contains(c);
+    if !word.is_empty() && word.chars().all(plain) {
+        word.to_string()
+    } else {
+        format!("'{}'", word.replace('\'', r"'\''"))
+    }
+}
+
+fn shell_line(args: &[String]) -> String {
+    args.iter()
+        .map(|a| shell_word(a))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// `name` reduced to the characters a job name may hold everywhere (a Kubernetes object name:
+/// lower-case letters, digits and `-`, at most 63), prefixed `soig-`.
+fn job_name(name: &str) -> String {
+    let mut s = String::from("soig-");
+    for c in name.chars() {
+        let c = c.to_ascii_lowercase();
+        s.push(if c.is_ascii_alphanumeric() { c } else { '-' });
+    }
+    // Room for the `-merge` suffix within 63.
+    s.truncate(57);
+    s.trim_end_matches('-').to_string()
+}
+
+/// The Slurm files: `array.sbatch`, `merge.sbatch`, `submit.sh`. Logs go to the folder the
+/// scripts are submitted from (`submit.sh` submits from its own), as `NAME-%A_%a.out` for the
+/// array (job id, task id) and `NAME-merge-%j.out` for the merge.
+pub fn slurm(l: &Launch) -> Vec<File> {
+    let name = job_name(&l.name);
+    let last = l.shards - 1;
+    // The task id is a number, so it may stand unquoted after the quoted output path.
+    let out = format!(
+        "{}-shard-${{SLURM_ARRAY_TASK_ID}}-of-{}",
+        shell_word(&l.out.display().to_string()),
+        l.shards
+    );
+    let array = format!(
+        "#!/bin/bash\n\
+         #SBATCH --job-name={name}\n\
+         #SBATCH --array=0-{last}\n\
+         #SBATCH --output={name}-%A_%a.out\n\
+         # One task per shard: task K renders shard K of {n} (`--shard auto` reads\n\
+         # SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT). A task that is requeued resumes.\n\
+         set -euo pipefail\n\
+         exec {run} --shard auto --out {out}\n",
+        n = l.shards,
+        run = shell_line(&l.run_args()),
+    );
+    let merge = format!(
+        "#!/bin/bash\n\
+         #SBATCH --job-name={name}-merge\n\
+         #SBATCH --output={name}-merge-%j.out\n\
+         # Runs after every task of the array succeeded (submit.sh: --dependency=afterok).\n\
+         set -euo pipefail\n\
+         exec {}\n",
+        shell_line(&l.merge_args())
+    );
+    let submit = "#!/bin/bash\n\
+         # Submit the shard array, then the merge to run once all its tasks succeeded\n\
+         # (cancelled if one fails). Prints the two job ids.\n\
+         set -euo pipefail\n\
+         cd \"$(dirname \"$0\")\"\n\
+         array=$(sbatch --parsable array.sbatch)\n\
+         array=${array%%;*}\n\
+         merge=$(sbatch --parsable --dependency=afterok:\"$array\" --kill-on-invalid-dep=yes merge.sbatch)\n\
+         merge=${merge%%;*}\n\
+         echo \"array job $array\"\n\
+         echo \"merge job $merge\"\n"
+        .to_string();
+    vec![
+        File {
+            name: "array.sbatch",
+            text: array,
+            executable: false,
+        },
+        File {
+            name: "merge.sbatch",
+            text: merge,
+            executable: false,
+        },
+        File {
+            name: "submit.sh",
+            text: submit,
+            executable: true,
+        },
+    ]
+}
+
+/// Where the shared volume is mounted in every pod; campaign and output paths are relative
+/// to it (the pods' working directory).
+pub const MOUNT: &str = "/data";
+
+/// A Job running `command` in `image` with the claim `claim` mounted at `MOUNT`.
+fn job(name: &str, image: &str, claim: &str, command: Vec<String>, env: Value) -> Value {
+    json!({
+        "apiVersion": "batch/v1",
+        "kind": "Job",
+        "metadata": {"name": name, "labels": {"app": "soig"}},
+        "spec": {
+            "template": {
+                "metadata": {"labels": {"app": "soig", "job": name}},
+                "spec": {
+                    "restartPolicy": "Never",
+                    "containers": [{
+                        "name": "soig",
+                        "image": image,
+                        "workingDir": MOUNT,
+                        "command": command,
+                        "env": env,
+                        "volumeMounts": [{"name": "data", "mountPath": MOUNT}],
+                    }],
+                    "volumes": [{"name": "data", "persistentVolumeClaim": {"claimName": claim}}],
+                },
+            },
+        },
+    })
+}
+
+/// The two Kubernetes Jobs: the Indexed Job of the shards and the merge Job.
+pub fn k8s_jobs(l: &Launch, image: &str, claim: &str) -> (Value, Value) {
+    let name = job_name(&l.name);
+    let mut run = l.run_args();
+    // `$(SHARD)` is expanded by Kubernetes from the container's env, below.
+    let out = format!("{}-shard-$(SHARD)-of-{}", l.out.display(), l.shards);
+    run.extend([
+        "--shard".into(),
+        format!("auto/{}", l.shards),
+        "--out".into(),
+        out,
+    ]);
+    let env = json!([{"name": "SHARD", "valueFrom": {"fieldRef": {
+        "fieldPath": "metadata.annotations['batch.kubernetes.io/job-completion-index']"
+    }}}]);
+    let mut shards = job(&name, image, claim, run, env);
+    let spec = &mut shards["spec"];
+    spec["completionMode"] = json!("Indexed");
+    spec["completions"] = json!(l.shards);
+    spec["parallelism"] = json!(l.shards);
+    // A failed shard is retried on its own (and resumes what its pod finished), twice.
+    spec["backoffLimitPerIndex"] = json!(2);
+    let mut merge = job(
+        &format!("{name}-merge"),
+        image,
+        claim,
+        l.merge_args(),
+        json!([]),
+    );
+    merge["spec"]["backoffLimit"] = json!(1);
+    (shards, merge)
+}
+
+/// The Kubernetes files: `shards.yaml`, `merge.yaml`, `submit.sh`.
+pub fn k8s(l: &Launch, image: &str, claim: &str) -> Vec<File> {
+    let (shards, merge) = k8s_jobs(l, image, claim);
+    let name = job_name(&l.name);
+    let submit = format!(
+        "#!/bin/bash\n\
+         # Start the shards, wait until every index has completed, then start the merge.\n\
+         set -euo pipefail\n\
+         cd \"$(dirname \"$0\")\"\n\
+         kubectl apply -f shards.yaml\n\
+         kubectl wait --for=condition=complete --timeout=-1s job/{name}\n\
+         kubectl apply -f merge.yaml\n\
+         kubectl wait --for=condition=complete --timeout=-1s job/{name}-merge\n\
+         kubectl logs job/{name}-merge\n"
+    );
+    vec![
+        File {
+            name: "shards.yaml",
+            text: yaml(&shards),
+            executable: false,
+        },
+        File {
+            name: "merge.yaml",
+            text: yaml(&merge),
+            executable: false,
+        },
+        File {
+            name: "submit.sh",
+            text: submit,
+            executable: true,
+        },
+    ]
+}
+
+/// `v` as a block YAML document. Strings are written as JSON strings, which YAML reads as
+/// double-quoted scalars, so no value is ever taken for a number, a boolean or a comment.
+pub fn yaml(v: &Value) -> String {
+    let mut s = String::new();
+    block(v, 0, &mut s);
+    s
+}
+
+fn scalar(v: &Value) -> String {
+    match v {
+        Value::Array(a) if a.is_empty() => "[]".into(),
+        Value::Object(o) if o.is_empty() => "{}".into(),
+        other => other.to_string(),
+    }
+}
+
+/// A mapping key: bare when it is a plain name (`apiVersion`), else quoted.
+fn key(k: &str) -> String {
+    if !k.is_empty() && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        k.to_string()
+    } else {
+        Value::from(k).to_string()
+    }
+}
+
+fn nested(v: &Value) -> bool {
+    matches!(v, Value::Array(a) if !a.is_empty()) || matches!(v, Value::Object(o) if !o.is_empty())
+}
+
+fn block(v: &Value, indent: usize, s: &mut String) {
+    let pad = " ".repeat(indent);
+    match v {
+        Value::Object(o) if !o.is_empty() => {
+            for (k, v) in o {
+                if nested(v) {
+                    let _ = writeln!(s, "{pad}{}:", key(k));
+                    block(v, indent + 2, s);
+                } else {
+                    let _ = writeln!(s, "{pad}{}: {}", key(k), scalar(v));
+                }
+            }
+        }
+        Value::Array(a) if !a.is_empty() => {
+            for v in a {
+                if nested(v) {
+                    // The item's first line starts with `- ` in place of its indentation.
+                    let mut item = String::new();
+                    block(v, indent + 2, &mut item);
+                    let _ = write!(s, "{pad}- {}", &item[indent + 2..]);
+                } else {
+                    let _ = writeln!(s, "{pad}- {}", scalar(v));
+                }
+            }
+        }
+        other => {
+            let _ = writeln!(s, "{pad}{}", scalar(other));
+        }
+    }
+}
+
+/// Write `files` into `dir` (created if missing).
+pub fn write(dir: &Path, files: &[File]) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    for f in files {
+        let path = dir.join(f.name);
+        std::fs::write(&path, &f.text).with_context(|| format!("writing {}", path.display()))?;
+        if f.executable {
+            use std::os::unix::fs::PermissionsExt;
+            std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755))
+                .with_context(|| format!("making {} executable", path.display()))?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn launch(shards: u64) -> Launch {
+        Launch {
+            soig: "/opt/soig/bin/soig".into(),
+            campaign: "/home/me/my campaigns/quick start.toml".into(),
+            sets: vec!["images=6".into(), "name=it's".into()],
+            out: "/scratch/run s/q".into(),
+            shards,
+            name: "Quick_Start".into(),
+        }
+    }
+
+    fn text<'a>(files: &'a [File], name: &str) -> &'a str {
+        &files.iter().find(|f| f.name == name).unwrap().text
+    }
+
+    #[test]
+    fn shell_words_quote_what_the_shell_would_split() {
+        assert_eq!(shell_word("a/b-c_1.toml"), "a/b-c_1.toml");
+        assert_eq!(shell_word("a b"), "'a b'");
+        assert_eq!(shell_word("it's"), r"'it'\''s'");
+        assert_eq!(shell_word("$HOME"), "'$HOME'");
+        assert_eq!(shell_word(""), "''");
+    }
+
+    #[test]
+    fn job_names_are_kubernetes_names() {
+        assert_eq!(job_name("Quick_Start"), "soig-quick-start");
+        let long = job_name(&"x".repeat(100));
+        assert!(long.len() <= 57 && long.starts_with("soig-x"));
+    }
+
+    #[test]
+    fn slurm_array_runs_one_shard_per_task_and_merge_waits_for_it() {
+        let files = slurm(&launch(3));
+        let array = text(&files, "array.sbatch");
+        assert!(array.starts_with("#!/bin/bash\n#SBATCH --job-name=soig-quick-start\n"));
+        assert!(array.contains("\n#SBATCH --array=0-2\n"));
+        assert!(array.contains("\n#SBATCH --output=soig-quick-start-%A_%a.out\n"));
+        assert!(array.contains(
+            "exec /opt/soig/bin/soig run '/home/me/my campaigns/quick start.toml' --quiet \
+             --set images=6 --set 'name=it'\\''s' --shard auto \
+             --out '/scratch/run s/q'-shard-${SLURM_ARRAY_TASK_ID}-of-3\n"
+        ));
+        let merge = text(&files, "merge.sbatch");
+        assert!(merge.contains(
+            "exec /opt/soig/bin/soig merge '/scratch/run s/q-shard-0-of-3' \
+             '/scratch/run s/q-shard-1-of-3' '/scratch/run s/q-shard-2-of-3' \
+             --out '/scratch/run s/q' --quiet\n"
+        ));
+        let submit = text(&files, "submit.sh");
+        assert!(submit.contains("--dependency=afterok:\"$array\""));
+        assert!(
+            files
+                .iter()
+                .find(|f| f.name == "submit.sh")
+                .unwrap()
+                .executable
+        );
+    }
+
+    #[test]
+    fn one_shard_is_an_array_of_one() {
+        assert!(text(&slurm(&launch(1)), "array.sbatch").contains("--array=0-0\n"));
+    }
+
+    #[test]
+    fn k8s_indexed_job_runs_one_shard_per_index() {
+        let (shards, merge) = k8s_jobs(&launch(4), "reg/soig:1", "soig-data");
+        assert_eq!(shards["apiVersion"], "batch/v1");
+        let spec = &shards["spec"];
+        assert_eq!(spec["completionMode"], "Indexed");
+        assert_eq!(spec["completions"], 4);
+        assert_eq!(spec["parallelism"], 4);
+        let pod = &spec["template"]["spec"];
+        assert_eq!(pod["restartPolicy"], "Never");
+        assert_eq!(
+            pod["volumes"][0]["persistentVolumeClaim"]["claimName"],
+            "soig-data"
+        );
+        let c = &pod["containers"][0];
+        assert_eq!(c["volumeMounts"][0]["mountPath"], MOUNT);
+        let cmd: Vec<&str> = c["command"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap())
+            .collect();
+        // Kubernetes passes each item as one argument: no shell quoting here.
+        assert_eq!(
+            cmd[cmd.len() - 4..],
+            [
+                "--shard",
+                "auto/4",
+                "--out",
+                "/scratch/run s/q-shard-$(SHARD)-of-4"
+            ]
+        );
+        assert_eq!(c["env"][0]["name"], "SHARD");
+        let m = merge["spec"]["template"]["spec"]["containers"][0]["command"]
+            .as_array()
+            .unwrap();
+        assert_eq!(m[1], "merge");
+        assert_eq!(m[2], "/scratch/run s/q-shard-0-of-4");
+        assert_eq!(m[5], "/scratch/run s/q-shard-3-of-4");
+        assert_eq!(merge["metadata"]["name"], "soig-quick-start-merge");
+    }
+
+    #[test]
+    fn yaml_is_block_style_with_quoted_strings() {
+        let v = json!({"a": 1, "b": ["x y", {"c": "yes", "d": [2]}], "e f": {}, "g": []});
+        assert_eq!(
+            yaml(&v),
+            "a: 1\nb:\n  - \"x y\"\n  - c: \"yes\"\n    d:\n      - 2\n\"e f\": {}\ng: []\n"
+        );
+    }
+}
