@@ -6,7 +6,8 @@
 //! `TRIMSEC`, else `DATASEC`, then edge columns whose level steps away from the sky's, found
 //! from column medians); its large-scale structure (a gradient, a dark's row drift) is
 //! flattened to its median; a science frame's sources and star trails (connected faint
-//! structure of the smoothed frame, so an arc is masked along its length) are replaced by
+//! structure of the smoothed frame, and fainter lines and arcs found by a line filter along
+//! many orientations, `trails`) are replaced by
 //! clean pixels of their own neighbourhood, while a dark frame (shutter closed) is the
 //! sensor's noise as it is, hot pixels included. Per image only the cheap fill runs (`fill`):
 //! overlapping blocks from random places of the field, cross-faded, so any image size is
@@ -17,6 +18,7 @@
 
 mod fill;
 mod prepare;
+mod trails;
 
 use std::path::{Path, PathBuf};
 
@@ -58,6 +60,8 @@ pub struct RealFrame {
     pub sigma: f64,
     /// Pixels replaced because they held sources, trails or defects.
     pub masked: usize,
+    /// Which pixels of `pixels` were replaced (row-major, `width * height`).
+    pub filled: Vec<bool>,
 }
 
 impl RealFrame {
@@ -170,6 +174,7 @@ impl RealFrame {
             median,
             sigma,
             masked,
+            filled: mask,
         })
     }
 
@@ -267,6 +272,7 @@ mod tests {
             median: 100.0,
             sigma: 3.7,
             masked: 0,
+            filled: vec![false; 300 * 300],
         }
     }
 

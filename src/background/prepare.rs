@@ -168,8 +168,9 @@ const TRAIL_MIN_PX: usize = 200;
 const MASK_GROW_PX: usize = 2;
 
 /// The pixels of a flattened frame that hold sources, defects or star trails: single pixels
-/// beyond `PIXEL_SIGMA` and connected faint structure of the smoothed frame (a trail is a line
-/// or an arc: found along its length, not as a blob), the latter grown.
+/// beyond `PIXEL_SIGMA`, connected faint structure of the smoothed frame (a trail is a line
+/// or an arc: found along its length, not as a blob), the latter grown, and the lines and arcs
+/// of `trails` (fainter trails, found by a line filter).
 pub fn source_mask(pixels: &[f32], width: usize, height: usize) -> Vec<bool> {
     let (median, sigma) = robust_stats(pixels);
     let outliers: Vec<bool> = pixels
@@ -198,10 +199,12 @@ pub fn source_mask(pixels: &[f32], width: usize, height: usize) -> Vec<bool> {
             }
         }
     }
+    let lines = super::trails::trail_mask(pixels, width, height);
     grow(&trails, width, height, MASK_GROW_PX)
         .into_iter()
         .zip(outliers)
-        .map(|(t, o)| t || o)
+        .zip(lines)
+        .map(|((t, o), l)| t || o || l)
         .collect()
 }
 
@@ -231,7 +234,12 @@ fn box_mean(v: &[f32], width: usize, height: usize, r: usize) -> Vec<f32> {
 }
 
 /// The 8-connected components of the pixels above `threshold`, as pixel indices.
-fn components(v: &[f32], width: usize, height: usize, threshold: f32) -> Vec<Vec<usize>> {
+pub(super) fn components(
+    v: &[f32],
+    width: usize,
+    height: usize,
+    threshold: f32,
+) -> Vec<Vec<usize>> {
     let mut seen = vec![false; v.len()];
     let mut out = Vec::new();
     for start in 0..v.len() {
@@ -273,7 +281,7 @@ const NEIGHBOURS: [(isize, isize); 8] = [
 ];
 
 /// A mask grown by `g` pixels (a square structuring element).
-fn grow(mask: &[bool], width: usize, height: usize, g: usize) -> Vec<bool> {
+pub(super) fn grow(mask: &[bool], width: usize, height: usize, g: usize) -> Vec<bool> {
     // Separable: grow the rows, then the columns.
     let mut rows = vec![false; mask.len()];
     for y in 0..height {
