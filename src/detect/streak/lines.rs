@@ -4,14 +4,19 @@
 use std::f64::consts::PI;
 
 use super::Sanitized;
+use super::noise::LineNoise;
 use super::smooth::corr;
 
 /// Best response (sigma) and best orientation index per pixel.
 #[inline(never)]
-pub(super) fn line_filter(zc: &[f32], w: usize, h: usize, p: &Sanitized) -> (Vec<f32>, Vec<u8>) {
+pub(super) fn line_filter(
+    zc: &[f32],
+    w: usize,
+    h: usize,
+    p: &Sanitized,
+    noise: &LineNoise,
+) -> (Vec<f32>, Vec<u8>) {
     let n = p.n_angles;
-    let hmax = *p.half_lengths.last().unwrap();
-    let kmax = 2 * hmax + 1;
     // Steep (y-major) lines advance one row per step in the image itself; flat (x-major) lines
     // advance one row per step in the transposed image.
     let mut zt = vec![0f32; w * h];
@@ -20,29 +25,12 @@ pub(super) fn line_filter(zc: &[f32], w: usize, h: usize, p: &Sanitized) -> (Vec
     let mut best_t = vec![f32::NEG_INFINITY; w * h];
     let mut accs: Vec<Vec<f32>> = vec![Vec::new(); p.half_lengths.len()];
     for j in 0..n {
-        let th = j as f64 * PI / n as f64;
-        let (c, s) = (th.cos(), th.sin());
-        let x_major = c.abs() >= s.abs() - 1e-12;
-        let t = if x_major { s / c } else { c / s };
-        // Noise sd of a sum of the first m terms of this digital line, m = 0..=kmax.
-        let pts: Vec<(f64, f64)> = (0..kmax)
-            .map(|k| (k as f64, (k as f64 * t).round()))
-            .collect();
-        let mut sd = vec![1f64; kmax + 1];
-        let mut var = 0.0;
-        for m in 0..kmax {
-            let mut add = 1.0;
-            for q in &pts[..m] {
-                let (dx, dy) = (pts[m].0 - q.0, pts[m].1 - q.1);
-                add += 2.0 * corr(dx * dx + dy * dy, p.psf_sigma);
-            }
-            var += add;
-            sd[m + 1] = var.sqrt();
-        }
-        let inv: Vec<f32> = p
-            .half_lengths
+        let (x_major, t) = slope(j, n);
+        let model = model_sd(j, p);
+        let inv: Vec<f32> = model
             .iter()
-            .map(|&hk| (1.0 / sd[2 * hk + 1]) as f32)
+            .enumerate()
+            .map(|(l, &sd)| (1.0 / (sd * noise.at(j, l))) as f32)
             .collect();
         let sw = Sweep {
             halves: &p.half_lengths,
@@ -66,6 +54,38 @@ pub(super) fn line_filter(zc: &[f32], w: usize, h: usize, p: &Sanitized) -> (Vec
         *b = v;
     }
     (best, arg)
+}
+
+/// Whether orientation `j` of `n` is x-major (steps along x), and its slope: minor-axis
+/// offset per major-axis step, |t| <= 1.
+pub(super) fn slope(j: usize, n: usize) -> (bool, f64) {
+    let th = j as f64 * PI / n as f64;
+    let (c, s) = (th.cos(), th.sin());
+    let x_major = c.abs() >= s.abs() - 1e-12;
+    (x_major, if x_major { s / c } else { c / s })
+}
+
+/// White-noise sd of the sums of the unit-noise smoothed map along the digital line of
+/// orientation `j`, one per filter length (pixels of the line correlated through the Gaussian).
+pub(super) fn model_sd(j: usize, p: &Sanitized) -> Vec<f64> {
+    let t = slope(j, p.n_angles).1;
+    let kmax = 2 * p.half_lengths.last().expect("at least one length") + 1;
+    let pts: Vec<(f64, f64)> = (0..kmax)
+        .map(|k| (k as f64, (k as f64 * t).round()))
+        .collect();
+    // sd[m]: noise sd of the sum of the first m terms.
+    let mut sd = vec![1f64; kmax + 1];
+    let mut var = 0.0;
+    for m in 0..kmax {
+        let mut add = 1.0;
+        for q in &pts[..m] {
+            let (dx, dy) = (pts[m].0 - q.0, pts[m].1 - q.1);
+            add += 2.0 * corr(dx * dx + dy * dy, p.psf_sigma);
+        }
+        var += add;
+        sd[m + 1] = var.sqrt();
+    }
+    p.half_lengths.iter().map(|&hk| sd[2 * hk + 1]).collect()
 }
 
 /// Blocked transpose of a `w` x `h` row-major map into `h` x `w`.

@@ -12,7 +12,7 @@ pub(super) fn angle_diff_deg(a: f64, b: f64) -> f64 {
 
 impl Ctx<'_> {
     /// Whether the profile samples of `s` farther than `duplicate_distance_px` from all `others`
-    /// still make `min_length_px` samples and `min_snr` (median level times count over the
+    /// still make `min_length_px` samples and `min_snr` (median contrast times count over the
     /// noise sd of that many samples).
     pub(super) fn survives(&self, s: &Seg, others: &[(Point, Point)]) -> bool {
         let (ux, uy) = s.dir();
@@ -20,6 +20,7 @@ impl Ctx<'_> {
         let hl = 0.5 * s.length;
         let ta = (-hl + 0.5).ceil() as i64;
         let tb = (hl - 0.5).floor() as i64;
+        let taps = self.contrast_taps();
         let mut vals = Vec::new();
         for t in ta..=tb {
             let (x, y) = (s.cx + t as f64 * ux, s.cy + t as f64 * uy);
@@ -29,13 +30,13 @@ impl Ctx<'_> {
             {
                 continue;
             }
-            vals.push(self.cross_mean(x, y, nx, ny));
+            vals.push(self.contrast(&taps, x, y, nx, ny));
         }
         let n = vals.len();
         if (n as f64) < self.p.min_length || n == 0 {
             return false;
         }
-        median_of(&mut vals) * n as f64 / self.profile_sum_sd(n) >= self.p.min_snr
+        median_of(&mut vals) * n as f64 / self.contrast_sum_sd(&taps, s.theta, n) >= self.p.min_snr
     }
 
     /// Merge collinear fragments until none merge. Fragments join `done`, in which no two

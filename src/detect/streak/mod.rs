@@ -22,7 +22,10 @@
 //!    centred on every pixel (running sums over rows of the image or of its transpose, O(1) per
 //!    pixel and filter, contiguous memory). Each sum is divided by its noise standard deviation
 //!    (white pixel noise smoothed by the Gaussian, exact for the digital line), so every filter
-//!    output is in sigma; beyond the image counts as zero (conservative near the edges). Per
+//!    output is in sigma; beyond the image counts as zero (conservative near the edges). The
+//!    clipped map is first made zero-mean, and each filter's sigma is the larger of the
+//!    white-noise value and the one measured on the image (`noise`: real sensors' noise is
+//!    correlated and skewed). Per
 //!    pixel the maximum over filters and its orientation are kept.
 //! 4. **Components.** Pixels with response >= `threshold_sigma` are joined by 8-connectivity,
 //!    but only between pixels whose best orientations differ by at most `angle_link_bins`
@@ -35,10 +38,11 @@
 //!    at lateral offsets -1, 0, 1 px) is read, the streak level is the median of `p` in the
 //!    component's inner part, and each end is the change point maximising the cumulative sum
 //!    of `min(p, 1.5 level) - level / 2` outwards (the half-level crossing, robust to noise
-//!    dips). Measured on the refined segment: length between the ends; SNR = median of `p`
-//!    over the segment times its sample count, divided by the noise standard deviation of that
-//!    sum (white-noise model; the median keeps a bright star on the axis from making a
-//!    streak); flux = sum of background-subtracted grey levels within `3 psf_sigma_px` of the
+//!    dips). Measured on the refined segment: length between the ends; SNR = median over the
+//!    segment of the contrast (`p` less the mean of side bands beyond the cross-section, so a
+//!    raised patch of background is no streak) times its sample count, divided by the noise
+//!    standard deviation of that sum (white-noise model times the measured excess of step 3;
+//!    the median keeps a bright star on the axis from making a streak); flux = sum of background-subtracted grey levels within `3 psf_sigma_px` of the
 //!    segment; elongation = sqrt(l1 / l2) of the second moments of the pixels within
 //!    `3 psf_sigma_px` of the segment weighted by `z` clipped to `[0, clip_sigma]` (a streak of
 //!    length L: about L / (sqrt(12) 2.5); a star: about 1).
@@ -51,8 +55,10 @@
 //!    Explaining away, best score first: the profile samples of a candidate within
 //!    `duplicate_distance_px` of a better candidate are ignored and the rest must still pass
 //!    the length and SNR tests (drops duplicates and the off-axis echoes of bright streaks).
-//! 7. **Output.** Score (monotone increasing in SNR and in elongation, in [0, 1)):
-//!    `(1 - exp(-snr / score_snr_scale)) * (1 - exp(-(elongation - 1) / score_elongation_scale))`.
+//! 7. **Output.** Confidence (monotone increasing in SNR and in elongation, in [0, 1]): the
+//!    probability that noise alone gives no candidate that significant in an image this size,
+//!    under a Gumbel model calibrated by `confidence_snr` and `confidence_snr_scale`, times
+//!    `1 - exp(-(elongation - 1) / confidence_elongation_scale)` (see `output::confidence`).
 //!    Box: the refined segment padded by `box_pad_along_sigma * psf_sigma_px` along the axis and
 //!    `box_pad_across_sigma * psf_sigma_px` across it (bounding box of that ellipse-capped
 //!    segment), which matches the label convention of the generator (the box holding all but
@@ -75,6 +81,7 @@ mod background;
 mod components;
 mod lines;
 mod merge;
+mod noise;
 mod output;
 mod refine;
 mod smooth;
@@ -89,7 +96,8 @@ use background::background;
 use components::components;
 use lines::line_filter;
 use merge::angle_diff_deg;
-use output::score;
+use noise::LineNoise;
+use output::confidence;
 use refine::{Ctx, Point, Seed, Seg};
 use smooth::{equalise_edge_noise, gaussian_kernel, smooth};
 use stars::mask_stars;
@@ -162,10 +170,15 @@ pub struct StreakParams {
     pub box_pad_along_sigma: f64,
     /// Box padding across the streak axis, in PSF sigmas (default 3.0).
     pub box_pad_across_sigma: f64,
-    /// SNR scale of the score (default 10.0).
-    pub score_snr_scale: f64,
-    /// Elongation scale of the score (default 3.0).
-    pub score_elongation_scale: f64,
+    /// The SNR at which a 1024 x 1024 image's candidate has confidence 0.5: where noise alone
+    /// gives a candidate that strong in half of such images (default 9.0).
+    pub confidence_snr: f64,
+    /// Each step of this much SNR above `confidence_snr` divides the expected number of noise
+    /// candidates that strong by e (default 1.0).
+    pub confidence_snr_scale: f64,
+    /// Elongation scale of the confidence's shape factor `1 - exp(-(elongation - 1) / this)`
+    /// (default 3.0).
+    pub confidence_elongation_scale: f64,
     /// Class written into the detections (default 0).
     pub class: u32,
     /// At most this many candidates are returned, best first (default 16).
@@ -200,8 +213,9 @@ impl Default for StreakParams {
             duplicate_distance_px: 10.0,
             box_pad_along_sigma: 1.0,
             box_pad_across_sigma: 3.0,
-            score_snr_scale: 10.0,
-            score_elongation_scale: 3.0,
+            confidence_snr: 9.0,
+            confidence_snr_scale: 1.0,
+            confidence_elongation_scale: 3.0,
             class: 0,
             max_candidates: 16,
         }
@@ -326,13 +340,18 @@ impl StreakParams {
                 nonneg,
             ),
             (
-                "score_snr_scale",
-                fin(self.score_snr_scale) && self.score_snr_scale > 0.0,
+                "confidence_snr",
+                fin(self.confidence_snr),
+                "must be a finite number",
+            ),
+            (
+                "confidence_snr_scale",
+                fin(self.confidence_snr_scale) && self.confidence_snr_scale > 0.0,
                 "must be a positive finite number",
             ),
             (
-                "score_elongation_scale",
-                fin(self.score_elongation_scale) && self.score_elongation_scale > 0.0,
+                "confidence_elongation_scale",
+                fin(self.confidence_elongation_scale) && self.confidence_elongation_scale > 0.0,
                 "must be a positive finite number",
             ),
             ("max_candidates", self.max_candidates >= 1, "must be >= 1"),
@@ -409,10 +428,17 @@ pub fn detect_streaks(
     }
     mask_stars(&mut z, w, h, &p);
     let clip = p.clip as f32;
-    let zc: Vec<f32> = z.iter().map(|&v| v.clamp(-clip, clip)).collect();
+    let mut zc: Vec<f32> = z.iter().map(|&v| v.clamp(-clip, clip)).collect();
+    // The line filter sums zc, so zc must have zero mean, not only zero median: a real
+    // sensor's skewed noise (warm pixels) has its mean above its median (0.2 sigma on the
+    // NEOSSat dark frame), which summed over 51 pixels made every line a "5 sigma" fragment.
+    // A streak covers too few pixels to move the mean.
+    let mean = zc.iter().map(|&v| v as f64).sum::<f64>() / zc.len() as f64;
+    zc.iter_mut().for_each(|v| *v -= mean as f32);
 
-    // 3. Oriented line filter.
-    let (best, arg) = line_filter(&zc, w, h, &p);
+    // 3. Oriented line filter, in units of its measured noise.
+    let noise = LineNoise::measure(&zc, w, h, &p);
+    let (best, arg) = line_filter(&zc, w, h, &p, &noise);
 
     // 4. Components.
     let comps = components(&best, &arg, w, h, &p);
@@ -425,6 +451,7 @@ pub fn detect_streaks(
         bg: &bg,
         z: &z,
         p: &p,
+        noise: &noise,
     };
     let trail = star_trail_angle_deg.filter(|a| a.is_finite());
     // A short segment's orientation is uncertain by about its width over its length, so the
@@ -467,7 +494,7 @@ pub fn detect_streaks(
                 && !aligned(s)
         })
         .map(|s| {
-            let score = score(s.snr, s.elongation, &p);
+            let score = confidence(s.snr, s.elongation, (w * h) as f64, &p);
             (s, score)
         })
         .collect();
@@ -522,8 +549,9 @@ struct Sanitized {
     dup_dist: f64,
     pad_along: f64,
     pad_across: f64,
-    snr_scale: f64,
-    elong_scale: f64,
+    confidence_snr: f64,
+    confidence_scale: f64,
+    elongation_scale: f64,
     class: u32,
     max_candidates: usize,
 }
@@ -569,8 +597,10 @@ impl Sanitized {
             dup_dist: fin(p.duplicate_distance_px, d.duplicate_distance_px),
             pad_along: fin(p.box_pad_along_sigma, d.box_pad_along_sigma).max(0.0),
             pad_across: fin(p.box_pad_across_sigma, d.box_pad_across_sigma).max(0.0),
-            snr_scale: fin(p.score_snr_scale, d.score_snr_scale).max(1e-9),
-            elong_scale: fin(p.score_elongation_scale, d.score_elongation_scale).max(1e-9),
+            confidence_snr: fin(p.confidence_snr, d.confidence_snr),
+            confidence_scale: fin(p.confidence_snr_scale, d.confidence_snr_scale).max(1e-9),
+            elongation_scale: fin(p.confidence_elongation_scale, d.confidence_elongation_scale)
+                .max(1e-9),
             class: p.class,
             max_candidates: p.max_candidates,
         }

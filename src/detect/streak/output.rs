@@ -3,12 +3,24 @@
 use super::refine::{Ctx, Seg};
 use super::{Candidate, Detection, Sanitized};
 
-/// Score in [0, 1): increasing in SNR and in elongation.
-pub(super) fn score(snr: f64, elongation: f64, p: &Sanitized) -> f64 {
-    let a = 1.0 - (-snr.max(0.0) / p.snr_scale).exp();
-    let b = 1.0 - (-(elongation - 1.0).max(0.0) / p.elong_scale).exp();
-    (a * b).clamp(0.0, 1.0)
+/// Confidence in [0, 1): the probability that noise alone gives no candidate as significant
+/// in an image of `area_px` pixels, under a Gumbel model of the most significant noise candidate
+/// (the maximum of many nearly Gaussian tests has a Gumbel tail): noise candidates of SNR >= s
+/// are expected `(area_px / 2^20) exp(-(s - confidence_snr) / confidence_snr_scale) ln 2` times,
+/// so a long streak in a 1024 x 1024 image scores 0.5 at `confidence_snr`; times
+/// `1 - exp(-(elongation - 1) / confidence_elongation_scale)`, which leaves long streaks alone
+/// but keeps short ones (elongation about 3 at 25 px), where unmasked bright stars and warm
+/// pixel clusters also reach a high SNR, below 0.5.
+pub(super) fn confidence(snr: f64, elongation: f64, area_px: f64, p: &Sanitized) -> f64 {
+    let expected = (area_px / MEGAPIXEL)
+        * (-(snr - p.confidence_snr) / p.confidence_scale).exp()
+        * std::f64::consts::LN_2;
+    let shape = 1.0 - (-(elongation - 1.0).max(0.0) / p.elongation_scale).exp();
+    ((-expected).exp() * shape).clamp(0.0, 1.0)
 }
+
+/// The reference image area of the confidence: 1024 x 1024 pixels.
+const MEGAPIXEL: f64 = 1_048_576.0;
 
 impl Ctx<'_> {
     pub(super) fn candidate(&self, s: &Seg, score: f64) -> Candidate {
@@ -47,22 +59,29 @@ mod tests {
     use super::*;
 
     #[test]
-    fn score_is_monotone_and_bounded() {
+    fn confidence_is_monotone_bounded_and_half_at_its_snr() {
         let p = Sanitized::new(&StreakParams::default());
+        // A long streak: the shape factor is 1 to 1e-12.
+        let long = 100.0;
         let mut prev = -1.0;
         for i in 0..200 {
-            let snr = i as f64 * 0.5;
-            let s = score(snr, 8.0, &p);
-            assert!((0.0..1.0).contains(&s) && s >= prev);
-            prev = s;
+            let c = confidence(i as f64 * 0.25, long, MEGAPIXEL, &p);
+            assert!((0.0..=1.0).contains(&c) && c >= prev, "{i} {c}");
+            prev = c;
         }
         let mut prev = -1.0;
         for i in 0..200 {
-            let s = score(12.0, 1.0 + i as f64 * 0.25, &p);
-            assert!((0.0..1.0).contains(&s) && s >= prev);
-            prev = s;
+            let c = confidence(12.0, 1.0 + i as f64 * 0.25, MEGAPIXEL, &p);
+            assert!((0.0..=1.0).contains(&c) && c >= prev, "{i} {c}");
+            prev = c;
         }
-        assert_eq!(score(0.0, 10.0, &p), 0.0);
-        assert_eq!(score(10.0, 1.0, &p), 0.0);
+        assert!((confidence(p.confidence_snr, long, MEGAPIXEL, &p) - 0.5).abs() < 1e-9);
+        // Four times the area holds four times the noise candidates: 0.5^4.
+        let c4 = confidence(p.confidence_snr, long, 4.0 * MEGAPIXEL, &p);
+        assert!((c4 - 0.0625).abs() < 1e-9, "{c4}");
+        assert!(confidence(0.0, long, MEGAPIXEL, &p) < 1e-3);
+        assert_eq!(confidence(50.0, 1.0, MEGAPIXEL, &p), 0.0);
+        let sure = p.confidence_snr + 20.0 * p.confidence_scale;
+        assert!(confidence(sure, long, MEGAPIXEL, &p) > 0.999);
     }
 }

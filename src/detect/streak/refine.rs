@@ -5,6 +5,7 @@
 use std::f64::consts::PI;
 
 use super::Sanitized;
+use super::noise::LineNoise;
 use super::smooth::corr;
 use super::stats::median_of;
 use crate::imaging::bilinear;
@@ -57,6 +58,8 @@ pub(super) struct Ctx<'a> {
     pub(super) bg: &'a [f32],
     pub(super) z: &'a [f32],
     pub(super) p: &'a Sanitized,
+    /// The line filter's measured noise, which inflates the white-noise sd of profile sums.
+    pub(super) noise: &'a LineNoise,
 }
 
 /// Distance from `p` to the segment `a`-`b`.
@@ -81,6 +84,30 @@ impl Ctx<'_> {
     /// Profile sample: the mean of z at lateral offsets -1, 0, 1 along the normal (nx, ny).
     pub(super) fn cross_mean(&self, x: f64, y: f64, nx: f64, ny: f64) -> f64 {
         (self.z_at(x - nx, y - ny) + self.z_at(x, y) + self.z_at(x + nx, y + ny)) / 3.0
+    }
+
+    /// Lateral taps (offset along the normal, weight) of a contrast sample: the profile sample
+    /// (offsets -1, 0, 1) less the mean of side bands beyond the streak's smoothed
+    /// cross-section (z falls below 1 % of its peak by 3 sqrt(2) psf_sigma), six pixels on
+    /// each side. A line through a patch of raised background (a dark frame's warm region, the
+    /// halo of a bright object) has its sides raised too and no contrast; a streak keeps its
+    /// level.
+    pub(super) fn contrast_taps(&self) -> Vec<(f64, f64)> {
+        let d = (3.0 * std::f64::consts::SQRT_2 * self.p.psf_sigma).ceil() + 1.0;
+        let mut taps: Vec<(f64, f64)> = (-1..=1).map(|u| (u as f64, 1.0 / 3.0)).collect();
+        for k in 0..6 {
+            let off = d + k as f64;
+            taps.push((off, -1.0 / 12.0));
+            taps.push((-off, -1.0 / 12.0));
+        }
+        taps
+    }
+
+    /// Contrast sample at (x, y) with the normal (nx, ny) (see [`Ctx::contrast_taps`]).
+    pub(super) fn contrast(&self, taps: &[(f64, f64)], x: f64, y: f64, nx: f64, ny: f64) -> f64 {
+        taps.iter()
+            .map(|&(u, a)| a * self.z_at(x + u * nx, y + u * ny))
+            .sum()
     }
 
     /// Range of t for which (cx, cy) + t (ux, uy) lies inside the pixel-centre rectangle.
@@ -189,11 +216,14 @@ impl Ctx<'_> {
                 s = t;
             }
         }
-        // Robust SNR: the median level over the segment times its sample count, so that a
-        // bright star on the axis does not make a streak.
-        let mut seg_vals: Vec<f64> = (s..=e).map(at).collect();
+        // Robust SNR: the median contrast over the segment times its sample count, so that a
+        // bright star on the axis does not make a streak, nor a raised patch of background.
+        let taps = self.contrast_taps();
+        let mut seg_vals: Vec<f64> = (s..=e)
+            .map(|t| self.contrast(&taps, cx + t as f64 * ux, cy + t as f64 * uy, nx, ny))
+            .collect();
         let n = seg_vals.len();
-        let snr = median_of(&mut seg_vals) * n as f64 / self.profile_sum_sd(n);
+        let snr = median_of(&mut seg_vals) * n as f64 / self.contrast_sum_sd(&taps, th, n);
         let (t0, t1) = (s as f64 - 0.5, e as f64 + 0.5);
         let mid = 0.5 * (t0 + t1);
         let mut seg = Seg {
@@ -211,18 +241,19 @@ impl Ctx<'_> {
         Some(seg)
     }
 
-    /// Noise sd of the sum of `n` consecutive profile samples (white-noise model).
-    pub(super) fn profile_sum_sd(&self, n: usize) -> f64 {
+    /// Noise sd of the sum of `n` consecutive contrast samples (`taps`) along orientation
+    /// `theta`: the white-noise model (z has unit noise, correlated through the Gaussian), times
+    /// the line filter's measured excess ([`LineNoise::for_sum`]).
+    pub(super) fn contrast_sum_sd(&self, taps: &[(f64, f64)], theta: f64, n: usize) -> f64 {
         let sp = self.p.psf_sigma;
-        let c = |dt: f64| {
+        let c = |dt: f64| -> f64 {
             let mut s = 0.0;
-            for a in -1..=1 {
-                for b in -1..=1 {
-                    let du = (a - b) as f64;
-                    s += corr(dt * dt + du * du, sp);
+            for &(u, a) in taps {
+                for &(v, b) in taps {
+                    s += a * b * corr(dt * dt + (u - v) * (u - v), sp);
                 }
             }
-            s / 9.0
+            s
         };
         let nf = n as f64;
         let mut var = nf * c(0.0);
@@ -230,7 +261,7 @@ impl Ctx<'_> {
         for d in 1..=dmax {
             var += 2.0 * (nf - d as f64) * c(d as f64);
         }
-        var.max(1e-12).sqrt()
+        var.max(1e-12).sqrt() * self.noise.for_sum(theta, n)
     }
 
     /// Flux (grey levels) and weighted elongation within 3 PSF sigmas of the segment.

@@ -7,6 +7,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use std::f64::consts::PI;
 
+mod confidence;
+
 const BG: f64 = 100.0;
 const NOISE: f64 = 8.0;
 const PSF: f64 = 1.5;
