@@ -1,0 +1,59 @@
+//! Time the scene draw alone (no render) over a campaign's images, and fingerprint the scenes it
+//! accepts, so that a change to the draw can be shown to keep every accepted scene and to cost
+//! less: the same fingerprint before and after means the same scenes, attempts and rejections.
+//!
+//! ```sh
+//! cargo run --release --example draw_scenes -- campaigns/paper-fixed-original-small.toml [IMAGES] [EXPOSURE_S]
+//! ```
+
+use std::collections::hash_map::DefaultHasher;
+use std::hash::{Hash, Hasher};
+use std::path::Path;
+use std::time::Instant;
+
+use soig::{Campaign, Experiment};
+
+fn main() -> Result<(), soig::Error> {
+    let args: Vec<String> = std::env::args().collect();
+    let path = args
+        .get(1)
+        .map(String::as_str)
+        .unwrap_or("campaigns/quickstart.toml");
+    let campaign = Campaign::load(Path::new(path))?;
+    let mut x = Experiment::new(&campaign);
+    let images: u64 = args
+        .get(2)
+        .map(|s| s.parse().expect("IMAGES is a count"))
+        .unwrap_or(campaign.resolved.images as u64);
+    if let Some(e) = args.get(3) {
+        // One exposure for every draw, to see how the draw's cost grows with it.
+        let e: f64 = e.parse().expect("EXPOSURE_S is seconds");
+        x.scene.exposure_min_s = e;
+        x.scene.exposure_max_s = e;
+    }
+    let inputs = soig::experiment::inputs(&campaign)?;
+
+    let mut fingerprint = DefaultHasher::new();
+    let (mut attempts, mut failed) = (0u64, 0u64);
+    let t = Instant::now();
+    for image in 0..images {
+        match soig::scene::draw(&x.scene, &x.sensor, &inputs, x.seed, image) {
+            Ok(s) => {
+                attempts += u64::from(s.attempts);
+                // The Debug text holds every field, floats to the last bit.
+                format!("{s:?}").hash(&mut fingerprint);
+            }
+            Err(e) => {
+                failed += 1;
+                format!("{:?}", e.rejections).hash(&mut fingerprint);
+            }
+        }
+    }
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    println!(
+        "{path}: {images} images, {attempts} attempts ({failed} never visible), {:.2} ms per image, fingerprint {:016x}",
+        ms / images as f64,
+        fingerprint.finish()
+    );
+    Ok(())
+}
