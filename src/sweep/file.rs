@@ -23,6 +23,10 @@ pub struct ExperimentFile {
     /// Replicates of every point, the campaign `seed` being the base's plus 0, 1, .. N-1.
     #[serde(default = "one")]
     pub seeds: u32,
+    /// Fixed overrides of the base for every point, `key.path=value` as `soig run --set`
+    /// writes them (applied before the axes).
+    #[serde(default)]
+    pub set: Vec<String>,
     /// The figures of the summary (default: mAP50-95 and recall).
     #[serde(default = "default_collect")]
     pub collect: Vec<Figure>,
@@ -189,10 +193,8 @@ impl Experiment {
                 .collect();
             let group = point_name(&settings);
             for replicate in 0..file.seeds {
-                let mut sets: Vec<String> = settings
-                    .iter()
-                    .map(|s| format!("{}={}", s.field, s.value))
-                    .collect();
+                let mut sets = file.set.clone();
+                sets.extend(settings.iter().map(|s| format!("{}={}", s.field, s.value)));
                 let mut name = group.clone();
                 if file.seeds > 1 {
                     sets.push(format!(
@@ -202,6 +204,10 @@ impl Experiment {
                     name = format!("{group},rep={replicate}");
                 }
                 let campaign = Campaign::load_with_overrides(&base, &sets).map_err(|e| {
+                    let label = e.file.to_string_lossy();
+                    if file.set.iter().any(|s| label == format!("--set {s}")) {
+                        return at(None, "set", format!("refused by the campaign: {e}"));
+                    }
                     // The axis whose value the campaign refused answers for it.
                     let a = settings
                         .iter()
