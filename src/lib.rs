@@ -86,5 +86,6 @@ pub mod simulate;
 pub mod sky;
 pub mod study;
 pub mod summary;
+pub mod sweep;
 pub mod tables;
 pub(crate) mod train;

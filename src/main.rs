@@ -197,8 +197,26 @@ enum Command {
         #[arg(long)]
         conf: Option<f64>,
     },
-    /// Print the JSON Schema of the campaign format.
-    Schema,
+    /// Print the JSON Schema of the campaign format (or, with --experiment, of the experiment
+    /// file).
+    Schema {
+        #[arg(long)]
+        experiment: bool,
+    },
+    /// Run an experiment: a sweep of campaign fields (an experiment file), one `soig run` per
+    /// point into OUT/points/<parameter values>, reusing a point whose campaign is unchanged;
+    /// writes summary.csv, summary.md, plots/ and experiment.json (the digest of every point).
+    /// A malformed experiment is refused before anything runs; a failing point is reported and
+    /// the others go on (exit 1 at the end).
+    Experiment {
+        /// The experiment TOML file.
+        experiment: PathBuf,
+        /// Output directory (default: `runs/<file stem>` beside the experiment file).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Score YOLO-format predictions (`cls xc yc w h score`) against YOLO labels, exactly as
     /// Ultralytics and pycocotools compute their metrics.
     Eval {
@@ -516,10 +534,19 @@ fn main() -> ExitCode {
             println!("-> {}\ndigest {}", s.output.display(), s.digest);
             Ok(())
         }),
-        Command::Schema => {
-            println!("{}", soig::campaign::schema_json());
+        Command::Schema { experiment } => {
+            if experiment {
+                println!("{}", soig::sweep::schema_json());
+            } else {
+                println!("{}", soig::campaign::schema_json());
+            }
             ExitCode::SUCCESS
         }
+        Command::Experiment {
+            experiment,
+            out,
+            quiet,
+        } => experiment_command(&experiment, out, quiet),
     }
 }
 
@@ -565,6 +592,36 @@ fn user_errors(f: impl FnOnce() -> anyhow::Result<()>) -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+/// `soig experiment`: exit 2 for a refused experiment, 1 when some point failed.
+fn experiment_command(path: &std::path::Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
+    let mut failed = false;
+    let code = user_errors(|| {
+        let experiment = soig::sweep::Experiment::load(path)?;
+        let out = out.unwrap_or_else(|| {
+            let stem = path.file_stem().unwrap_or_default();
+            path.parent()
+                .unwrap_or(std::path::Path::new("."))
+                .join("runs")
+                .join(stem)
+        });
+        let f = soig::sweep::run(&experiment, &out, &*progress(quiet))?;
+        for (name, e) in &f.failures {
+            eprintln!("point {name} failed: {e}");
+        }
+        failed = !f.failures.is_empty();
+        println!(
+            "{} point(s), {} reused, {} failed -> {}\ndigest {}",
+            f.points,
+            f.reused,
+            f.failures.len(),
+            f.out.display(),
+            f.digest
+        );
+        Ok(())
+    });
+    if failed { ExitCode::from(1) } else { code }
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -1,0 +1,156 @@
+//! `soig experiment` end to end: a 2x2 grid runs, a rerun with a point added reuses the four
+//! it already has, and each kind of malformed experiment is refused before anything runs,
+//! naming file, line and field.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn soig(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_soig"))
+        .args(args)
+        .env("RAYON_NUM_THREADS", "2")
+        .output()
+        .unwrap()
+}
+
+/// A small campaign with orbits given as elements (no TLE file), rendered but not detected.
+const BASE: &str = r#"
+name = "tiny"
+seed = 7
+images = 3
+stages = ["render", "enhance", "dataset"]
+[observer]
+norad = 1
+elements = { period_min = 100.0, inclination_deg = 98.6, apogee_km = 800.0, perigee_km = 790.0 }
+[[debris]]
+norad = 40649
+elements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }
+"#;
+
+fn experiment(dir: &Path, file: &str, axes: &str) -> String {
+    std::fs::write(dir.join("base.toml"), BASE).unwrap();
+    let path = dir.join(file);
+    std::fs::write(
+        &path,
+        format!("base = \"base.toml\"\ncollect = [\"seconds\"]\n{axes}"),
+    )
+    .unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+fn digests(out: &Path) -> Vec<(String, String)> {
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("experiment.json")).unwrap())
+            .unwrap();
+    m["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            (
+                p["name"].as_str().unwrap().to_string(),
+                p["digest"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_grid_runs_and_a_rerun_reuses_unchanged_points() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let axes = |exposures: &str| {
+        format!(
+            "[[axis]]\nfield = \"exposure.max_s\"\nvalues = {exposures}\n\n[[axis]]\nfield = \"seed\"\nfrom = 1\nto = 2\nstep = 1\n"
+        )
+    };
+    let path = experiment(tmp.path(), "e.toml", &axes("[5.0, 8.0]"));
+    let o = soig(&["experiment", &path, "--out", out.to_str().unwrap(), "-q"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        stdout.contains("4 point(s), 0 reused, 0 failed"),
+        "{stdout}"
+    );
+    let first = digests(&out);
+    assert_eq!(first.len(), 4);
+    assert!(
+        first.iter().any(|(n, _)| n == "exposure.max_s=8.0,seed=2"),
+        "{first:?}"
+    );
+    let csv = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 5, "{csv}");
+    assert!(out.join("plots/seconds-vs-exposure.max_s.png").is_file());
+    // Each point is a verifiable soig run.
+    let v = soig(&[
+        "verify",
+        out.join("points/exposure.max_s=5.0,seed=1")
+            .to_str()
+            .unwrap(),
+    ]);
+    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+
+    // A point added: the four others are reused, with their digests.
+    let path = experiment(tmp.path(), "e.toml", &axes("[5.0, 8.0, 11.0]"));
+    let o = soig(&["experiment", &path, "--out", out.to_str().unwrap(), "-q"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        stdout.contains("6 point(s), 4 reused, 0 failed"),
+        "{stdout}"
+    );
+    let second = digests(&out);
+    for p in &first {
+        assert!(second.contains(p), "{p:?} changed");
+    }
+}
+
+#[test]
+fn malformed_experiments_are_refused_before_anything_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let cases = [
+        (
+            "[[axis]]\nfield = \"visibility.snr_minn\"\nvalues = [0.1]\n",
+            ":4: field `axis[0].field`",
+            "unknown field `snr_minn`",
+        ),
+        (
+            "[[axis]]\nfield = \"images\"\nvalues = [\"many\"]\n",
+            ":5: field `axis[0].values`",
+            "expected u32",
+        ),
+        (
+            "[[axis]]\nfield = \"images\"\nvalues = []\n",
+            ":5: field `axis[0].values`",
+            "no values",
+        ),
+        (
+            "mode = \"zip\"\n[[axis]]\nfield = \"images\"\nvalues = [3, 4]\n[[axis]]\nfield = \"seed\"\nvalues = [1]\n",
+            ":9: field `axis[1].values`",
+            "equal length",
+        ),
+    ];
+    for (axes, place, why) in cases {
+        let path = experiment(tmp.path(), "bad.toml", axes);
+        let o = soig(&["experiment", &path, "--out", out.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(&format!("bad.toml{place}")), "{stderr}");
+        assert!(stderr.contains(why), "{stderr}");
+        assert!(!out.exists(), "nothing runs for a refused experiment");
+    }
+}
+
+/// `schemas/experiment.schema.json` is the output of `soig schema --experiment`; regenerate
+/// with `target/release/soig schema --experiment > schemas/experiment.schema.json`.
+#[test]
+fn committed_experiment_schema_is_current() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("schemas/experiment.schema.json");
+    let committed = std::fs::read_to_string(&path).unwrap();
+    assert_eq!(
+        committed,
+        soig::sweep::schema_json() + "\n",
+        "schemas/experiment.schema.json is stale: run `soig schema --experiment > schemas/experiment.schema.json`"
+    );
+}
