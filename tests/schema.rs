@@ -18,6 +18,22 @@ fn committed_schema_is_current() {
 /// hash pins its outputs (results/*/digest.txt), so rewriting a campaign file must keep it.
 const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     (
+        "campaigns/model-fixed-original.toml",
+        "a5a657fc43c7e6d9b595a618d47fcd806a6df72b773ecf1b3bf8c3447e1e3924",
+    ),
+    (
+        "campaigns/model-fixed-padded.toml",
+        "bce24a88b351c8716e4f219737864bf3ccd519002dd65155292f1cb6bfe84b08",
+    ),
+    (
+        "campaigns/model-survey-original.toml",
+        "e910250d4e5c778542a7da2538f2412bddac806a1337cbad2cb87ed1a8bc198f",
+    ),
+    (
+        "campaigns/model-survey-rotated.toml",
+        "822ad0f28cfab2c1dc4981befff78384915658f2a3e5649ff8356009af4043a5",
+    ),
+    (
         "campaigns/model-fixed.toml",
         "9e585bacc9a4f33755fd0b3f3624a9a389d9c65648577224e4c462140ae15dd8",
     ),
