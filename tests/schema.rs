@@ -19,19 +19,19 @@ fn committed_schema_is_current() {
 const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     (
         "campaigns/model-fixed-original.toml",
-        "a5a657fc43c7e6d9b595a618d47fcd806a6df72b773ecf1b3bf8c3447e1e3924",
+        "7ef4f89e09b767f98dd3e6271182526899918de04557253c6fa6f3b7ca089bfd",
     ),
     (
         "campaigns/model-fixed-padded.toml",
-        "bce24a88b351c8716e4f219737864bf3ccd519002dd65155292f1cb6bfe84b08",
+        "554a2bcb0ee2fc81d3ba24c8b434de70df203cf98d53b06172770c8b2e96769e",
     ),
     (
         "campaigns/model-survey-original.toml",
-        "e910250d4e5c778542a7da2538f2412bddac806a1337cbad2cb87ed1a8bc198f",
+        "054ed5a3326d0f0ec10f93f261ba4663cfac8f1e9e9398afd121dc61e7ef9e5e",
     ),
     (
         "campaigns/model-survey-rotated.toml",
-        "822ad0f28cfab2c1dc4981befff78384915658f2a3e5649ff8356009af4043a5",
+        "51eb4daed68044a9697103912246eb1134a81d7747c55891381226d3b26877b4",
     ),
     (
         "campaigns/model-fixed.toml",
