@@ -336,3 +336,19 @@ fn chunk_records(
     }
     Ok(serde_json::Value::Array(chunks))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::parse_budget;
+
+    #[test]
+    fn budgets_read_in_seconds_minutes_and_hours() {
+        assert_eq!(parse_budget("9m").unwrap(), 540.0);
+        assert_eq!(parse_budget("540s").unwrap(), 540.0);
+        assert_eq!(parse_budget("540").unwrap(), 540.0);
+        assert_eq!(parse_budget("1.5h").unwrap(), 5400.0);
+        for bad in ["", "m", "-3m", "0s", "9d", "nan"] {
+            assert!(parse_budget(bad).is_err(), "{bad:?}");
+        }
+    }
+}
