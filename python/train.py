@@ -1,6 +1,14 @@
 #!/usr/bin/env python3
 """Train a YOLOv8 debris detector on a soig dataset, export ONNX, write summary.json.
 
+Trains in chunks when given --budget-s or --chunk-epochs: each chunk ends at an epoch boundary
+before its budget (the next epoch estimated by the longest one of the chunk so far) or its count and keeps a resumable
+checkpoint, weights/resume.pt (Ultralytics' last.pt with its optimizer state: the end of
+training strips the optimizer from last.pt and best.pt, so the copy is taken as each epoch is
+saved). --resume continues from it with the checkpoint's own schedule (epochs, learning rates,
+seed). Only the chunk that completes the schedule validates on the test split and exports ONNX;
+summary.json says `finished` and, for every chunk, the epochs it ran.
+
 Runs fully offline (no downloads): sets YOLO_OFFLINE, a private YOLO_CONFIG_DIR under --out
 with a bundled font as Arial.ttf, and trains with amp=False (the AMP check downloads weights).
 """
@@ -30,6 +38,12 @@ def parse_args():
     p.add_argument("--workers", type=int, default=8)
     p.add_argument("--patience", type=int, default=100)
     p.add_argument("--time-hours", type=float, default=None, help="Ultralytics `time` limit in hours")
+    p.add_argument("--cache", default="false", help="Ultralytics `cache`: false, ram or disk")
+    p.add_argument("--budget-s", type=float, default=None,
+                   help="end this chunk at the last epoch boundary that fits in this many seconds")
+    p.add_argument("--chunk-epochs", type=int, default=None,
+                   help="end this chunk after this many epochs")
+    p.add_argument("--resume", action="store_true", help="continue from weights/resume.pt")
     return p.parse_args()
 
 
@@ -79,6 +93,43 @@ def box_metrics(m) -> dict:
     return {"precision": float(b.mp), "recall": float(b.mr), "mAP50": float(b.map50), "mAP50-95": float(b.map)}
 
 
+class Chunk:
+    """Ends a chunk at an epoch boundary before its budget and keeps resume.pt, the last epoch's
+    checkpoint with its optimizer state (Ultralytics strips last.pt when training ends)."""
+
+    def __init__(self, budget_s, max_epochs, t0):
+        self.budget_s = budget_s
+        self.max_epochs = max_epochs
+        self.t0 = t0
+        self.epoch_s = []
+        self.first = None  # 0-based index of the chunk's first epoch
+        self.last = None
+        self.budget_stop = False
+
+    def on_model_save(self, trainer):
+        now = time.time()
+        self.epoch_s.append(round(now - trainer.epoch_time_start, 2))
+        if self.first is None:
+            self.first = trainer.epoch
+        self.last = trainer.epoch
+        # Copy, then rename: a chunk killed mid-copy leaves the previous resume.pt whole.
+        tmp = trainer.wdir / "resume.pt.partial"
+        shutil.copyfile(trainer.last, tmp)
+        os.replace(tmp, trainer.wdir / "resume.pt")
+        # The longest epoch so far bounds the next one (the chunk's first also carries the data
+        # loaders' start, so the estimate errs on the early side).
+        if not trainer.stop and trainer.epoch + 1 < trainer.epochs:
+            over_time = self.budget_s is not None and now - self.t0 + max(self.epoch_s) > self.budget_s
+            over_count = self.max_epochs is not None and len(self.epoch_s) >= self.max_epochs
+            if over_time or over_count:
+                trainer.stop = self.budget_stop = True
+
+    def record(self):
+        epochs = [] if self.first is None else [self.first + 1, self.last + 1]
+        return {"epochs": epochs, "epoch_s": self.epoch_s, "budget_s": self.budget_s,
+                "max_epochs": self.max_epochs}
+
+
 def main():
     a = parse_args()
     out = Path(a.out).resolve()
@@ -94,14 +145,34 @@ def main():
     from ultralytics import YOLO
 
     device = None if a.device == "auto" else a.device
-    model = YOLO(a.model)
+    cache = {"false": False, "true": True}.get(a.cache, a.cache)
+    summary_path = out / "summary.json"
+    chunks = []
     t0 = time.time()
-    model.train(
-        data=str(data), epochs=a.epochs, batch=a.batch, imgsz=a.imgsz, optimizer=a.optimizer,
-        device=device, seed=a.seed, workers=a.workers, patience=a.patience, time=a.time_hours,
-        project=str(out), name="train", exist_ok=True,
-        amp=False, deterministic=True, plots=plots, val=True,
-    )
+    chunk = Chunk(a.budget_s, a.chunk_epochs, t0)
+    save_dir = out / "train"
+    if a.resume:
+        resume_pt = save_dir / "weights" / "resume.pt"
+        if not resume_pt.is_file():
+            sys.exit(f"train.py: nothing to resume: {resume_pt} not found")
+        if summary_path.is_file():
+            chunks = json.loads(summary_path.read_text()).get("chunks", [])
+        # Ultralytics resumes from last.pt; the resumable copy replaces the stripped one.
+        shutil.copyfile(resume_pt, save_dir / "weights" / "last.pt")
+        model = YOLO(str(save_dir / "weights" / "last.pt"))
+        model.add_callback("on_model_save", chunk.on_model_save)
+        # Only what Ultralytics lets a resume change (the loader's); the schedule is the checkpoint's.
+        model.train(resume=True, data=str(data), device=device, workers=a.workers, cache=cache,
+                    plots=plots)
+    else:
+        model = YOLO(a.model)
+        model.add_callback("on_model_save", chunk.on_model_save)
+        model.train(
+            data=str(data), epochs=a.epochs, batch=a.batch, imgsz=a.imgsz, optimizer=a.optimizer,
+            device=device, seed=a.seed, workers=a.workers, patience=a.patience, time=a.time_hours,
+            cache=cache, project=str(out), name="train", exist_ok=True,
+            amp=False, deterministic=True, plots=plots, val=True,
+        )
     train_wall_s = time.time() - t0
     trainer = model.trainer
     save_dir = Path(trainer.save_dir)
@@ -111,6 +182,26 @@ def main():
         sys.exit(f"train.py: training produced no best.pt in {best.parent}")
     with open(results_csv) as f:
         epochs_completed = sum(1 for _ in csv.DictReader(f))
+    chunks.append({**chunk.record(), "wall_s": round(train_wall_s, 1)})
+    # Done when the schedule ran out, or Ultralytics stopped it (patience, `time`), not the budget.
+    finished = not chunk.budget_stop
+    base = {
+        "ultralytics": ultralytics.__version__,
+        "torch": torch.__version__,
+        "args": vars(a),
+        "plots": plots,
+        "finished": finished,
+        "chunks": chunks,
+        "epochs_completed": epochs_completed,
+        "epochs_planned_final": int(trainer.epochs),
+        "train_wall_s": round(sum(c["wall_s"] for c in chunks), 1),
+        "results_csv": str(results_csv),
+    }
+    if not finished:
+        summary_path.write_text(json.dumps(base, indent=2) + "\n")
+        print(json.dumps(base, indent=2))
+        return
+    (save_dir / "weights" / "resume.pt").unlink(missing_ok=True)
 
     # Validation of best.pt: val split, test split (Ultralytics defaults), test split at the paper's conf/iou.
     def val(split, name, **kw):
@@ -132,19 +223,12 @@ def main():
     onnx = Path(onnx).resolve()
 
     summary = {
-        "ultralytics": ultralytics.__version__,
-        "torch": torch.__version__,
-        "args": vars(a),
-        "plots": plots,
-        "epochs_completed": epochs_completed,
-        "epochs_planned_final": int(trainer.epochs),
+        **base,
         "best_epoch": int(trainer.stopper.best_epoch),  # 1-based, by fitness = mAP50-95 on val
-        "train_wall_s": round(train_wall_s, 1),
         "metrics": metrics,
         "onnx": {"path": str(onnx), "sha256": sha256(onnx), "bytes": onnx.stat().st_size,
                  "opset": 17, "imgsz": a.imgsz, "simplify": simplify},
         "best_pt": str(best),
-        "results_csv": str(results_csv),
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     print(json.dumps(summary, indent=2))

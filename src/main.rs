@@ -101,6 +101,16 @@ enum Command {
         /// value (`512`, `true`, `[8, 8]`) or else a string. Repeatable.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Train one chunk: stop at the last epoch boundary before this much time (`9m`,
+        /// `540s`, `1.5h`), keeping what `--resume` needs to go on.
+        #[arg(long, value_name = "DURATION")]
+        budget: Option<String>,
+        /// Train one chunk of at most this many epochs (with or without --budget).
+        #[arg(long, value_name = "N")]
+        chunk_epochs: Option<u32>,
+        /// Continue the schedule a chunk left in the output (same epochs, learning rates, seed).
+        #[arg(long)]
+        resume: bool,
     },
     /// Recompute every hash of an output directory against its manifest.
     Verify {
@@ -377,12 +387,28 @@ fn main() -> ExitCode {
             python,
             quiet,
             set,
+            budget,
+            chunk_epochs,
+            resume,
         } => user_errors(|| {
             let campaign = Campaign::load_with_overrides(&campaign, &set)?;
             let output = out.unwrap_or_else(|| campaign.output_dir.clone());
-            let model =
-                soig::pipeline::train(&campaign, &output, python.as_deref(), &*progress(quiet))?;
-            println!("model {}", model.display());
+            let chunk = soig::pipeline::Chunk {
+                budget_s: budget
+                    .as_deref()
+                    .map(soig::pipeline::parse_budget)
+                    .transpose()?,
+                epochs: chunk_epochs,
+                resume,
+            };
+            let python = python.as_deref();
+            match soig::pipeline::train(&campaign, &output, python, chunk, &*progress(quiet))? {
+                Some(model) => println!("model {}", model.display()),
+                None => println!(
+                    "training unfinished (budget reached): run the same command with --resume to go on ({})",
+                    campaign.source.display()
+                ),
+            }
             Ok(())
         }),
         Command::Verify { dir, digest } => match soig::manifest::verify(&dir) {

@@ -29,6 +29,7 @@ use crate::report::{self, DetectorRun, TestImage};
 use crate::scene::Pointing;
 use crate::shard::Shard;
 use crate::simulate;
+pub use crate::train::{Chunk, parse_budget};
 use crate::train::{TRAIN_DIR, find_python, fit, volatile_files};
 
 /// What a finished run reports.
@@ -145,17 +146,24 @@ pub fn run_with(
 
 /// `soig train`: train on the dataset in `out` (written first if it is missing or does not
 /// verify), then record the run in the manifest. A campaign whose stages include `train` is
-/// simply run: the pipeline trains (and detects with the new model) itself.
+/// simply run: the pipeline trains (and detects with the new model) itself. With a budget,
+/// one chunk of the schedule runs; the model is `None` until the last chunk.
 pub fn train(
     campaign: &Campaign,
     out: &Path,
     python: Option<&Path>,
+    chunk: Chunk,
     progress: &dyn Progress,
-) -> anyhow::Result<PathBuf> {
+) -> anyhow::Result<Option<PathBuf>> {
     if campaign.resolved.stages.contains(&Stage::Train) {
+        if chunk.budget_s.is_some() || chunk.epochs.is_some() || chunk.resume {
+            anyhow::bail!(
+                "--budget, --chunk-epochs and --resume train a dataset in chunks: take `train` out of the campaign's stages"
+            );
+        }
         // The pipeline finds (and checks) the interpreter itself.
         run(campaign, out, python, progress)?;
-        return Ok(out.join(TRAIN_DIR).join("model.onnx"));
+        return Ok(Some(out.join(TRAIN_DIR).join("model.onnx")));
     }
     let python = find_python(python)?;
     let reusable = out.join(MANIFEST).is_file()
@@ -168,7 +176,7 @@ pub fn train(
         ));
         run(campaign, out, None, progress)?;
     }
-    let trained = fit(campaign, out, &python, progress)?;
+    let trained = fit(campaign, out, &python, chunk, progress)?;
     let old = Manifest::read(out)?;
     let mut volatile = volatile_files(out)?;
     volatile.extend(old.volatile.iter().cloned());
@@ -445,13 +453,13 @@ pub(crate) fn finish(
         String::new()
     };
     let trained = match python {
-        Some(python) => Some(fit(campaign, dir, python, progress)?),
+        Some(python) => Some(fit(campaign, dir, python, Chunk::default(), progress)?),
         None => None,
     };
     if stages.contains(&Stage::Detect) {
         // A train stage's model, else the campaign's (validation allows one, not both).
         let model = match &trained {
-            Some(t) => Some(t.model.clone()),
+            Some(t) => t.model.clone(),
             None => c.detect.model.as_ref().map(|m| campaign.base_dir.join(m)),
         };
         detect_and_report(

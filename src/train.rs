@@ -3,6 +3,11 @@
 //! trains offline with the campaign's hyperparameters and exports ONNX, and the run is recorded
 //! in the manifest: the model's sha256, the Ultralytics and torch versions, the log.
 //!
+//! Training runs whole, or in chunks (`soig train --budget 9m`, then `--resume`): each chunk
+//! ends at an epoch boundary before its budget, so that a schedule longer than one command may
+//! run (the lent GPU machine's 10 minutes) still runs as one schedule; the record lists every
+//! chunk.
+//!
 //! The Python side is installed by `scripts/setup-train.sh` into `.venv-train/`.
 
 use std::path::{Path, PathBuf};
@@ -51,9 +56,39 @@ pub fn find_python(explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
     )
 }
 
-/// A model trained in an output directory, and the record that goes into its manifest.
+/// How much of the schedule one `soig train` runs: all of it, or a chunk that ends before
+/// `budget_s`; `resume` continues the schedule a previous chunk left.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Chunk {
+    pub budget_s: Option<f64>,
+    /// At most this many epochs in the chunk.
+    pub epochs: Option<u32>,
+    pub resume: bool,
+}
+
+/// A duration such as `9m`, `540s`, `540` (seconds) or `1.5h`, in seconds.
+pub fn parse_budget(text: &str) -> anyhow::Result<f64> {
+    let t = text.trim();
+    let (number, unit) = match t.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => (&t[..i], c),
+        _ => (t, 's'),
+    };
+    let scale = match unit {
+        's' => 1.0,
+        'm' => 60.0,
+        'h' => 3600.0,
+        _ => bail!("--budget {text:?}: the unit must be s, m or h"),
+    };
+    match number.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v * scale),
+        _ => bail!("--budget {text:?}: expected a positive duration such as 9m, 540s or 1.5h"),
+    }
+}
+
+/// A model trained in an output directory (none while chunks of its schedule are left), and
+/// the record that goes into its manifest.
 pub struct Trained {
-    pub model: PathBuf,
+    pub model: Option<PathBuf>,
     pub record: serde_json::Value,
 }
 
@@ -70,12 +105,14 @@ pub fn volatile_files(out: &Path) -> anyhow::Result<Vec<String>> {
         .collect())
 }
 
-/// Train on the dataset already in `out` (its `data.yaml`), export ONNX to
-/// `out/train/model.onnx` and check that the detector loads it.
+/// Train on the dataset already in `out` (its `data.yaml`), the whole schedule or one chunk of
+/// it; once the schedule is done, export ONNX to `out/train/model.onnx` and check that the
+/// detector loads it.
 pub fn fit(
     campaign: &Campaign,
     out: &Path,
     python: &Path,
+    chunk: Chunk,
     progress: &dyn Progress,
 ) -> anyhow::Result<Trained> {
     let data = out.join("data.yaml");
@@ -86,12 +123,25 @@ pub fn fit(
         );
     }
     let tdir = out.join(TRAIN_DIR);
-    if tdir.exists() {
-        std::fs::remove_dir_all(&tdir)?;
-    }
+    let chunk_no = if chunk.resume {
+        resumable_chunks(&tdir)? + 1
+    } else {
+        if tdir.exists() {
+            std::fs::remove_dir_all(&tdir)?;
+        }
+        1
+    };
     std::fs::create_dir_all(&tdir)?;
     let script = tdir.join("train.py");
-    std::fs::write(&script, TRAIN_PY)?;
+    // A resumed chunk runs the script the schedule started with, in case this binary differs.
+    if !chunk.resume {
+        std::fs::write(&script, TRAIN_PY)?;
+    } else if std::fs::read_to_string(&script)? != TRAIN_PY {
+        bail!(
+            "{} is not this soig's train.py: resume with the soig that started the schedule",
+            script.display()
+        );
+    }
     let t = &campaign.resolved.train;
     let (imgsz, batch) = crate::experiment::train_size_and_batch(campaign);
     // Starting weights (a .pt) are a file beside the campaign and are hashed into the record;
@@ -140,7 +190,25 @@ pub fn fit(
     if let Some(h) = t.time_hours {
         args.extend(["--time-hours".into(), h.to_string()]);
     }
-    let log_path = tdir.join("train.log");
+    if let Some(cache) = t.cache {
+        args.extend(["--cache".into(), cache.as_str().into()]);
+    }
+    if let Some(b) = chunk.budget_s {
+        args.extend(["--budget-s".into(), b.to_string()]);
+    }
+    if let Some(n) = chunk.epochs {
+        args.extend(["--chunk-epochs".into(), n.to_string()]);
+    }
+    if chunk.resume {
+        args.push("--resume".into());
+    }
+    // One log per chunk: the first keeps the name whole runs always had.
+    let log_name = if chunk_no == 1 {
+        "train.log".to_string()
+    } else {
+        format!("train-chunk-{chunk_no}.log")
+    };
+    let log_path = tdir.join(&log_name);
     let log = std::fs::File::create(&log_path)?;
     progress.note(&format!(
         "soig train: {} {} (log: {})",
@@ -168,6 +236,23 @@ pub fn fit(
         &std::fs::read_to_string(&summary_path)
             .with_context(|| format!("reading {}", summary_path.display()))?,
     )?;
+    let chunks = chunk_records(&summary, &tdir, chunk_no, &log_name)?;
+    if summary["finished"] == false {
+        return Ok(Trained {
+            model: None,
+            record: serde_json::json!({
+                "finished": false,
+                "epochs_completed": summary["epochs_completed"],
+                "epochs_planned": summary["epochs_planned_final"],
+                "chunks": chunks,
+                "resume_checkpoint": "train/run/train/weights/resume.pt",
+                "ultralytics": summary["ultralytics"],
+                "torch": summary["torch"],
+                "summary": "train/run/summary.json",
+                "start_weights": start_weights,
+            }),
+        });
+    }
     let onnx = summary["onnx"]["path"]
         .as_str()
         .map(PathBuf::from)
@@ -180,6 +265,9 @@ pub fn fit(
 
     Ok(Trained {
         record: serde_json::json!({
+            "finished": true,
+            "epochs_completed": summary["epochs_completed"],
+            "chunks": chunks,
             "model": "train/model.onnx",
             "model_sha256": sha256_file(&model)?.0,
             "ultralytics": summary["ultralytics"],
@@ -189,6 +277,78 @@ pub fn fit(
             "summary": "train/run/summary.json",
             "start_weights": start_weights,
         }),
-        model,
+        model: Some(model),
     })
+}
+
+/// How many chunks of the schedule in `tdir` have run, checking that one can follow.
+fn resumable_chunks(tdir: &Path) -> anyhow::Result<usize> {
+    let summary_path = tdir.join("run/summary.json");
+    let summary: serde_json::Value = match std::fs::read_to_string(&summary_path) {
+        Ok(text) => serde_json::from_str(&text)?,
+        Err(_) => bail!(
+            "--resume: {} holds no training to resume (no {}); run without --resume first",
+            tdir.display(),
+            summary_path.display()
+        ),
+    };
+    if summary["finished"] != false {
+        bail!(
+            "--resume: the training in {} is finished; nothing to resume",
+            tdir.display()
+        );
+    }
+    Ok(summary["chunks"].as_array().map_or(0, Vec::len))
+}
+
+/// The record of every chunk so far: train.py's (epochs, seconds per epoch, wall time), with
+/// this chunk's log and the checkpoints it left, and their sizes.
+fn chunk_records(
+    summary: &serde_json::Value,
+    tdir: &Path,
+    chunk_no: usize,
+    log_name: &str,
+) -> anyhow::Result<serde_json::Value> {
+    let mut chunks = summary["chunks"].as_array().cloned().unwrap_or_default();
+    let previous: Vec<serde_json::Value> = if chunk_no > 1 {
+        let m = manifest::Manifest::read(tdir.parent().unwrap_or(tdir))?;
+        m.training
+            .and_then(|t| t["chunks"].as_array().cloned())
+            .unwrap_or_default()
+    } else {
+        Vec::new()
+    };
+    let weights = tdir.join("run/train/weights");
+    let mut files = vec![serde_json::json!({"path": format!("train/{log_name}")})];
+    for f in manifest::list_files(&weights).unwrap_or_default() {
+        let bytes = std::fs::metadata(weights.join(&f))?.len();
+        files.push(
+            serde_json::json!({"path": format!("train/run/train/weights/{f}"), "bytes": bytes}),
+        );
+    }
+    for (i, c) in chunks.iter_mut().enumerate() {
+        // Earlier chunks keep what the manifest recorded of them; this one gets its files.
+        if let Some(prev) = previous.get(i) {
+            *c = prev.clone();
+        } else if i + 1 == chunk_no {
+            c["files"] = serde_json::Value::Array(files.clone());
+        }
+    }
+    Ok(serde_json::Value::Array(chunks))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_budget;
+
+    #[test]
+    fn budgets_read_in_seconds_minutes_and_hours() {
+        assert_eq!(parse_budget("9m").unwrap(), 540.0);
+        assert_eq!(parse_budget("540s").unwrap(), 540.0);
+        assert_eq!(parse_budget("540").unwrap(), 540.0);
+        assert_eq!(parse_budget("1.5h").unwrap(), 5400.0);
+        for bad in ["", "m", "-3m", "0s", "9d", "nan"] {
+            assert!(parse_budget(bad).is_err(), "{bad:?}");
+        }
+    }
 }

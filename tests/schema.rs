@@ -18,6 +18,22 @@ fn committed_schema_is_current() {
 /// hash pins its outputs (results/*/digest.txt), so rewriting a campaign file must keep it.
 const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     (
+        "campaigns/model-fixed-original.toml",
+        "7ef4f89e09b767f98dd3e6271182526899918de04557253c6fa6f3b7ca089bfd",
+    ),
+    (
+        "campaigns/model-fixed-padded.toml",
+        "554a2bcb0ee2fc81d3ba24c8b434de70df203cf98d53b06172770c8b2e96769e",
+    ),
+    (
+        "campaigns/model-survey-original.toml",
+        "054ed5a3326d0f0ec10f93f261ba4663cfac8f1e9e9398afd121dc61e7ef9e5e",
+    ),
+    (
+        "campaigns/model-survey-rotated.toml",
+        "51eb4daed68044a9697103912246eb1134a81d7747c55891381226d3b26877b4",
+    ),
+    (
         "campaigns/model-fixed.toml",
         "9e585bacc9a4f33755fd0b3f3624a9a389d9c65648577224e4c462140ae15dd8",
     ),

@@ -437,6 +437,28 @@ pub struct Train {
     /// Stop after this many hours (Ultralytics' `time`), keeping the best weights so far.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_hours: Option<f64>,
+    /// Ultralytics' image cache: `ram` (decoded images held in memory) or `disk` (as .npy
+    /// beside the PNGs); left out, each epoch decodes every PNG again (models/README.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cache: Option<TrainCache>,
+}
+
+/// Where Ultralytics keeps decoded training images between epochs.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum TrainCache {
+    Ram,
+    Disk,
+}
+
+impl TrainCache {
+    /// Ultralytics' name for it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            TrainCache::Ram => "ram",
+            TrainCache::Disk => "disk",
+        }
+    }
 }
 
 /// Detection and evaluation on the test split (stage `detect`).
