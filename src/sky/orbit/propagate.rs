@@ -1,5 +1,8 @@
 //! SGP4/SDP4 propagation of one object, from a TLE or from the elements of the paper's Table 1.
 
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
+
 use hifitime::Epoch;
 
 use super::epoch_to_chrono;
@@ -87,6 +90,49 @@ pub struct Propagator {
     epoch: Epoch,
     regime: Regime,
     norad_id: u64,
+    /// Resonant deep-space orbits only (GEO, 12 h): see [`Resonance`].
+    resonance: Option<Arc<Resonance>>,
+}
+
+/// The resonance integrator states a resonant deep-space orbit has reached, by 720-min step.
+/// SDP4 integrates the resonance from the epoch in 720-min steps on every call, so a scene draw
+/// days after the epoch spent ~90% of its time in `sin`/`cos` there. A call that starts from
+/// the latest stored step on its side of the epoch, at or before its time, gives the same bits:
+/// the integration from the epoch passes through that very state and goes on the same way.
+#[derive(Default)]
+struct Resonance(Mutex<BTreeMap<i64, sgp4::ResonanceState>>);
+
+impl std::fmt::Debug for Resonance {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Resonance")
+    }
+}
+
+/// SDP4's resonance integration step, minutes (`sgp4::ResonanceState::t` moves by it).
+const RESONANCE_STEP_MIN: f64 = 720.0;
+
+impl Resonance {
+    /// The state to start a propagation to `minutes` from.
+    fn start(&self, initial: sgp4::ResonanceState, minutes: f64) -> sgp4::ResonanceState {
+        let steps = minutes / RESONANCE_STEP_MIN;
+        let states = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        let stored = if steps >= 1.0 {
+            states.range(1..=steps.floor() as i64).next_back()
+        } else if steps <= -1.0 {
+            states.range(steps.ceil() as i64..=-1).next()
+        } else {
+            None
+        };
+        stored.map_or(initial, |(_, s)| *s)
+    }
+
+    fn store(&self, state: sgp4::ResonanceState) {
+        let step = (state.t() / RESONANCE_STEP_MIN).round() as i64;
+        if step != 0 {
+            let mut states = self.0.lock().unwrap_or_else(|e| e.into_inner());
+            states.insert(step, state);
+        }
+    }
 }
 
 impl Propagator {
@@ -215,11 +261,15 @@ impl Propagator {
         } else {
             Regime::DeepSpace
         };
+        let resonance = constants
+            .initial_state()
+            .map(|_| Arc::new(Resonance::default()));
         Ok(Self {
             constants,
             epoch,
             regime,
             norad_id,
+            resonance,
         })
     }
 
@@ -251,14 +301,23 @@ impl Propagator {
         if !minutes.is_finite() {
             return Err(OrbitError::NonFinite { norad_id, minutes });
         }
-        let prediction = self
-            .constants
-            .propagate_afspc_compatibility_mode(sgp4::MinutesSinceEpoch(minutes))
-            .map_err(|source| OrbitError::Propagation {
-                norad_id,
-                minutes,
-                source,
-            })?;
+        let t = sgp4::MinutesSinceEpoch(minutes);
+        let propagated = match (&self.resonance, self.constants.initial_state()) {
+            (Some(resonance), Some(initial)) => {
+                let mut state = resonance.start(initial, minutes);
+                let p = self
+                    .constants
+                    .propagate_from_state(t, Some(&mut state), true);
+                resonance.store(state);
+                p
+            }
+            _ => self.constants.propagate_afspc_compatibility_mode(t),
+        };
+        let prediction = propagated.map_err(|source| OrbitError::Propagation {
+            norad_id,
+            minutes,
+            source,
+        })?;
         let (r, v) = (prediction.position, prediction.velocity);
         if !r.iter().chain(v.iter()).all(|x| x.is_finite()) {
             return Err(OrbitError::NonFinite { norad_id, minutes });
@@ -467,5 +526,39 @@ mod tests {
             prop.position_gcrs_km(prop.epoch() + 1000.0 * Unit::Day)
                 .is_err()
         );
+    }
+
+    /// The stored resonance states change no bit: a GEO object (one-day resonance) and a
+    /// Molniya (half-day), at times out of order on both sides of the epoch, against the
+    /// crate's own propagation from the epoch.
+    #[test]
+    fn resonance_states_give_the_same_bits_as_integrating_from_the_epoch() {
+        let molniya = "MOLNIYA 1-36\n\
+            1 08195U 75081A   06176.33215444  .00000099  00000-0  11873-3 0   813\n\
+            2 08195  64.1586 279.0717 6877146 264.7651  20.2257  2.00491383225656\n";
+        let geo = catalog().into_iter().find(|t| t.norad_id == 40989).unwrap();
+        let tles = [geo, parse_tles(molniya).unwrap().remove(0)];
+        let minutes = [
+            9000.5, 1500.0, 720.0, 30000.25, 1439.9, -800.0, -20000.0, 0.0, -719.0, 14400.0,
+        ];
+        for tle in &tles {
+            let p = Propagator::from_tle(tle).unwrap();
+            assert!(p.resonance.is_some(), "NORAD {} is resonant", tle.norad_id);
+            for &m in &minutes {
+                let t = p.epoch + m * Unit::Minute;
+                let (r, v) = p.state_teme(t).unwrap();
+                let from_epoch = p
+                    .constants
+                    .propagate_afspc_compatibility_mode(sgp4::MinutesSinceEpoch(
+                        (t - p.epoch).to_seconds() / 60.0,
+                    ))
+                    .unwrap();
+                assert_eq!(
+                    (r, v),
+                    (from_epoch.position, from_epoch.velocity),
+                    "{m} min"
+                );
+            }
+        }
     }
 }
