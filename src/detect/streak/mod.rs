@@ -179,6 +179,12 @@ pub struct StreakParams {
     /// Elongation scale of the confidence's shape factor `1 - exp(-(elongation - 1) / this)`
     /// (default 3.0).
     pub confidence_elongation_scale: f64,
+    /// Calibrate the line filter on the image's own noise (default true): the clipped map made
+    /// zero-mean and each filter's noise measured on the image, used where it exceeds the
+    /// white-noise model (see `noise`). A frame crowded with real star trails (a raw NEOSSat
+    /// frame taken while slewing) raises both so far that its own bright streak no longer
+    /// stands out: there, `false` keeps the zero-median map and the white-noise model.
+    pub calibrate_noise: bool,
     /// Class written into the detections (default 0).
     pub class: u32,
     /// At most this many candidates are returned, best first (default 16).
@@ -216,6 +222,7 @@ impl Default for StreakParams {
             confidence_snr: 9.0,
             confidence_snr_scale: 1.0,
             confidence_elongation_scale: 3.0,
+            calibrate_noise: true,
             class: 0,
             max_candidates: 16,
         }
@@ -433,11 +440,17 @@ pub fn detect_streaks(
     // sensor's skewed noise (warm pixels) has its mean above its median (0.2 sigma on the
     // NEOSSat dark frame), which summed over 51 pixels made every line a "5 sigma" fragment.
     // A streak covers too few pixels to move the mean.
-    let mean = zc.iter().map(|&v| v as f64).sum::<f64>() / zc.len() as f64;
-    zc.iter_mut().for_each(|v| *v -= mean as f32);
+    if p.calibrate_noise {
+        let mean = zc.iter().map(|&v| v as f64).sum::<f64>() / zc.len() as f64;
+        zc.iter_mut().for_each(|v| *v -= mean as f32);
+    }
 
     // 3. Oriented line filter, in units of its measured noise.
-    let noise = LineNoise::measure(&zc, w, h, &p);
+    let noise = if p.calibrate_noise {
+        LineNoise::measure(&zc, w, h, &p)
+    } else {
+        LineNoise::white(&p)
+    };
     let (best, arg) = line_filter(&zc, w, h, &p, &noise);
 
     // 4. Components.
@@ -554,6 +567,7 @@ struct Sanitized {
     elongation_scale: f64,
     class: u32,
     max_candidates: usize,
+    calibrate_noise: bool,
 }
 
 impl Sanitized {
@@ -603,6 +617,7 @@ impl Sanitized {
                 .max(1e-9),
             class: p.class,
             max_candidates: p.max_candidates,
+            calibrate_noise: p.calibrate_noise,
         }
     }
 }

@@ -90,6 +90,15 @@ impl LineNoise {
         }
     }
 
+    /// The white-noise model alone: every ratio 1.
+    pub(super) fn white(p: &Sanitized) -> Self {
+        LineNoise {
+            n_angles: p.n_angles,
+            lengths: p.half_lengths.iter().map(|&h| 2 * h + 1).collect(),
+            ratio: vec![1.0; p.n_angles * p.half_lengths.len()],
+        }
+    }
+
     /// The ratio for filter (j, l).
     pub(super) fn at(&self, j: usize, l: usize) -> f64 {
         self.ratio[j * self.lengths.len() + l]
