@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Reruns every committed reference run in results/ and copies back what is committed of each
 # (digest, metrics, reports, PR curve; the images stay in the scratch folder), then the study,
+# the committed experiments,
 # the CI baseline (results/ci-quickstart) and the tables of results/README.md.
 # Run after any change that moves a digest, on a quiet machine; results/README.md says when
 # it was last done. Usage: bash scripts/regenerate-results.sh [SCRATCH_DIR]
@@ -22,6 +23,14 @@ done
 "$soig" study campaigns/quickstart.toml --seeds 16 --out "$scratch/study"
 rm -rf results/study && mkdir -p results/study
 cp "$scratch/study/"{errors.csv,manifest.json,study.csv,study.json,study.md,study.png} results/study/
+# The committed experiments: their summaries, plots and digests (not the point folders).
+for experiment in experiments/*.toml; do
+    name=$(basename "$experiment" .toml)
+    "$soig" experiment "$experiment" --out "$scratch/experiments/$name" --quiet
+    rm -rf "results/experiments/$name" && mkdir -p "results/experiments/$name"
+    cp -r "$scratch/experiments/$name/"{digest.txt,experiment.json,plots,summary.csv,summary.md} \
+        "results/experiments/$name/"
+done
 SOIG="$soig" OUT="$scratch/ci-quickstart" bash scripts/ci.sh --pin
 "$soig" tables results/results-* --readme results/README.md > /dev/null
 echo "results regenerated (scratch: $scratch)"
