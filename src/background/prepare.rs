@@ -180,13 +180,7 @@ pub fn source_mask(pixels: &[f32], width: usize, height: usize) -> Vec<bool> {
     let clip = TRAIL_CLIP_SIGMA * sigma;
     let clipped: Vec<f32> = pixels
         .iter()
-        .map(|&v| {
-            if v.is_finite() {
-                (v as f64 - median).clamp(-clip, clip) as f32
-            } else {
-                0.0
-            }
-        })
+        .map(|&v| clipped_about(v, median, clip) as f32)
         .collect();
     let smooth = box_mean(&clipped, width, height, TRAIL_BOX_RADIUS);
     let mut trails = vec![false; pixels.len()];
@@ -206,6 +200,16 @@ pub fn source_mask(pixels: &[f32], width: usize, height: usize) -> Vec<bool> {
         .zip(lines)
         .map(|((t, o), l)| t || o || l)
         .collect()
+}
+
+/// A pixel's offset from `median`, clipped to +-`clip` (a non-finite pixel counts as the
+/// median): hot pixels then weigh no more than the faint trail pixels being looked for.
+pub(super) fn clipped_about(v: f32, median: f64, clip: f64) -> f64 {
+    if v.is_finite() {
+        (v as f64 - median).clamp(-clip, clip)
+    } else {
+        0.0
+    }
 }
 
 /// The mean over a (2r+1)^2 box, the box clipped at the frame's edges (summed-area table).

@@ -7,7 +7,7 @@
 //! faintest arcs (~0.1 sigma per pixel, README) stay under it, while a line filter averages
 //! along the trail and shows them.
 
-use super::prepare::{components, grow};
+use super::prepare::{clipped_about, components, grow};
 
 /// Pixels are clipped to this many (lower-side) sigma before filtering, as in `prepare`: a hot
 /// pixel then weighs no more than a trail pixel, and a bright trail no more than a faint one.
@@ -52,12 +52,7 @@ pub fn trail_mask(pixels: &[f32], width: usize, height: usize) -> Vec<bool> {
     let mut binned = vec![0.0f32; wb * hb];
     for y in 0..hb * BIN {
         for x in 0..wb * BIN {
-            let v = pixels[y * width + x];
-            let c = if v.is_finite() {
-                (v as f64 - median).clamp(-clip, clip)
-            } else {
-                0.0
-            };
+            let c = clipped_about(pixels[y * width + x], median, clip);
             binned[(y / BIN) * wb + x / BIN] += (c / (BIN * BIN) as f64) as f32;
         }
     }
