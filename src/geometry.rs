@@ -278,20 +278,20 @@ pub fn flux_box(img: &[f32], width: usize, height: usize, share: f64) -> Option<
     // image, and the zeros outside it change no sum, so the box (and its bits) is the one a
     // whole-image table gives (that table was 8.4 MB per 1024 px image).
     let stride = width;
+    if stride == 0 {
+        return None;
+    }
     let lit = |v: &f32| *v > 0.0;
-    let row_of = |j: usize| &img[j * stride..(j + 1) * stride];
-    let y_first = (0..height).find(|&j| row_of(j).iter().any(lit))?;
-    let y_last = (y_first..height)
-        .rev()
-        .find(|&j| row_of(j).iter().any(lit))?;
-    let (mut x_first, mut x_last) = (stride, 0);
-    for j in y_first..=y_last {
-        if let Some(i) = row_of(j).iter().position(lit) {
-            x_first = x_first.min(i);
+    let (mut x_first, mut x_last, mut y_first, mut y_last) = (stride, 0, height, 0);
+    for (j, row) in img.chunks_exact(stride).take(height).enumerate() {
+        if let Some(i) = row.iter().position(lit) {
+            let i_last = row.iter().rposition(lit).unwrap_or(i);
+            (x_first, x_last) = (x_first.min(i), x_last.max(i_last));
+            (y_first, y_last) = (y_first.min(j), j);
         }
-        if let Some(i) = row_of(j).iter().rposition(lit) {
-            x_last = x_last.max(i);
-        }
+    }
+    if y_first > y_last {
+        return None;
     }
     let (width, height) = (x_last - x_first + 1, y_last - y_first + 1);
     let mut col = vec![0.0f64; width];
