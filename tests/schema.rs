@@ -123,35 +123,35 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-fixed-original-semisynthetic.toml",
-        "eafe86166e0a0b430830cb2d2eeb1616656dca34447abbee5d9f3510fe31f3ab",
+        "feb8eb11cfd10957036e6ac3dc68d8eaa22d347422d19eb18e2da095e4b37c34",
     ),
     (
         "results/campaigns/results-fixed-original-synthetic.toml",
-        "199f621e91bfb88905b4be3a394796ccc248b0f347c6c516605d2b9607d773c4",
+        "57dd1a768a42c0116c61f3cce6bd937de10ba43158fd3d53003bb22d9e34e4d3",
     ),
     (
         "results/campaigns/results-fixed-padded-semisynthetic.toml",
-        "d74e433a1239ec109914b896f7ee518f49cdbe672657d0f7d24bfbb11af4aad1",
+        "f49cc9e55c2804e96bdf461b529f270dfd227d8fa0e303ec40edf7eeb912cebb",
     ),
     (
         "results/campaigns/results-fixed-padded-synthetic.toml",
-        "66e72140e2403e769ccd9b6068217b82411699b45919800391a0677ca1526a4a",
+        "4369027821d4114c07f210606c0014656e5784738bde3c9688c235f0697ba80a",
     ),
     (
         "results/campaigns/results-survey-original-semisynthetic.toml",
-        "608b355d5def09c34d8a5c7935286bc391b827c72cb59dc0a83fc9853146a5ca",
+        "224434a8b68ea27a20b66d9fc477b66f36f5818cc293f29d4de2ae5b203e9a5a",
     ),
     (
         "results/campaigns/results-survey-original-synthetic.toml",
-        "0815ac6b02103aabb53f4b78aba6fbca411080394db09aa70cbd9f51eb5e17a8",
+        "1a32135041fc75d97f6762abe6857ac83437443abb86b6ec93e2e75c04527148",
     ),
     (
         "results/campaigns/results-survey-rotated-semisynthetic.toml",
-        "73c606fe7381f96d1d8876f5c4cb1081a9f279c9a27c428fbfa52318b511dc04",
+        "9ccd87884e3fd12305f7256b227033d26f30217fbbe8e8cb70428ad74e3fd563",
     ),
     (
         "results/campaigns/results-survey-rotated-synthetic.toml",
-        "2e107a7baff5a30e2bdd281e52fba0ffb6967ccf9d8cef9faf2115780acc507a",
+        "faea793b33de6131a370632c4f67e808af65ec208958b42eda557b7025a76d85",
     ),
 ];
 
