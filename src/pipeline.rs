@@ -25,7 +25,7 @@ use crate::journal::{self, Identity, Journal, PngRecord, Record};
 use crate::manifest::{self, MANIFEST, Manifest};
 use crate::output::{Resume, write_resumable};
 use crate::progress::Progress;
-use crate::report::{self, DetectorRun, TestImage};
+use crate::report::{self, DetectorRun, ObjectFacts, TestImage};
 use crate::scene::Pointing;
 use crate::shard::Shard;
 use crate::simulate;
@@ -557,22 +557,25 @@ fn detect_and_report(
         .collect();
     let images: Vec<TestImage> = chosen
         .iter()
-        .map(|w| {
+        .map(|w| -> anyhow::Result<TestImage> {
             let png = w.png.as_ref().expect("filtered");
-            TestImage {
-                stem: png
-                    .path
-                    .file_stem()
-                    .unwrap_or_default()
-                    .to_string_lossy()
-                    .into_owned(),
+            let stem = png
+                .path
+                .file_stem()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned();
+            let facts = ObjectFacts::read(&dir.join("truth").join(format!("{stem}.json")))?;
+            Ok(TestImage {
+                stem,
                 png: png.path.clone(),
                 width: png.width,
                 height: png.height,
                 truth: png.label.into_iter().collect(),
-            }
+                facts: Some(facts),
+            })
         })
-        .collect();
+        .collect::<anyhow::Result<_>>()?;
     let load = |img: &TestImage| -> anyhow::Result<Vec<u8>> {
         Ok(image::open(&img.png)
             .with_context(|| format!("reading {}", img.png.display()))?
@@ -627,33 +630,35 @@ fn detect_and_report(
                 .iter_mut()
                 .map(|yolo| {
                     let (next, failed, images, load) = (&next, &failed, &images, &load);
-                    s.spawn(move || -> anyhow::Result<Vec<(usize, Vec<Detection>, f64)>> {
-                        let mut done = Vec::new();
-                        loop {
-                            let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                            let Some(img) = images.get(i) else {
-                                return Ok(done);
-                            };
-                            if failed.load(std::sync::atomic::Ordering::Relaxed) {
-                                return Ok(done);
-                            }
-                            let mut one = || -> anyhow::Result<(Vec<Detection>, f64)> {
-                                let pixels = load(img)?;
-                                let t = Instant::now();
-                                let found = yolo.detect(&pixels, img.width, img.height)?;
-                                Ok((found, t.elapsed().as_secs_f64()))
-                            };
-                            match one() {
-                                Ok((found, s)) => done.push((i, found, s)),
-                                Err(e) => {
-                                    // The others stop at their next image.
-                                    failed.store(true, std::sync::atomic::Ordering::Relaxed);
-                                    return Err(e);
+                    s.spawn(
+                        move || -> anyhow::Result<Vec<(usize, Vec<Detection>, f64)>> {
+                            let mut done = Vec::new();
+                            loop {
+                                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                                let Some(img) = images.get(i) else {
+                                    return Ok(done);
+                                };
+                                if failed.load(std::sync::atomic::Ordering::Relaxed) {
+                                    return Ok(done);
                                 }
+                                let mut one = || -> anyhow::Result<(Vec<Detection>, f64)> {
+                                    let pixels = load(img)?;
+                                    let t = Instant::now();
+                                    let found = yolo.detect(&pixels, img.width, img.height)?;
+                                    Ok((found, t.elapsed().as_secs_f64()))
+                                };
+                                match one() {
+                                    Ok((found, s)) => done.push((i, found, s)),
+                                    Err(e) => {
+                                        // The others stop at their next image.
+                                        failed.store(true, std::sync::atomic::Ordering::Relaxed);
+                                        return Err(e);
+                                    }
+                                }
+                                progress.advance();
                             }
-                            progress.advance();
-                        }
-                    })
+                        },
+                    )
                 })
                 .collect();
             handles

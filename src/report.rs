@@ -2,14 +2,17 @@
 //! the paper's Tables 3 and 5 (Ultralytics and COCO conventions side by side), per-image
 //! detections, timing in the shape of Table 6, a precision-recall plot and previews of true
 //! positives, false positives and misses (ground truth green, predictions red, as the paper's
-//! Figs. 11 and 13).
+//! Figs. 11 and 13), and each detector's efficiency against magnitude, SNR and streak length
+//! (`efficiency`).
 //!
 //! Everything here is a pure function of the images and detections, except the timing, which is
 //! written to `report/timing.json` and `report/report.md` only: the manifest lists those two as
 //! volatile (present, not hashed), so the digest stays reproducible. The figures are drawn in
 //! `figures`.
 
+pub mod efficiency;
 mod figures;
+pub use efficiency::{Efficiency, HalfRecall, ObjectFacts};
 pub(crate) use figures::draw_rect;
 
 use std::fmt::Write as _;
@@ -30,6 +33,8 @@ pub struct TestImage {
     pub width: usize,
     pub height: usize,
     pub truth: Vec<[f64; 4]>,
+    /// The debris' magnitude, SNR and length from the truth sidecar (None: not known).
+    pub facts: Option<ObjectFacts>,
 }
 
 /// The detections of one detector on every test image, and its time per image.
@@ -260,6 +265,18 @@ pub fn write(
     progress.finish();
     csv_rows.flush()?;
 
+    let facts: Vec<Option<ObjectFacts>> = images.iter().map(|i| i.facts).collect();
+    let efficiencies: Vec<Efficiency> = runs
+        .iter()
+        .map(|run| efficiency::efficiency(&run.name, &evals(images, run), &facts, conf))
+        .collect();
+    std::fs::write(
+        rdir.join("efficiency.json"),
+        serde_json::to_string_pretty(&efficiencies)? + "\n",
+    )?;
+    efficiency::write_csv(&rdir.join("efficiency.csv"), &efficiencies)?;
+    efficiency::plot(&rdir.join("efficiency.png"), &efficiencies)?;
+
     let report = Report {
         campaign: campaign.to_string(),
         campaign_hash: campaign_hash.to_string(),
@@ -320,12 +337,18 @@ pub fn write(
     )?;
     std::fs::write(
         rdir.join("report.md"),
-        markdown(&report, &conversion, &detection, conf),
+        markdown(&report, &efficiencies, &conversion, &detection, conf),
     )?;
     Ok(())
 }
 
-fn markdown(r: &Report, conversion: &Timing, detection: &[(String, Timing)], conf: f64) -> String {
+fn markdown(
+    r: &Report,
+    efficiencies: &[Efficiency],
+    conversion: &Timing,
+    detection: &[(String, Timing)],
+    conf: f64,
+) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# soig report: {}\n", r.campaign);
     let _ = writeln!(
@@ -372,6 +395,7 @@ fn markdown(r: &Report, conversion: &Timing, detection: &[(String, Timing)], con
             .unwrap_or_default();
         let _ = writeln!(s, "- `{}`: {}{model}", d.detector, d.description);
     }
+    efficiency_markdown(&mut s, efficiencies, conf);
     let _ = writeln!(
         s,
         "\n## Time per image (the shape of Table 6; this machine, this run)\n"
@@ -397,6 +421,43 @@ fn markdown(r: &Report, conversion: &Timing, detection: &[(String, Timing)], con
         "\n![precision-recall](pr_curve.png)\n\nPreviews of true positives, false positives and misses are in `previews/` (ground truth green, predictions red)."
     );
     s
+}
+
+/// The 50% magnitude of each detector and its recall per magnitude bin.
+fn efficiency_markdown(s: &mut String, efficiencies: &[Efficiency], conf: f64) {
+    let _ = writeln!(s, "\n## Detection efficiency\n");
+    let _ = writeln!(
+        s,
+        "Recall of each detector at confidence {conf}, IoU 0.5, by the debris' magnitude (`efficiency.csv` also bins by matched-filter SNR and streak length; `efficiency.png` plots all three).\n"
+    );
+    for e in efficiencies {
+        let _ = writeln!(
+            s,
+            "- `{}`: magnitude of 50% recall: {}",
+            e.detector, e.half_recall
+        );
+    }
+    let Some(first) = efficiencies.first() else {
+        return;
+    };
+    let _ = write!(s, "\n| magnitude | objects |");
+    for e in efficiencies {
+        let _ = write!(s, " recall {} |", e.detector);
+    }
+    let _ = write!(s, "\n|---|---|");
+    for _ in efficiencies {
+        let _ = write!(s, "---|");
+    }
+    let _ = writeln!(s);
+    let magnitude = efficiency::Quantity::Magnitude;
+    for (k, b) in first.curves[&magnitude].iter().enumerate() {
+        let _ = write!(s, "| {:.1}-{:.1} | {} |", b.lo, b.hi, b.objects);
+        for e in efficiencies {
+            let _ = write!(s, " {:.2} |", e.curves[&magnitude][k].recall);
+        }
+        let _ = writeln!(s);
+    }
+    let _ = writeln!(s, "\n![efficiency](efficiency.png)");
 }
 
 #[cfg(test)]

@@ -28,38 +28,15 @@ pub struct AtThreshold {
 }
 
 /// Precision, recall, TP, FP, FN counting detections with `score >= conf` (the paper reports conf 0.5,
-/// IoU 0.5). Matching per image and class, greedy by score as COCO does: detections in descending score
-/// (ties in input order) each take the still unmatched object of their class with the highest IoU
-/// ([`iou`], plain `f64`), provided it is `>= iou_threshold` (IoU ties: the first object). Unmatched
-/// detections are FP, unmatched objects FN.
+/// IoU 0.5), matched per image by [`match_image`].
 pub fn at_threshold(images: &[ImageEval], conf: f64, iou_threshold: f64) -> AtThreshold {
     let (mut tp, mut fp, mut fn_) = (0usize, 0usize, 0usize);
     for im in images {
-        im.check();
-        let mut dets: Vec<&Detection> = im.detections.iter().filter(|d| d.score >= conf).collect();
-        dets.sort_by(|a, b| cmp_desc(a.score, b.score));
-        let mut matched = vec![false; im.truth.len()];
-        for d in dets {
-            let db = det_box(d);
-            let mut best: Option<(usize, f64)> = None;
-            for (g, (tb, &tc)) in im.truth.iter().zip(&im.truth_class).enumerate() {
-                if matched[g] || tc != d.class {
-                    continue;
-                }
-                let v = iou(tb, &db);
-                if v >= iou_threshold && best.is_none_or(|(_, bv)| v > bv) {
-                    best = Some((g, v));
-                }
-            }
-            match best {
-                Some((g, _)) => {
-                    matched[g] = true;
-                    tp += 1;
-                }
-                None => fp += 1,
-            }
-        }
-        fn_ += matched.iter().filter(|&&m| !m).count();
+        let m = match_image(im, conf, iou_threshold);
+        let found = m.found.iter().filter(|&&f| f).count();
+        tp += found;
+        fp += m.false_positives;
+        fn_ += m.found.len() - found;
     }
     let ratio = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f64 / b as f64 };
     AtThreshold {
@@ -68,6 +45,48 @@ pub fn at_threshold(images: &[ImageEval], conf: f64, iou_threshold: f64) -> AtTh
         tp,
         fp,
         fn_,
+    }
+}
+
+/// How the detections of one image matched its objects at one confidence and IoU threshold.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageMatch {
+    /// Per object (in the image's order): whether a detection took it.
+    pub found: Vec<bool>,
+    /// Detections with `score >= conf` that took no object.
+    pub false_positives: usize,
+}
+
+/// Match one image, greedy by score as COCO does: detections with `score >= conf` in descending
+/// score (ties in input order) each take the still unmatched object of their class with the
+/// highest IoU ([`iou`], plain `f64`), provided it is `>= iou_threshold` (IoU ties: the first
+/// object). Unmatched detections are false positives, unmatched objects misses.
+pub fn match_image(im: &ImageEval, conf: f64, iou_threshold: f64) -> ImageMatch {
+    im.check();
+    let mut dets: Vec<&Detection> = im.detections.iter().filter(|d| d.score >= conf).collect();
+    dets.sort_by(|a, b| cmp_desc(a.score, b.score));
+    let mut found = vec![false; im.truth.len()];
+    let mut false_positives = 0;
+    for d in dets {
+        let db = det_box(d);
+        let mut best: Option<(usize, f64)> = None;
+        for (g, (tb, &tc)) in im.truth.iter().zip(&im.truth_class).enumerate() {
+            if found[g] || tc != d.class {
+                continue;
+            }
+            let v = iou(tb, &db);
+            if v >= iou_threshold && best.is_none_or(|(_, bv)| v > bv) {
+                best = Some((g, v));
+            }
+        }
+        match best {
+            Some((g, _)) => found[g] = true,
+            None => false_positives += 1,
+        }
+    }
+    ImageMatch {
+        found,
+        false_positives,
     }
 }
 

@@ -44,7 +44,7 @@ mod yolo_files;
 mod cases;
 
 pub use coco_eval::{CocoMetrics, coco};
-pub use matching::{AtThreshold, at_threshold, iou};
+pub use matching::{AtThreshold, ImageMatch, at_threshold, iou, match_image};
 pub use ultralytics_map::{UltralyticsMetrics, UltralyticsVersion, ultralytics, ultralytics_with};
 pub use yolo_files::{MetricsError, read_yolo_dirs};
 

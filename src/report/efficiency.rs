@@ -1,0 +1,523 @@
+//! Detection efficiency: each detector's recall and precision against the debris' magnitude,
+//! its integrated matched-filter SNR and its streak length, binned, and the magnitude at which
+//! recall falls to 50% (the limiting magnitude an SSA sensor is judged by).
+//!
+//! Every soig test image holds one debris object. An image goes into the bin of its object's
+//! value; the object counts as found when a detection with `score >= conf` takes it at
+//! IoU >= 0.5 (`metrics::match_image`, the matching behind the report's P/R@conf), and the
+//! image's detections that take no object are that bin's false positives. Images whose debris
+//! left no label (no photon landed) have no object and are left out.
+//!
+//! Bins: magnitude in steps of 0.5 mag; SNR and length in octaves (2^k .. 2^(k+1)), since
+//! both span orders of magnitude. The 50% magnitude interpolates linearly between the centres
+//! of the last bin (going fainter) whose recall is at least 0.5 and the next one, which is below.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::metrics::{ImageEval, match_image};
+
+/// What the truth sidecar says of an image's debris, as far as efficiency needs it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObjectFacts {
+    pub magnitude: f64,
+    /// Integrated matched-filter SNR of the streak (`Truth::snr_matched_filter`).
+    pub snr: f64,
+    /// Distance between the first and last trajectory samples, pixels.
+    pub length_px: f64,
+}
+
+impl ObjectFacts {
+    /// Read from a truth sidecar (`truth/<stem>.json`).
+    pub fn read(path: &Path) -> anyhow::Result<ObjectFacts> {
+        #[derive(Deserialize)]
+        struct Sidecar {
+            magnitude: f64,
+            snr_matched_filter: f64,
+            streak_start_px: [f64; 2],
+            streak_end_px: [f64; 2],
+        }
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| anyhow::anyhow!("reading {}: {e}", path.display()))?;
+        let s: Sidecar = serde_json::from_str(&text)
+            .map_err(|e| anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display()))?;
+        let [x0, y0] = s.streak_start_px;
+        let [x1, y1] = s.streak_end_px;
+        Ok(ObjectFacts {
+            magnitude: s.magnitude,
+            snr: s.snr_matched_filter,
+            length_px: (x1 - x0).hypot(y1 - y0),
+        })
+    }
+}
+
+/// The quantities efficiency is binned against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Quantity {
+    Magnitude,
+    SnrMatchedFilter,
+    StreakLengthPx,
+}
+
+impl Quantity {
+    pub const ALL: [Quantity; 3] = [
+        Quantity::Magnitude,
+        Quantity::SnrMatchedFilter,
+        Quantity::StreakLengthPx,
+    ];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Quantity::Magnitude => "debris magnitude",
+            Quantity::SnrMatchedFilter => "matched-filter SNR",
+            Quantity::StreakLengthPx => "streak length (px)",
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Quantity::Magnitude => "magnitude",
+            Quantity::SnrMatchedFilter => "snr_matched_filter",
+            Quantity::StreakLengthPx => "streak_length_px",
+        }
+    }
+
+    fn value(self, f: &ObjectFacts) -> f64 {
+        match self {
+            Quantity::Magnitude => f.magnitude,
+            Quantity::SnrMatchedFilter => f.snr,
+            Quantity::StreakLengthPx => f.length_px,
+        }
+    }
+
+    /// The bin index of a value (None for a value no bin holds: non-finite, or not positive
+    /// on an octave scale).
+    fn bin(self, v: f64) -> Option<i64> {
+        let k = match self {
+            Quantity::Magnitude => (v / 0.5).floor(),
+            _ if v > 0.0 => v.log2().floor(),
+            _ => return None,
+        };
+        k.is_finite().then_some(k as i64)
+    }
+
+    fn edges(self, k: i64) -> (f64, f64) {
+        match self {
+            Quantity::Magnitude => (k as f64 * 0.5, (k + 1) as f64 * 0.5),
+            _ => (2f64.powi(k as i32), 2f64.powi(k as i32 + 1)),
+        }
+    }
+
+    /// The bin's centre: arithmetic for magnitude, geometric for octaves.
+    fn centre(self, lo: f64, hi: f64) -> f64 {
+        match self {
+            Quantity::Magnitude => (lo + hi) / 2.0,
+            _ => (lo * hi).sqrt(),
+        }
+    }
+}
+
+/// One bin of one quantity.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bin {
+    pub lo: f64,
+    pub hi: f64,
+    pub objects: usize,
+    pub found: usize,
+    pub false_positives: usize,
+    /// found / objects.
+    pub recall: f64,
+    /// found / (found + false positives); None when the bin's images hold no detection.
+    pub precision: Option<f64>,
+}
+
+/// Where recall crosses 50% on the magnitude scale.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum HalfRecall {
+    /// Interpolated between two bin centres.
+    At { magnitude: f64 },
+    /// Recall is at least 50% in every bin: the limit is fainter than the faintest bin.
+    FainterThan { magnitude: f64 },
+    /// Recall is below 50% already in the brightest bin.
+    BrighterThan { magnitude: f64 },
+    /// No test image holds an object.
+    NoObjects,
+}
+
+impl std::fmt::Display for HalfRecall {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            HalfRecall::At { magnitude } => write!(f, "{magnitude:.2}"),
+            HalfRecall::FainterThan { magnitude } => {
+                write!(f, "not reached (recall >= 50% to {magnitude:.1})")
+            }
+            HalfRecall::BrighterThan { magnitude } => {
+                write!(
+                    f,
+                    "brighter than the data (recall < 50% from {magnitude:.1})"
+                )
+            }
+            HalfRecall::NoObjects => write!(f, "no objects"),
+        }
+    }
+}
+
+/// One detector's efficiency.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Efficiency {
+    pub detector: String,
+    pub conf: f64,
+    pub iou: f64,
+    pub half_recall: HalfRecall,
+    pub curves: BTreeMap<Quantity, Vec<Bin>>,
+}
+
+/// The efficiency of one detector: `evals` and `facts` per test image, in the same order.
+pub fn efficiency(
+    detector: &str,
+    evals: &[ImageEval],
+    facts: &[Option<ObjectFacts>],
+    conf: f64,
+) -> Efficiency {
+    const IOU: f64 = 0.5;
+    // Per image with an object: its facts, objects found, objects, false positives.
+    let matched: Vec<(ObjectFacts, usize, usize, usize)> = evals
+        .iter()
+        .zip(facts)
+        .filter(|(e, _)| !e.truth.is_empty())
+        .filter_map(|(e, f)| {
+            let m = match_image(e, conf, IOU);
+            let found = m.found.iter().filter(|&&x| x).count();
+            f.map(|f| (f, found, m.found.len(), m.false_positives))
+        })
+        .collect();
+    let curves: BTreeMap<Quantity, Vec<Bin>> = Quantity::ALL
+        .into_iter()
+        .map(|q| {
+            let mut counts: BTreeMap<i64, (usize, usize, usize)> = BTreeMap::new();
+            for (f, found, objects, fp) in &matched {
+                if let Some(k) = q.bin(q.value(f)) {
+                    let c = counts.entry(k).or_default();
+                    c.0 += objects;
+                    c.1 += found;
+                    c.2 += fp;
+                }
+            }
+            let bins = counts
+                .into_iter()
+                .map(|(k, (objects, found, fp))| {
+                    let (lo, hi) = q.edges(k);
+                    Bin {
+                        lo,
+                        hi,
+                        objects,
+                        found,
+                        false_positives: fp,
+                        recall: found as f64 / objects as f64,
+                        precision: (found + fp > 0).then(|| found as f64 / (found + fp) as f64),
+                    }
+                })
+                .collect();
+            (q, bins)
+        })
+        .collect();
+    Efficiency {
+        detector: detector.to_string(),
+        conf,
+        iou: IOU,
+        half_recall: half_recall(&curves[&Quantity::Magnitude]),
+        curves,
+    }
+}
+
+/// The magnitude at which recall falls to 50%, from magnitude bins in increasing magnitude.
+pub fn half_recall(bins: &[Bin]) -> HalfRecall {
+    let centre = |b: &Bin| Quantity::Magnitude.centre(b.lo, b.hi);
+    let Some(first) = bins.first() else {
+        return HalfRecall::NoObjects;
+    };
+    match bins.iter().position(|b| b.recall < 0.5) {
+        None => HalfRecall::FainterThan {
+            magnitude: bins.last().map_or(first.hi, |b| b.hi),
+        },
+        Some(0) => HalfRecall::BrighterThan {
+            magnitude: first.lo,
+        },
+        Some(i) => {
+            let (a, b) = (&bins[i - 1], &bins[i]);
+            let t = (a.recall - 0.5) / (a.recall - b.recall);
+            HalfRecall::At {
+                magnitude: centre(a) + t * (centre(b) - centre(a)),
+            }
+        }
+    }
+}
+
+/// The bins of every detector as CSV rows.
+pub fn write_csv(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
+    let mut w = csv::Writer::from_path(path)?;
+    w.write_record([
+        "detector",
+        "quantity",
+        "lo",
+        "hi",
+        "objects",
+        "found",
+        "false_positives",
+        "recall",
+        "precision",
+    ])?;
+    for e in all {
+        for (q, bins) in &e.curves {
+            for b in bins {
+                w.write_record([
+                    e.detector.clone(),
+                    q.name().to_string(),
+                    format!("{}", b.lo),
+                    format!("{}", b.hi),
+                    b.objects.to_string(),
+                    b.found.to_string(),
+                    b.false_positives.to_string(),
+                    format!("{:.4}", b.recall),
+                    b.precision.map_or(String::new(), |p| format!("{p:.4}")),
+                ])?;
+            }
+        }
+    }
+    w.flush()?;
+    Ok(())
+}
+
+/// Recall (solid) and precision (dashed) of each detector against each quantity, one panel
+/// per quantity; SNR and length on log axes.
+pub fn plot(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
+    use plotters::prelude::*;
+    let colors = [
+        RGBColor(200, 30, 30),
+        RGBColor(30, 90, 200),
+        RGBColor(30, 150, 60),
+    ];
+    crate::plot::png(path, (1500, 460), |root| {
+        let panels = root.split_evenly((1, 3));
+        for (panel, q) in panels.iter().zip(Quantity::ALL) {
+            let bins = all.iter().flat_map(|e| &e.curves[&q]);
+            let (lo, hi) = bins.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), b| {
+                (l.min(b.lo), h.max(b.hi))
+            });
+            if !lo.is_finite() {
+                continue;
+            }
+            let points = |e: &Efficiency, of: fn(&Bin) -> Option<f64>| -> Vec<(f64, f64)> {
+                e.curves[&q]
+                    .iter()
+                    .filter_map(|b| of(b).map(|y| (q.centre(b.lo, b.hi), y)))
+                    .collect()
+            };
+            let title = format!("Efficiency against {}", q.label());
+            let mut builder = ChartBuilder::on(panel);
+            builder
+                .caption(title, ("sans-serif", 18))
+                .margin(10)
+                .x_label_area_size(40)
+                .y_label_area_size(45);
+            // One body for both axis kinds: plotters' linear and log ranges are different types.
+            macro_rules! draw {
+                ($chart:expr) => {{
+                    let mut chart = $chart;
+                    chart
+                        .configure_mesh()
+                        .x_labels(6)
+                        .x_label_formatter(&|v| {
+                            format!("{v:.4}")
+                                .trim_end_matches('0')
+                                .trim_end_matches('.')
+                                .to_string()
+                        })
+                        .light_line_style(WHITE)
+                        .x_desc(q.label())
+                        .y_desc("recall (solid), precision (dashed)")
+                        .draw()?;
+                    for (k, e) in all.iter().enumerate() {
+                        let c = colors[k % colors.len()];
+                        let recall = points(e, |b| Some(b.recall));
+                        chart
+                            .draw_series(LineSeries::new(recall.clone(), c.stroke_width(2)))?
+                            .label(e.detector.clone())
+                            .legend(move |(x, y)| {
+                                PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                            });
+                        chart.draw_series(recall.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
+                        chart.draw_series(DashedLineSeries::new(
+                            points(e, |b| b.precision),
+                            5,
+                            4,
+                            c.stroke_width(1),
+                        ))?;
+                    }
+                    chart.draw_series(std::iter::once(PathElement::new(
+                        vec![(lo, 0.5), (hi, 0.5)],
+                        BLACK.mix(0.3),
+                    )))?;
+                    chart
+                        .configure_series_labels()
+                        .background_style(WHITE.mix(0.8))
+                        .border_style(BLACK)
+                        .position(SeriesLabelPosition::LowerLeft)
+                        .draw()?;
+                }};
+            }
+            match q {
+                Quantity::Magnitude => draw!(builder.build_cartesian_2d(lo..hi, 0.0..1.05)?),
+                _ => draw!(builder.build_cartesian_2d((lo..hi).log_scale(), 0.0..1.05)?),
+            }
+        }
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::detect::Detection;
+
+    fn image(found: bool, extra_fp: usize) -> ImageEval {
+        let truth = [100.0, 100.0, 140.0, 110.0];
+        let mut detections = Vec::new();
+        if found {
+            detections.push(Detection {
+                x1: 100.0,
+                y1: 100.0,
+                x2: 140.0,
+                y2: 110.0,
+                score: 0.9,
+                class: 0,
+            });
+        }
+        for i in 0..extra_fp {
+            detections.push(Detection {
+                x1: 500.0 + 20.0 * i as f64,
+                y1: 500.0,
+                x2: 510.0 + 20.0 * i as f64,
+                y2: 510.0,
+                score: 0.8,
+                class: 0,
+            });
+        }
+        // A low-score detection on the object never counts: conf 0.5 filters it out.
+        detections.push(Detection {
+            x1: 100.0,
+            y1: 100.0,
+            x2: 140.0,
+            y2: 110.0,
+            score: 0.2,
+            class: 0,
+        });
+        ImageEval {
+            truth: vec![truth],
+            truth_class: vec![0],
+            detections,
+        }
+    }
+
+    fn facts(magnitude: f64, snr: f64, length_px: f64) -> Option<ObjectFacts> {
+        Some(ObjectFacts {
+            magnitude,
+            snr,
+            length_px,
+        })
+    }
+
+    #[test]
+    fn bins_count_objects_found_and_false_positives() {
+        // Magnitudes 10.1, 10.4 (bin 10.0-10.5), 11.2 (11.0-11.5) and 12.7 (12.5-13.0).
+        let evals = [
+            image(true, 0),
+            image(true, 1),
+            image(false, 0),
+            image(false, 2),
+        ];
+        let f = [
+            facts(10.1, 30.0, 40.0),
+            facts(10.4, 17.0, 70.0),
+            facts(11.2, 9.0, 3.0),
+            facts(12.7, 1.5, 200.0),
+        ];
+        let e = efficiency("d", &evals, &f, 0.5);
+        let m = &e.curves[&Quantity::Magnitude];
+        let got: Vec<_> = m
+            .iter()
+            .map(|b| (b.lo, b.hi, b.objects, b.found, b.false_positives))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (10.0, 10.5, 2, 2, 1),
+                (11.0, 11.5, 1, 0, 0),
+                (12.5, 13.0, 1, 0, 2)
+            ]
+        );
+        assert_eq!(m[0].recall, 1.0);
+        assert_eq!(m[0].precision, Some(2.0 / 3.0));
+        assert_eq!(m[1].precision, None);
+        assert_eq!(m[2].precision, Some(0.0));
+        // Octaves: SNR 30 and 17 share 16-32, 9 is in 8-16, 1.5 in 1-2.
+        let s: Vec<_> = e.curves[&Quantity::SnrMatchedFilter]
+            .iter()
+            .map(|b| (b.lo, b.hi, b.objects))
+            .collect();
+        assert_eq!(s, [(1.0, 2.0, 1), (8.0, 16.0, 1), (16.0, 32.0, 2)]);
+        let l: Vec<_> = e.curves[&Quantity::StreakLengthPx]
+            .iter()
+            .map(|b| (b.lo, b.objects))
+            .collect();
+        assert_eq!(l, [(2.0, 1), (32.0, 1), (64.0, 1), (128.0, 1)]);
+        // Recall 1 at centre 10.25, 0 at 11.25: 50% half way, 10.75.
+        assert_eq!(e.half_recall, HalfRecall::At { magnitude: 10.75 });
+    }
+
+    #[test]
+    fn half_recall_interpolates_and_says_when_it_is_not_reached() {
+        let bin = |lo: f64, recall: f64| Bin {
+            lo,
+            hi: lo + 0.5,
+            objects: 10,
+            found: (recall * 10.0) as usize,
+            false_positives: 0,
+            recall,
+            precision: None,
+        };
+        // 0.9 at 12.25, 0.7 at 12.75, 0.3 at 13.25: crosses a half of the way from 12.75.
+        let bins = [bin(12.0, 0.9), bin(12.5, 0.7), bin(13.0, 0.3)];
+        assert_eq!(half_recall(&bins), HalfRecall::At { magnitude: 13.0 });
+        assert_eq!(
+            half_recall(&bins[..2]),
+            HalfRecall::FainterThan { magnitude: 13.0 }
+        );
+        assert_eq!(
+            half_recall(&bins[2..]),
+            HalfRecall::BrighterThan { magnitude: 13.0 }
+        );
+        assert_eq!(half_recall(&[]), HalfRecall::NoObjects);
+    }
+
+    #[test]
+    fn images_without_an_object_or_facts_are_left_out() {
+        let empty = ImageEval {
+            truth: vec![],
+            truth_class: vec![],
+            detections: vec![],
+        };
+        let e = efficiency(
+            "d",
+            &[empty, image(true, 0), image(true, 0)],
+            &[facts(9.0, 10.0, 10.0), None, facts(9.2, 10.0, 10.0)],
+            0.5,
+        );
+        let m = &e.curves[&Quantity::Magnitude];
+        assert_eq!((m.len(), m[0].objects), (1, 1));
+    }
+}
