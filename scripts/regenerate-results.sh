@@ -30,6 +30,13 @@ for experiment in experiments/*.toml; do
     rm -rf "results/experiments/$name" && mkdir -p "results/experiments/$name"
     cp -r "$scratch/experiments/$name/"{digest.txt,experiment.json,plots,summary.csv,summary.md} \
         "results/experiments/$name/"
+    # Each point's detection-efficiency curves (runs with a detect stage).
+    for point in "$scratch/experiments/$name/points/"*/; do
+        [ -f "$point/report/efficiency.png" ] || continue
+        mkdir -p "results/experiments/$name/points/$(basename "$point")"
+        cp "$point/report/"{efficiency.png,efficiency.csv} \
+            "results/experiments/$name/points/$(basename "$point")/"
+    done
 done
 SOIG="$soig" OUT="$scratch/ci-quickstart" bash scripts/ci.sh --pin
 "$soig" tables results/results-* --readme results/README.md > /dev/null

@@ -9,8 +9,8 @@
 //! left no label (no photon landed) have no object and are left out.
 //!
 //! Bins: magnitude in steps of 0.5 mag; SNR and length in octaves (2^k .. 2^(k+1)), since
-//! both span orders of magnitude. The 50% magnitude interpolates linearly between the centres
-//! of the last bin (going fainter) whose recall is at least 0.5 and the next one, which is below.
+//! both span orders of magnitude. The 50% magnitude is interpolated linearly on the isotonic
+//! (never rising with magnitude) fit of recall to the magnitude bins: see [`half_recall`].
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -235,21 +235,39 @@ pub fn efficiency(
 }
 
 /// The magnitude at which recall falls to 50%, from magnitude bins in increasing magnitude.
+/// Recall should not rise as debris gets fainter, but a bin of a few objects can make it look
+/// so; adjacent bins that break the order are pooled first (pool-adjacent-violators, weighted by
+/// their objects: the isotonic fit), so one unlucky bright bin does not set the limit.
 pub fn half_recall(bins: &[Bin]) -> HalfRecall {
-    let centre = |b: &Bin| Quantity::Magnitude.centre(b.lo, b.hi);
-    let Some(first) = bins.first() else {
+    let (Some(first), Some(last)) = (bins.first(), bins.last()) else {
         return HalfRecall::NoObjects;
     };
-    match bins.iter().position(|b| b.recall < 0.5) {
-        None => HalfRecall::FainterThan {
-            magnitude: bins.last().map_or(first.hi, |b| b.hi),
-        },
+    // Pooled blocks: (objects, found, sum of bin centre x objects).
+    let mut blocks: Vec<(f64, f64, f64)> = Vec::new();
+    for b in bins {
+        let n = b.objects as f64;
+        blocks.push((
+            n,
+            b.found as f64,
+            Quantity::Magnitude.centre(b.lo, b.hi) * n,
+        ));
+        while let [.., a, z] = blocks[..]
+            && z.1 / z.0 > a.1 / a.0
+        {
+            blocks.pop();
+            *blocks.last_mut().expect("two blocks") = (a.0 + z.0, a.1 + z.1, a.2 + z.2);
+        }
+    }
+    let recall = |k: &(f64, f64, f64)| k.1 / k.0;
+    let centre = |k: &(f64, f64, f64)| k.2 / k.0;
+    match blocks.iter().position(|k| recall(k) < 0.5) {
+        None => HalfRecall::FainterThan { magnitude: last.hi },
         Some(0) => HalfRecall::BrighterThan {
             magnitude: first.lo,
         },
         Some(i) => {
-            let (a, b) = (&bins[i - 1], &bins[i]);
-            let t = (a.recall - 0.5) / (a.recall - b.recall);
+            let (a, b) = (&blocks[i - 1], &blocks[i]);
+            let t = (recall(a) - 0.5) / (recall(a) - recall(b));
             HalfRecall::At {
                 magnitude: centre(a) + t * (centre(b) - centre(a)),
             }
@@ -502,6 +520,18 @@ mod tests {
             HalfRecall::BrighterThan { magnitude: 13.0 }
         );
         assert_eq!(half_recall(&[]), HalfRecall::NoObjects);
+        // 1.0, 0.2, 1.0, 0: the middle two pool to 0.6 at 11.0, so 50% falls a sixth of the way
+        // from 11.0 to 11.75, at 11.125 (not beside the lone 0.2 bin, at 10.4).
+        let bins = [
+            bin(10.0, 1.0),
+            bin(10.5, 0.2),
+            bin(11.0, 1.0),
+            bin(11.5, 0.0),
+        ];
+        let HalfRecall::At { magnitude } = half_recall(&bins) else {
+            panic!("{:?}", half_recall(&bins))
+        };
+        assert!((magnitude - 11.125).abs() < 1e-12, "{magnitude}");
     }
 
     #[test]

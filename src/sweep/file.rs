@@ -52,8 +52,10 @@ pub enum Mode {
 }
 
 /// A figure of the summary. The detector metrics are those of the run's report, one column per
-/// detector; `objects` counts the labelled debris of the test split; `seconds` is the run time
-/// (volatile: shown, but outside the digest).
+/// detector; `mag50` is the magnitude at which a detector's recall falls to 50% (its report's
+/// detection efficiency; absent where the run's magnitudes never cross it); `objects` counts
+/// the labelled debris of the test split; `seconds` is the run time (volatile: shown, but
+/// outside the digest).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Figure {
@@ -63,6 +65,7 @@ pub enum Figure {
     Precision,
     Recall,
     CocoAp,
+    Mag50,
     Objects,
     Seconds,
 }
@@ -75,6 +78,7 @@ impl Figure {
             Figure::Precision => "precision",
             Figure::Recall => "recall",
             Figure::CocoAp => "coco_ap",
+            Figure::Mag50 => "mag50",
             Figure::Objects => "objects",
             Figure::Seconds => "seconds",
         }

@@ -12,7 +12,7 @@ use super::file::{Experiment, Point, Setting};
 use crate::hash::hash_json;
 use crate::manifest::Manifest;
 use crate::progress::Progress;
-use crate::report::Report;
+use crate::report::{Efficiency, HalfRecall, Report};
 
 /// What one point gave.
 #[derive(Debug, Serialize)]
@@ -128,6 +128,17 @@ fn read_report(dir: &Path, figures: &mut BTreeMap<String, f64>) -> anyhow::Resul
             ("coco_ap", d.coco.ap),
         ] {
             figures.insert(format!("{name}/{}", d.detector), v);
+        }
+    }
+    let path = dir.join("report").join("efficiency.json");
+    if path.is_file() {
+        let text = std::fs::read_to_string(&path)?;
+        let all: Vec<Efficiency> =
+            serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        for e in all {
+            if let HalfRecall::At { magnitude } = e.half_recall {
+                figures.insert(format!("mag50/{}", e.detector), magnitude);
+            }
         }
     }
     Ok(())
