@@ -121,12 +121,7 @@ impl Experiment {
             .then(|| Product {
                 frame: e.geometry,
                 pad_px: e.pad_px as usize,
-                enhance: enhance::Settings {
-                    sqrt: e.sqrt && c.pointing.mode == PointingMode::Fixed,
-                    clahe_clip_limit: e.clahe_clip_limit,
-                    clahe_tiles: e.clahe_tiles,
-                    gamma: e.gamma,
-                },
+                enhance: enhance_settings(Some(campaign)),
             });
         Experiment {
             seed: c.seed,
@@ -243,4 +238,23 @@ pub fn inputs(campaign: &Campaign) -> Result<Inputs, Error> {
         background: BackgroundModel::load(&frames)
             .map_err(|e| campaign.error_at("background.paths", e.to_string()))?,
     })
+}
+
+/// The enhancement of a campaign's PNGs (its `[enhance]`, the square root for fixed pointing
+/// only, paper 3.3), or soig's defaults without a campaign.
+pub fn enhance_settings(campaign: Option<&Campaign>) -> enhance::Settings {
+    let default = crate::campaign::Enhance::default();
+    let (e, fixed) = match campaign {
+        Some(c) => (
+            &c.resolved.enhance,
+            c.resolved.pointing.mode == PointingMode::Fixed,
+        ),
+        None => (&default, true),
+    };
+    enhance::Settings {
+        sqrt: e.sqrt && fixed,
+        clahe_clip_limit: e.clahe_clip_limit,
+        clahe_tiles: e.clahe_tiles,
+        gamma: e.gamma,
+    }
 }

@@ -240,9 +240,48 @@ fn section(key: &str, text: &str, width: usize, height: usize) -> Result<Region,
     })
 }
 
+/// A FITS region ready for the enhancement: non-finite values set to the median of the
+/// finite ones, and, before a square root, the minimum raised to 0 when it is negative
+/// (values the square root would clip). Returns (values, non-finite count, pedestal added).
+pub fn ready_for_enhancement(values: &[f32], sqrt: bool) -> (Vec<f32>, usize, f64) {
+    let mut finite: Vec<f32> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    let non_finite = values.len() - finite.len();
+    let median = if finite.is_empty() {
+        0.0
+    } else {
+        let mid = finite.len() / 2;
+        *finite.select_nth_unstable_by(mid, f32::total_cmp).1
+    };
+    let mut out: Vec<f32> = values
+        .iter()
+        .map(|&v| if v.is_finite() { v } else { median })
+        .collect();
+    let min = out.iter().copied().fold(f32::INFINITY, f32::min);
+    let pedestal = if sqrt && min < 0.0 {
+        -(min as f64)
+    } else {
+        0.0
+    };
+    if pedestal > 0.0 {
+        out.iter_mut()
+            .for_each(|v| *v = (*v as f64 + pedestal) as f32);
+    }
+    (out, non_finite, pedestal)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ready_for_enhancement_fills_non_finite_and_lifts_negative_frames_for_the_square_root() {
+        let (v, n, p) = ready_for_enhancement(&[-2.0, f32::NAN, 1.0, 5.0, f32::INFINITY], true);
+        assert_eq!((n, p), (2, 2.0));
+        // The NaN and the infinity take the median of the finite values, 1, then the pedestal.
+        assert_eq!(v, vec![0.0, 3.0, 3.0, 7.0, 3.0]);
+        let (v, _, p) = ready_for_enhancement(&[-2.0, 1.0], false);
+        assert_eq!((v, p), (vec![-2.0, 1.0], 0.0));
+    }
 
     #[test]
     fn sections_are_one_based_and_inclusive() {

@@ -7,7 +7,7 @@
 //! Imports go one way, top to bottom (no module imports one above it, and there is no cycle):
 //!
 //! ```text
-//! verbs          merge (of shards)   pipeline (run, train)   study   compare   tables   detect_frames   main.rs: the CLI
+//! verbs          merge (of shards)   pipeline (run, train)   study   compare   tables   detect_frames   convert   main.rs: the CLI
 //! config layer   campaign (file, defaults, compose, validate, resolve)  experiment (-> values)
 //! product        simulate (one image in memory)   artifacts (its files)   dataset   train
 //!                shard (a share of the images)
@@ -52,6 +52,7 @@ pub(crate) mod artifacts;
 pub mod background;
 pub mod campaign;
 pub mod compare;
+pub mod convert;
 pub mod dataset;
 pub mod detect;
 pub mod detect_frames;

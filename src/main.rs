@@ -207,6 +207,34 @@ enum Command {
         #[arg(long)]
         conf: Option<f64>,
     },
+    /// The paper's FITS -> PNG conversion (square root for fixed pointing, log stretch, CLAHE,
+    /// gamma, 8-bit PNG) of any FITS, soig's or a real frame's sky region: OUT/<stem>.png per
+    /// input, timing.json and a manifest. The original frame only: padding and rotation belong
+    /// to `soig run`
+    Enhance {
+        /// FITS files.
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// Output directory.
+        #[arg(long, default_value = "enhanced")]
+        out: PathBuf,
+        /// Take the enhancement of this campaign (`[enhance]`; the square root for fixed
+        /// pointing only), else soig's defaults; the flags below replace single settings.
+        #[arg(long)]
+        campaign: Option<PathBuf>,
+        /// Square-root compression first: true or false.
+        #[arg(long)]
+        sqrt: Option<bool>,
+        /// CLAHE clip limit (as OpenCV's clipLimit; 0 turns the clip off).
+        #[arg(long)]
+        clahe_clip_limit: Option<f64>,
+        /// CLAHE tile grid, columns x rows, e.g. 8x8.
+        #[arg(long, value_name = "COLSxROWS")]
+        clahe_tiles: Option<String>,
+        /// Power-law correction O = I^gamma.
+        #[arg(long)]
+        gamma: Option<f64>,
+    },
     /// Print the JSON Schema of the campaign format (or, with --experiment, of the experiment
     /// file).
     Schema {
@@ -520,6 +548,53 @@ fn main() -> ExitCode {
         Command::Tables { runs, out, readme } => {
             user_errors(|| soig::tables::write(&runs, out.as_deref(), readme.as_deref()))
         }
+        Command::Enhance {
+            inputs,
+            out,
+            campaign,
+            sqrt,
+            clahe_clip_limit,
+            clahe_tiles,
+            gamma,
+        } => user_errors(|| {
+            let loaded = campaign.as_deref().map(Campaign::load).transpose()?;
+            let mut settings = soig::experiment::enhance_settings(loaded.as_ref());
+            if let Some(v) = sqrt {
+                settings.sqrt = v;
+            }
+            if let Some(v) = clahe_clip_limit {
+                anyhow::ensure!(
+                    v.is_finite() && v >= 0.0,
+                    "--clahe-clip-limit {v}: must be a number >= 0"
+                );
+                settings.clahe_clip_limit = v;
+            }
+            if let Some(t) = clahe_tiles {
+                settings.clahe_tiles = parse_tiles(&t)?;
+            }
+            if let Some(v) = gamma {
+                // As the campaign's bound (campaign::validate): beyond it every pixel but the
+                // brightest (or the darkest) is one grey level.
+                anyhow::ensure!(
+                    (0.05..=20.0).contains(&v),
+                    "--gamma {v}: must be within 0.05..=20"
+                );
+                settings.gamma = v;
+            }
+            let s = soig::convert::run(&inputs, &out, &settings, campaign.as_deref())?;
+            for f in &s.frames {
+                println!(
+                    "{} -> {} ({} x {}, {:.1} ms)",
+                    f.file,
+                    f.png,
+                    f.width,
+                    f.height,
+                    f.seconds * 1e3
+                );
+            }
+            println!("-> {}\ndigest {}", out.display(), s.digest);
+            Ok(())
+        }),
         Command::Detect {
             inputs,
             model,
@@ -610,6 +685,20 @@ fn progress(quiet: bool) -> Box<dyn soig::progress::Progress> {
 }
 
 /// Run a command; a failure (bad input, missing file) prints its message and exits 2.
+/// A CLAHE tile grid `COLSxROWS`, each 1..=64 as the campaign's (`campaign::validate`).
+fn parse_tiles(text: &str) -> anyhow::Result<[u32; 2]> {
+    let bad =
+        || anyhow::anyhow!("--clahe-tiles {text}: expected COLSxROWS, each 1 to 64, e.g. 8x8");
+    let (a, b) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let n = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|n| (1..=64).contains(n))
+    };
+    Ok([n(a).ok_or_else(bad)?, n(b).ok_or_else(bad)?])
+}
+
 fn user_errors(f: impl FnOnce() -> anyhow::Result<()>) -> ExitCode {
     match f() {
         Ok(()) => ExitCode::SUCCESS,

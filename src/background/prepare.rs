@@ -193,7 +193,7 @@ pub fn source_mask(pixels: &[f32], width: usize, height: usize) -> Vec<bool> {
             }
         }
     }
-    let lines = super::trails::trail_mask(pixels, width, height);
+    let lines = super::trails::trail_mask(pixels, width, height, super::trails::Rounds::First);
     grow(&trails, width, height, MASK_GROW_PX)
         .into_iter()
         .zip(outliers)

@@ -41,8 +41,28 @@ const MAX_ARC_FILL: f64 = 0.3;
 /// binned pixels that passed `FOLLOW_SIGMA`.
 const GROW_PX: usize = 2;
 
+/// Seed and follow thresholds of the rounds after the first (see [`Rounds`]): once the
+/// brighter trails are filled, the fainter ones they hid are followed at a lower level. On the
+/// calibrated frame, whose arcs overlap densely, 5 and 2.5 in every round leave an arc texture
+/// at 20 degrees (tiled Radon z 5.7-7.0, tests/semisynthetic.rs); 4 and 2 take it to 4.5-5.4,
+/// and the raw science frame from 4.2-5.5 to 4.0-4.5.
+const LATER_SEED_SIGMA: f64 = 4.0;
+const LATER_FOLLOW_SIGMA: f64 = 2.0;
+
+/// Which round of masking: the first looks at the frame as it is, a later one at the frame
+/// with the trails found so far filled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rounds {
+    First,
+    Later,
+}
+
 /// The pixels of a flattened `width` x `height` frame on star trails (lines or arcs).
-pub fn trail_mask(pixels: &[f32], width: usize, height: usize) -> Vec<bool> {
+pub fn trail_mask(pixels: &[f32], width: usize, height: usize, round: Rounds) -> Vec<bool> {
+    let (seed_sigma, follow_sigma) = match round {
+        Rounds::First => (SEED_SIGMA, FOLLOW_SIGMA),
+        Rounds::Later => (LATER_SEED_SIGMA, LATER_FOLLOW_SIGMA),
+    };
     let (wb, hb) = (width / BIN, height / BIN);
     if wb < LINE_BINNED_PX as usize || hb < LINE_BINNED_PX as usize {
         return vec![false; pixels.len()];
@@ -63,8 +83,8 @@ pub fn trail_mask(pixels: &[f32], width: usize, height: usize) -> Vec<bool> {
         .map(|&r| ((r as f64 - r_median) / r_sigma) as f32)
         .collect();
     let mut trails = vec![false; wb * hb];
-    for component in components(&z, wb, hb, FOLLOW_SIGMA as f32) {
-        let seeded = component.iter().any(|&i| z[i] as f64 >= SEED_SIGMA);
+    for component in components(&z, wb, hb, follow_sigma as f32) {
+        let seeded = component.iter().any(|&i| z[i] as f64 >= seed_sigma);
         if seeded && component.len() >= MIN_BINNED_PX && elongated(&component, wb) {
             for i in component {
                 trails[i] = true;
@@ -178,7 +198,7 @@ mod tests {
     fn a_faint_arc_is_masked_and_noise_is_not() {
         let (w, h) = (512, 512);
         let px = noisy(on_arc, 0.7);
-        let mask = trail_mask(&px, w, h);
+        let mask = trail_mask(&px, w, h, Rounds::First);
         let arc: Vec<usize> = (0..w * h).filter(|&i| on_arc(i % w, i / w)).collect();
         let hit = arc.iter().filter(|&&i| mask[i]).count();
         // The arc's ends (within a half line of the edge) and short gaps where the noise
@@ -190,7 +210,10 @@ mod tests {
         // Pure noise: a few chance alignments of its tail pass (0.53% of this frame, measured),
         // not a share that would take texture out of a frame.
         let clean = noisy(|_, _| false, 0.0);
-        let share = trail_mask(&clean, w, h).iter().filter(|&&m| m).count();
+        let share = trail_mask(&clean, w, h, Rounds::First)
+            .iter()
+            .filter(|&&m| m)
+            .count();
         assert!(share * 100 < w * h, "{share}");
     }
 }

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 
-use crate::campaign::{Campaign, Detect, Enhance, PointingMode};
+use crate::campaign::{Campaign, Detect};
 use crate::detect::Detection;
 use crate::detect::streak::{StreakParams, detect_streaks};
 use crate::detect::yolo::{YoloDetector, YoloParams};
@@ -80,24 +80,11 @@ pub struct Options {
 impl Options {
     /// The campaign's enhancement and detector settings, or soig's defaults without one.
     pub fn new(campaign: Option<&Campaign>, which: Which, model: Option<PathBuf>) -> Options {
-        let (e, d, fixed) = match campaign {
-            Some(c) => (
-                c.resolved.enhance.clone(),
-                c.resolved.detect.clone(),
-                c.resolved.pointing.mode == PointingMode::Fixed,
-            ),
-            None => (Enhance::default(), Detect::default(), true),
-        };
+        let d = campaign.map_or_else(Detect::default, |c| c.resolved.detect.clone());
         Options {
             which,
             model,
-            // As `Experiment::new`: the square root only for fixed pointing (paper 3.3).
-            enhance: enhance::Settings {
-                sqrt: e.sqrt && fixed,
-                clahe_clip_limit: e.clahe_clip_limit,
-                clahe_tiles: e.clahe_tiles,
-                gamma: e.gamma,
-            },
+            enhance: crate::experiment::enhance_settings(campaign),
             streak: d.streak.clone(),
             yolo: YoloParams {
                 conf: d.conf,
@@ -252,7 +239,8 @@ fn detect_frame(
             "png",
         ),
         RegionPixels::Values(v) => {
-            let (values, non_finite, pedestal) = prepare(v, opts.enhance.sqrt);
+            let (values, non_finite, pedestal) =
+                crate::frames::ready_for_enhancement(v, opts.enhance.sqrt);
             (
                 enhance::enhance(&values, rw, rh, &opts.enhance),
                 non_finite,
@@ -351,48 +339,4 @@ fn detect_frame(
         detections: found,
         enhanced,
     })
-}
-
-/// A FITS region ready for the enhancement: non-finite values set to the median of the
-/// finite ones, and, before a square root, the minimum raised to 0 when it is negative
-/// (values the square root would clip). Returns (values, non-finite count, pedestal added).
-fn prepare(values: &[f32], sqrt: bool) -> (Vec<f32>, usize, f64) {
-    let mut finite: Vec<f32> = values.iter().copied().filter(|v| v.is_finite()).collect();
-    let non_finite = values.len() - finite.len();
-    let median = if finite.is_empty() {
-        0.0
-    } else {
-        let mid = finite.len() / 2;
-        *finite.select_nth_unstable_by(mid, f32::total_cmp).1
-    };
-    let mut out: Vec<f32> = values
-        .iter()
-        .map(|&v| if v.is_finite() { v } else { median })
-        .collect();
-    let min = out.iter().copied().fold(f32::INFINITY, f32::min);
-    let pedestal = if sqrt && min < 0.0 {
-        -(min as f64)
-    } else {
-        0.0
-    };
-    if pedestal > 0.0 {
-        out.iter_mut()
-            .for_each(|v| *v = (*v as f64 + pedestal) as f32);
-    }
-    (out, non_finite, pedestal)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn prepare_fills_non_finite_and_lifts_negative_frames_for_the_square_root() {
-        let (v, n, p) = prepare(&[-2.0, f32::NAN, 1.0, 5.0, f32::INFINITY], true);
-        assert_eq!((n, p), (2, 2.0));
-        // The NaN and the infinity take the median of the finite values, 1, then the pedestal.
-        assert_eq!(v, vec![0.0, 3.0, 3.0, 7.0, 3.0]);
-        let (v, _, p) = prepare(&[-2.0, 1.0], false);
-        assert_eq!((v, p), (vec![-2.0, 1.0], 0.0));
-    }
 }
