@@ -107,6 +107,10 @@ impl Experiment {
             star_cone_deg: c.stars.cone_radius_deg(),
             trajectory_samples: c.render.trajectory_samples as usize,
             apparent_positions: c.render.apparent_positions,
+            frame_share: match &c.background {
+                Background::Frames { share, .. } => *share,
+                Background::Uniform => 1.0,
+            },
         };
         let render = render::Settings {
             method: c.render.method,
@@ -229,7 +233,9 @@ pub fn inputs(campaign: &Campaign) -> Result<Inputs, Error> {
     };
     let frames: Vec<PathBuf> = match &c.background {
         Background::Uniform => Vec::new(),
-        Background::Frames { paths } => paths.iter().map(|p| campaign.base_dir.join(p)).collect(),
+        Background::Frames { paths, .. } => {
+            paths.iter().map(|p| campaign.base_dir.join(p)).collect()
+        }
     };
     Ok(Inputs {
         observer: campaign.observer.clone(),

@@ -30,6 +30,9 @@ pub enum Purpose {
     /// Hot pixels: their charge per image; their positions from the sensor's own index.
     HotPixels = 10,
     CosmicRays = 11,
+    /// Whether an image of a mixed campaign (`background.share` below 1) has a real frame under
+    /// it, drawn once before the scene's retries.
+    BackgroundKind = 12,
 }
 
 /// The stream for (seed, image index, purpose).

@@ -148,6 +148,9 @@ pub struct Spec {
     pub trajectory_samples: usize,
     /// Light-time and aberration (`sighting`); off in the paper's model.
     pub apparent_positions: bool,
+    /// The share of images with a real frame under them when the inputs have frames (1: all);
+    /// the others get the uniform model.
+    pub frame_share: f64,
 }
 
 /// Julian year (TT) of an instant, e.g. 2016.0 for the Gaia DR3 epoch.
@@ -415,11 +418,14 @@ pub fn draw(
     image: u64,
 ) -> Result<Scene, NoScene> {
     let debris_index = choose_debris(spec, inputs.debris.len(), seed, image);
+    // Drawn only in a mixed campaign, so that every other keeps its streams.
+    let on_frame = spec.frame_share >= 1.0
+        || stream(seed, image, Purpose::BackgroundKind).random::<f64>() < spec.frame_share;
     let rng = &mut stream(seed, image, Purpose::Scene);
     let mut rejections: BTreeMap<&'static str, u32> = BTreeMap::new();
     let max = spec.gate.max_attempts;
     for attempt in 1..=max {
-        match try_draw(spec, sensor, inputs, image, debris_index, rng) {
+        match try_draw(spec, sensor, inputs, image, debris_index, on_frame, rng) {
             Ok(mut scene) => {
                 scene.attempts = attempt;
                 scene.rejections = rejections;
@@ -450,6 +456,7 @@ fn try_draw(
     inputs: &Inputs,
     image: u64,
     debris_index: usize,
+    on_frame: bool,
     rng: &mut ChaCha12Rng,
 ) -> Result<Scene, &'static str> {
     let span_s = (spec.window_end - spec.window_start).to_seconds();
@@ -469,8 +476,7 @@ fn try_draw(
         rng.random_range(-1.0..1.0) * spec.placement_fraction,
     );
     let background = match &inputs.background {
-        BackgroundModel::Uniform => None,
-        BackgroundModel::Frames(frames) => {
+        BackgroundModel::Frames(frames) if on_frame => {
             let frame = rng.random_range(0..frames.len());
             let f = &frames[frame];
             Some(FrameChoice {
@@ -478,6 +484,7 @@ fn try_draw(
                 offset: (rng.random_range(0..f.width), rng.random_range(0..f.height)),
             })
         }
+        _ => None,
     };
     let tumble = spec.tumble.map(|r| Tumble {
         period_s: if r.period_max_s > r.period_min_s {

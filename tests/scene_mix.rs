@@ -109,3 +109,53 @@ fn weights_are_read_and_checked() {
     .to_string();
     assert!(e.contains("observer.weight"), "{e}");
 }
+
+/// `background.share`: each image is on a frame with that probability, drawn once per image
+/// from its own stream, so the images off the frames are the uniform campaign's own scenes.
+#[test]
+fn background_share_puts_that_share_of_images_on_frames() {
+    let frames = |share: &str| {
+        format!(
+            "[background]\nkind = \"frames\"\npaths = [{:?}]\n{share}",
+            common::neossat_frame().display().to_string()
+        )
+    };
+    let uniform = paper_objects("uniform", 200).load("uniform.toml");
+    let half = paper_objects("half", 200)
+        .tables(&frames("share = 0.5\n"))
+        .load("half.toml");
+    let draw = |c: &soig::campaign::Campaign| -> Vec<scene::Scene> {
+        let x = Experiment::new(c);
+        let inputs = experiment::inputs(c).unwrap();
+        (0..200u64)
+            .into_par_iter()
+            .map(|i| scene::draw(&x.scene, &x.sensor, &inputs, x.seed, i).unwrap())
+            .collect()
+    };
+    let (u, h) = (draw(&uniform), draw(&half));
+    let on_frames = h.iter().filter(|s| s.background.is_some()).count();
+    // Binomial(200, 0.5): sd 7.1; 76..=124 is 3.4 sd either side (a correct draw falls
+    // outside for one seed in ~1500).
+    assert!((76..=124).contains(&on_frames), "{on_frames} of 200");
+    for (a, b) in u.iter().zip(&h) {
+        if b.background.is_none() {
+            assert_eq!(
+                (a.debris_index, a.start, a.exposure_s, a.attempts),
+                (b.debris_index, b.start, b.exposure_s, b.attempts)
+            );
+        }
+    }
+    // Out of 0..=1 is refused, naming the field.
+    let e = soig::campaign::Campaign::from_toml(
+        &paper_objects("bad", 10)
+            .tables(&frames("share = 1.5\n"))
+            .text(),
+        std::path::Path::new("bad.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("background.share") && e.contains("bad.toml"),
+        "{e}"
+    );
+}

@@ -34,6 +34,22 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "51eb4daed68044a9697103912246eb1134a81d7747c55891381226d3b26877b4",
     ),
     (
+        "campaigns/model-fixed-original-mixed.toml",
+        "c0e995bd630d4241cebeae11f56e27930a65eb9bd0cdbfe7dcbbc456ffd94632",
+    ),
+    (
+        "campaigns/model-fixed-padded-mixed.toml",
+        "aa9ca139538d9a6025bc3005513b5ca6e041cc74362ac2607dd8cd7bc6da81e1",
+    ),
+    (
+        "campaigns/model-survey-original-mixed.toml",
+        "445e432b9c5beaa8b6537818f6f4441325cca9a6711fe3a955fdb7f596feb6cb",
+    ),
+    (
+        "campaigns/model-survey-rotated-mixed.toml",
+        "4903ef84430676555c69d7dcfdc9558ef26f505252539087c8e233aeca203c1c",
+    ),
+    (
         "campaigns/model-fixed.toml",
         "9e585bacc9a4f33755fd0b3f3624a9a389d9c65648577224e4c462140ae15dd8",
     ),

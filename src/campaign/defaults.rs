@@ -191,3 +191,11 @@ pub fn hot_pixel_dark() -> f64 {
 pub fn pixel_size() -> f64 {
     13.0
 }
+
+/// `background.share`: every image on a frame.
+pub fn share() -> f64 {
+    1.0
+}
+pub fn is_share(v: &f64) -> bool {
+    *v == 1.0
+}

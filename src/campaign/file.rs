@@ -249,7 +249,16 @@ pub enum Background {
     Uniform,
     /// FITS frames (with EXPTIME or EXPOSURE), relative to the campaign file; each image takes one at
     /// random, normalised by its exposure, scaled to the image's and tiled (see `background`).
-    Frames { paths: Vec<String> },
+    /// `share` (default 1) is the share of images that get a frame, drawn per image; the others
+    /// get the uniform background (a training set that mixes both).
+    Frames {
+        paths: Vec<String>,
+        #[serde(
+            default = "defaults::share",
+            skip_serializing_if = "defaults::is_share"
+        )]
+        share: f64,
+    },
 }
 
 /// Debris photometry (Eq. 6-7) and light-curve modulation.

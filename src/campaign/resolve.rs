@@ -93,9 +93,15 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
             ));
         }
     }
-    if let Background::Frames { paths } = &resolved.background {
+    if let Background::Frames { paths, share } = &resolved.background {
         if paths.is_empty() {
             return Err(fail("background.paths", "name at least one frame".into()));
+        }
+        if !(0.0..=1.0).contains(share) {
+            return Err(fail(
+                "background.share",
+                format!("{share}: the share of images on a frame must be within 0..=1"),
+            ));
         }
         for (i, p) in paths.iter().enumerate() {
             let full = base_dir.join(p);
