@@ -3,8 +3,9 @@
 //! A run fills a hidden staging directory `.NAME.partial-PID` beside its output and moves it
 //! into place only when it succeeded. Before anything is written:
 //!
-//! - the output must not be `/`, the current directory, the campaign's folder or an ancestor of
-//!   any of them (`name = ".."`, `output = "new/.."` and `--out .` resolve to those);
+//! - the output must not be `/`, the current directory, an input's folder (the campaign's, a
+//!   frame's) or an ancestor of any of them (`name = ".."`, `output = "new/.."` and `--out .`
+//!   resolve to those);
 //! - an existing output is replaced only if it is empty or holds a manifest that soig wrote and
 //!   that parses as one (another tool's `manifest.json` does not count);
 //! - a lock `.NAME.lock` (holding the writer's PID) keeps two runs from writing one output: the
@@ -199,7 +200,7 @@ fn refuse_protected(output: &Path, target: &Path, keep: &[&Path]) -> anyhow::Res
     }
     for k in keep {
         if let Ok(p) = resolve(k) {
-            protected.push((p, "the campaign's folder"));
+            protected.push((p, "an input's folder (the campaign's, a frame's)"));
         }
     }
     for (p, what) in &protected {
