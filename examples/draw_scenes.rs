@@ -35,16 +35,25 @@ fn main() -> Result<(), soig::Error> {
 
     let mut fingerprint = DefaultHasher::new();
     let (mut attempts, mut failed) = (0u64, 0u64);
+    // Why draws were rejected, over accepted and failed images alike.
+    let mut reasons = std::collections::BTreeMap::<&str, u64>::new();
     let t = Instant::now();
     for image in 0..images {
         match soig::scene::draw(&x.scene, &x.sensor, &inputs, x.seed, image) {
             Ok(s) => {
                 attempts += u64::from(s.attempts);
+                for (k, v) in &s.rejections {
+                    *reasons.entry(k).or_default() += u64::from(*v);
+                }
                 // The Debug text holds every field, floats to the last bit.
                 format!("{s:?}").hash(&mut fingerprint);
             }
             Err(e) => {
                 failed += 1;
+                attempts += u64::from(e.attempts);
+                for (k, v) in &e.rejections {
+                    *reasons.entry(k).or_default() += u64::from(*v);
+                }
                 format!("{:?}", e.rejections).hash(&mut fingerprint);
             }
         }
@@ -55,5 +64,6 @@ fn main() -> Result<(), soig::Error> {
         ms / images as f64,
         fingerprint.finish()
     );
+    println!("rejections: {reasons:?}");
     Ok(())
 }
