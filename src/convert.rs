@@ -63,10 +63,13 @@ pub fn run(
             );
         }
     }
-    // Read everything first: a bad input stops the command before any output exists.
-    let frames: Vec<(Frame, String)> = inputs
-        .iter()
-        .map(|p| -> anyhow::Result<(Frame, String)> {
+    let keep = crate::output::input_folders(inputs);
+    let keep_refs: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
+    let mut converted = Vec::new();
+    // One frame in memory at a time; a bad input fails the staged output, so none is left.
+    let digest = crate::output::write_replacing(out, &keep_refs, |dir| {
+        std::fs::create_dir_all(dir)?;
+        for p in inputs {
             let frame = Frame::read(p)?;
             if matches!(frame.pixels, RegionPixels::Gray(_)) {
                 bail!(
@@ -74,24 +77,8 @@ pub fn run(
                     p.display()
                 );
             }
-            Ok((frame, crate::hash::sha256_file(p)?.0))
-        })
-        .collect::<anyhow::Result<_>>()?;
-    let keep: Vec<PathBuf> = inputs
-        .iter()
-        .filter_map(|p| {
-            std::fs::canonicalize(p)
-                .ok()?
-                .parent()
-                .map(Path::to_path_buf)
-        })
-        .collect();
-    let keep_refs: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
-    let mut converted = Vec::new();
-    let digest = crate::output::write_replacing(out, &keep_refs, |dir| {
-        std::fs::create_dir_all(dir)?;
-        for (frame, sha256) in &frames {
-            converted.push(convert(frame, sha256, settings, dir)?);
+            let sha256 = crate::hash::sha256_file(p)?.0;
+            converted.push(convert(&frame, &sha256, settings, dir)?);
         }
         write_records(dir, &converted, settings, campaign)
     })?;

@@ -192,6 +192,20 @@ fn resolve(output: &Path) -> anyhow::Result<PathBuf> {
     Ok(resolved)
 }
 
+/// The folders holding `inputs` (as their real paths): the `keep` of a command that writes
+/// an output from them, which that output may not be or contain.
+pub fn input_folders(inputs: &[PathBuf]) -> Vec<PathBuf> {
+    inputs
+        .iter()
+        .filter_map(|p| {
+            std::fs::canonicalize(p)
+                .ok()?
+                .parent()
+                .map(Path::to_path_buf)
+        })
+        .collect()
+}
+
 /// Refuse `/`, the current directory, the `keep` folders and their ancestors.
 fn refuse_protected(output: &Path, target: &Path, keep: &[&Path]) -> anyhow::Result<()> {
     let mut protected: Vec<(PathBuf, &str)> = vec![(PathBuf::from("/"), "the root directory")];

@@ -200,15 +200,7 @@ pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options) -> anyhow::Result<Sum
     for frame in &frames {
         results.push(detect_frame(frame, opts, yolo.as_mut())?);
     }
-    let keep: Vec<PathBuf> = inputs
-        .iter()
-        .filter_map(|p| {
-            std::fs::canonicalize(p)
-                .ok()?
-                .parent()
-                .map(Path::to_path_buf)
-        })
-        .collect();
+    let keep = crate::output::input_folders(inputs);
     let keep_refs: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
     let digest =
         crate::output::write_replacing(out, &keep_refs, |dir| output::write(dir, &results, opts))?;
