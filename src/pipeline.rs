@@ -541,7 +541,8 @@ struct Written {
 }
 
 /// Run the detectors on the test split (every image when there is no split) and write the
-/// report. YOLO runs outside the rayon pool: ONNX Runtime slows ~3x beside a busy pool.
+/// report. YOLO's sessions run one thread each: ONNX Runtime's own pool slows ~3x beside a
+/// busy rayon pool.
 fn detect_and_report(
     campaign: &Campaign,
     dir: &Path,
@@ -612,65 +613,41 @@ fn detect_and_report(
         });
     }
     if let Some(path) = model {
-        // One single-threaded session per core, each taking the next image: every image is
-        // detected exactly as on one thread (same detections for any thread count), and the
-        // stage uses the cores rayon was given (ONNX Runtime's own pool slows beside others).
-        let workers = rayon::current_num_threads().clamp(1, images.len().max(1));
-        let mut sessions = (0..workers)
-            .map(|_| {
-                YoloDetector::load(path, yolo_params(campaign))
-                    .with_context(|| format!("loading model {}", path.display()))
-            })
-            .collect::<anyhow::Result<Vec<_>>>()?;
-        progress.start("yolo", images.len() as u64);
-        let next = std::sync::atomic::AtomicUsize::new(0);
-        let failed = std::sync::atomic::AtomicBool::new(false);
-        let per_worker = std::thread::scope(|s| {
-            let handles: Vec<_> = sessions
-                .iter_mut()
-                .map(|yolo| {
-                    let (next, failed, images, load) = (&next, &failed, &images, &load);
-                    s.spawn(
-                        move || -> anyhow::Result<Vec<(usize, Vec<Detection>, f64)>> {
-                            let mut done = Vec::new();
-                            loop {
-                                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                                let Some(img) = images.get(i) else {
-                                    return Ok(done);
-                                };
-                                if failed.load(std::sync::atomic::Ordering::Relaxed) {
-                                    return Ok(done);
-                                }
-                                let mut one = || -> anyhow::Result<(Vec<Detection>, f64)> {
-                                    let pixels = load(img)?;
-                                    let t = Instant::now();
-                                    let found = yolo.detect(&pixels, img.width, img.height)?;
-                                    Ok((found, t.elapsed().as_secs_f64()))
-                                };
-                                match one() {
-                                    Ok((found, s)) => done.push((i, found, s)),
-                                    Err(e) => {
-                                        // The others stop at their next image.
-                                        failed.store(true, std::sync::atomic::Ordering::Relaxed);
-                                        return Err(e);
-                                    }
-                                }
-                                progress.advance();
-                            }
-                        },
-                    )
+        // One single-threaded session per rayon thread, lent to whichever image a thread takes:
+        // every image is detected exactly as on one thread (same detections for any thread
+        // count), and the stage uses every core. Nothing inside `detect` waits on rayon, so at
+        // most that many images are in flight and the pool never runs dry.
+        let sessions = std::sync::Mutex::new(
+            (0..rayon::current_num_threads())
+                .map(|_| {
+                    YoloDetector::load(path, yolo_params(campaign))
+                        .with_context(|| format!("loading model {}", path.display()))
                 })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().expect("a YOLO worker panicked"))
-                .collect::<anyhow::Result<Vec<_>>>()
-        })?;
+                .collect::<anyhow::Result<Vec<_>>>()?,
+        );
+        progress.start("yolo", images.len() as u64);
+        let results: Vec<(Vec<Detection>, f64)> = images
+            .par_iter()
+            .map(|img| -> anyhow::Result<(Vec<Detection>, f64)> {
+                let pixels = load(img)?;
+                let mut yolo = sessions
+                    .lock()
+                    .expect("no session holder panicked")
+                    .pop()
+                    .expect("one session per rayon thread");
+                let t = Instant::now();
+                let found = yolo.detect(&pixels, img.width, img.height);
+                let seconds = t.elapsed().as_secs_f64();
+                sessions
+                    .lock()
+                    .expect("no session holder panicked")
+                    .push(yolo);
+                progress.advance();
+                Ok((found?, seconds))
+            })
+            .collect::<anyhow::Result<_>>()?;
         progress.finish();
-        let mut by_image: Vec<_> = per_worker.into_iter().flatten().collect();
-        by_image.sort_by_key(|(i, _, _)| *i);
-        let (detections, seconds): (Vec<_>, Vec<_>) =
-            by_image.into_iter().map(|(_, d, t)| (d, t)).unzip();
+        let (detections, seconds) = results.into_iter().unzip();
         runs.push(DetectorRun {
             name: "yolo".into(),
             description: format!(
