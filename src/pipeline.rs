@@ -573,7 +573,7 @@ fn detect_and_report(
                 width: png.width,
                 height: png.height,
                 truth: png.label.into_iter().collect(),
-                facts: Some(facts),
+                facts,
             })
         })
         .collect::<anyhow::Result<_>>()?;

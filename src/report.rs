@@ -33,8 +33,8 @@ pub struct TestImage {
     pub width: usize,
     pub height: usize,
     pub truth: Vec<[f64; 4]>,
-    /// The debris' magnitude, SNR and length from the truth sidecar (None: not known).
-    pub facts: Option<ObjectFacts>,
+    /// The debris' magnitude, SNR and length from the truth sidecar.
+    pub facts: ObjectFacts,
 }
 
 /// The detections of one detector on every test image, and its time per image.
@@ -265,7 +265,7 @@ pub fn write(
     progress.finish();
     csv_rows.flush()?;
 
-    let facts: Vec<Option<ObjectFacts>> = images.iter().map(|i| i.facts).collect();
+    let facts: Vec<ObjectFacts> = images.iter().map(|i| i.facts).collect();
     let efficiencies: Vec<Efficiency> = runs
         .iter()
         .map(|run| efficiency::efficiency(&run.name, &evals(images, run), &facts, conf))

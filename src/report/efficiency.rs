@@ -180,7 +180,7 @@ pub struct Efficiency {
 pub fn efficiency(
     detector: &str,
     evals: &[ImageEval],
-    facts: &[Option<ObjectFacts>],
+    facts: &[ObjectFacts],
     conf: f64,
 ) -> Efficiency {
     const IOU: f64 = 0.5;
@@ -189,10 +189,10 @@ pub fn efficiency(
         .iter()
         .zip(facts)
         .filter(|(e, _)| !e.truth.is_empty())
-        .filter_map(|(e, f)| {
+        .map(|(e, &f)| {
             let m = match_image(e, conf, IOU);
             let found = m.found.iter().filter(|&&x| x).count();
-            f.map(|f| (f, found, m.found.len(), m.false_positives))
+            (f, found, m.found.len(), m.false_positives)
         })
         .collect();
     let curves: BTreeMap<Quantity, Vec<Bin>> = Quantity::ALL
@@ -441,12 +441,12 @@ mod tests {
         }
     }
 
-    fn facts(magnitude: f64, snr: f64, length_px: f64) -> Option<ObjectFacts> {
-        Some(ObjectFacts {
+    fn facts(magnitude: f64, snr: f64, length_px: f64) -> ObjectFacts {
+        ObjectFacts {
             magnitude,
             snr,
             length_px,
-        })
+        }
     }
 
     #[test]
@@ -535,7 +535,7 @@ mod tests {
     }
 
     #[test]
-    fn images_without_an_object_or_facts_are_left_out() {
+    fn images_without_an_object_are_left_out() {
         let empty = ImageEval {
             truth: vec![],
             truth_class: vec![],
@@ -543,8 +543,8 @@ mod tests {
         };
         let e = efficiency(
             "d",
-            &[empty, image(true, 0), image(true, 0)],
-            &[facts(9.0, 10.0, 10.0), None, facts(9.2, 10.0, 10.0)],
+            &[empty, image(true, 0)],
+            &[facts(9.0, 10.0, 10.0), facts(9.2, 10.0, 10.0)],
             0.5,
         );
         let m = &e.curves[&Quantity::Magnitude];
