@@ -573,10 +573,8 @@ fn main() -> ExitCode {
                 settings.clahe_tiles = parse_tiles(&t)?;
             }
             if let Some(v) = gamma {
-                // As the campaign's bound (campaign::validate): beyond it every pixel but the
-                // brightest (or the darkest) is one grey level.
                 anyhow::ensure!(
-                    (0.05..=20.0).contains(&v),
+                    soig::enhance::GAMMA.contains(&v),
                     "--gamma {v}: must be within 0.05..=20"
                 );
                 settings.gamma = v;
@@ -684,8 +682,7 @@ fn progress(quiet: bool) -> Box<dyn soig::progress::Progress> {
     }
 }
 
-/// Run a command; a failure (bad input, missing file) prints its message and exits 2.
-/// A CLAHE tile grid `COLSxROWS`, each 1..=64 as the campaign's (`campaign::validate`).
+/// A CLAHE tile grid `COLSxROWS`, each within `enhance::CLAHE_TILES` as a campaign's.
 fn parse_tiles(text: &str) -> anyhow::Result<[u32; 2]> {
     let bad =
         || anyhow::anyhow!("--clahe-tiles {text}: expected COLSxROWS, each 1 to 64, e.g. 8x8");
@@ -694,11 +691,12 @@ fn parse_tiles(text: &str) -> anyhow::Result<[u32; 2]> {
         v.trim()
             .parse::<u32>()
             .ok()
-            .filter(|n| (1..=64).contains(n))
+            .filter(|n| soig::enhance::CLAHE_TILES.contains(n))
     };
     Ok([n(a).ok_or_else(bad)?, n(b).ok_or_else(bad)?])
 }
 
+/// Run a command; a failure (bad input, missing file) prints its message and exits 2.
 fn user_errors(f: impl FnOnce() -> anyhow::Result<()>) -> ExitCode {
     match f() {
         Ok(()) => ExitCode::SUCCESS,

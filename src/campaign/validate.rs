@@ -319,14 +319,14 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "must be >= 0",
     )?;
     check(
-        en.clahe_tiles.iter().all(|&t| (1..=64).contains(&t)),
+        en.clahe_tiles
+            .iter()
+            .all(|t| crate::enhance::CLAHE_TILES.contains(t)),
         "enhance.clahe_tiles",
         "each must be between 1 and 64",
     )?;
-    // O = I^gamma on 8 bits: beyond 20 (or below 1/20) every pixel but the brightest (or the
-    // darkest) rounds to 0 (or 255), an image with nothing left to see.
     check(
-        (0.05..=20.0).contains(&en.gamma),
+        crate::enhance::GAMMA.contains(&en.gamma),
         "enhance.gamma",
         "must be in [0.05, 20]",
     )?;

@@ -14,6 +14,13 @@ use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 /// bright stars are compressed instead of saturating.
 pub const BACKGROUND_LEVEL: f64 = 0.25;
 
+/// CLAHE tiles per axis that make sense on a 1024 px image (a campaign's and `soig enhance`'s
+/// bound).
+pub const CLAHE_TILES: std::ops::RangeInclusive<u32> = 1..=64;
+/// Gamma values that leave something to see: O = I^gamma on 8 bits, beyond 20 (or below 1/20)
+/// every pixel but the brightest (or the darkest) rounds to 0 (or 255).
+pub const GAMMA: std::ops::RangeInclusive<f64> = 0.05..=20.0;
+
 /// An 8-bit greyscale image, row-major, row 0 first (the top of the PNG).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Gray8 {
