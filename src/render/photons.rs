@@ -4,7 +4,7 @@
 use rand_chacha::ChaCha12Rng;
 use rand_distr::StandardNormal;
 
-use super::{Jitter, Source};
+use super::{Jitter, Path, Source};
 use rand::RngExt;
 
 /// Photon counts on the detector, all sources and debris alone.
@@ -18,12 +18,14 @@ pub(super) struct Canvas {
 
 impl Canvas {
     pub(super) fn add(&mut self, x: f64, y: f64, weight: u32, debris: bool) {
-        // Pixel = floor(coordinate + 0.5); the image spans [-0.5, n - 0.5).
-        let (px, py) = ((x + 0.5).floor(), (y + 0.5).floor());
-        if px < 0.0 || py < 0.0 || px >= self.width as f64 || py >= self.height as f64 {
+        // Pixel = floor(coordinate + 0.5); the image spans [-0.5, n - 0.5). On the kept range
+        // (>= 0) floor is truncation, which `as` does in one instruction; `floor` itself is a
+        // libm call on baseline x86-64 (no SSE4.1), 6% of a render.
+        let (u, v) = (x + 0.5, y + 0.5);
+        if !(u >= 0.0 && v >= 0.0 && u < self.width as f64 && v < self.height as f64) {
             return;
         }
-        let k = py as usize * self.width + px as usize;
+        let k = v as usize * self.width + u as usize;
         self.electrons[k] = self.electrons[k].saturating_add(weight);
         if debris {
             self.debris[k] = self.debris[k].saturating_add(weight);
@@ -65,24 +67,42 @@ pub(super) fn trace(
         (0, 1)
     };
     let w32 = weight as u32; // <= u32::MAX by the clamp above
-    for n in 0..packets + singles + tail {
-        let t = source.arrival(rng);
-        let (x0, y0) = source.path.at(t);
-        let (jx, jy) = jitter.at(t);
-        let gx: f64 = rng.sample(StandardNormal);
-        let gy: f64 = rng.sample(StandardNormal);
-        let w = if n < packets {
+    let weight_of = |n: u64| {
+        if n < packets {
             w32
         } else if tail == 1 {
             rest as u32
         } else {
             1
-        };
-        canvas.add(
-            x0 + jx + gx * psf_px,
-            y0 + jy + gy * psf_px,
-            w,
-            source.debris,
-        );
+        }
+    };
+    let packets = packets + singles + tail;
+    match source.path {
+        // All of a trajectory sample's photons arrive at one time, so one jittered position:
+        // computed once, not per packet (the same sums in the same order, so the same pixels).
+        Path::Instant { t, x, y } => {
+            let (jx, jy) = jitter.at(t);
+            let (x0, y0) = (x + jx, y + jy);
+            for n in 0..packets {
+                let gx: f64 = rng.sample(StandardNormal);
+                let gy: f64 = rng.sample(StandardNormal);
+                canvas.add(x0 + gx * psf_px, y0 + gy * psf_px, weight_of(n), source.debris);
+            }
+        }
+        _ => {
+            for n in 0..packets {
+                let t = source.arrival(rng);
+                let (x0, y0) = source.path.at(t);
+                let (jx, jy) = jitter.at(t);
+                let gx: f64 = rng.sample(StandardNormal);
+                let gy: f64 = rng.sample(StandardNormal);
+                canvas.add(
+                    x0 + jx + gx * psf_px,
+                    y0 + jy + gy * psf_px,
+                    weight_of(n),
+                    source.debris,
+                );
+            }
+        }
     }
 }
