@@ -7,6 +7,12 @@ use clap::{Parser, Subcommand};
 
 use soig::campaign::Campaign;
 
+// Each image allocates and frees several multi-MB buffers; glibc's malloc returns such blocks
+// to the kernel at every free, so every image paid their page faults again (12% of a run).
+// mimalloc keeps freed blocks for reuse.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 #[derive(Parser)]
 #[command(
     name = "soig",
