@@ -86,7 +86,12 @@ pub(super) fn trace(
             for n in 0..packets {
                 let gx: f64 = rng.sample(StandardNormal);
                 let gy: f64 = rng.sample(StandardNormal);
-                canvas.add(x0 + gx * psf_px, y0 + gy * psf_px, weight_of(n), source.debris);
+                canvas.add(
+                    x0 + gx * psf_px,
+                    y0 + gy * psf_px,
+                    weight_of(n),
+                    source.debris,
+                );
             }
         }
         _ => {
