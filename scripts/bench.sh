@@ -3,7 +3,8 @@
 # same inputs, interleaved (soig, peer, soig, peer, ...), medians and ratios, on this machine.
 #   enhancement  `soig enhance` against numpy + astropy + OpenCV doing the same steps
 #                (scripts/bench/peer.py; the PNGs' pixels must be identical)
-#   YOLO         soig's detect stage (1 thread) against onnxruntime from Python (1 thread)
+#   YOLO         soig's detect stage (1 thread) against onnxruntime from Python (1 thread);
+#                the streak detector of the same stage is timed alongside (no peer)
 #   metrics      `soig eval --mode coco` against pycocotools on EVAL_IMAGES images
 #   run          `soig run` of the quickstart without the detect stage, 1 and 2 threads,
 #                images/s and peak memory at 100 and 400 images
@@ -56,12 +57,13 @@ PY
 )
 
 # YOLO, per image, 1 thread each: soig's detect stage (the quickstart's test split as every image).
-soig_y=() peer_y=()
+soig_y=() peer_y=() soig_s=()
 for r in $(seq "$rounds"); do
     rm -rf "$work/y"
     RAYON_NUM_THREADS=1 "$soig" run campaigns/quickstart.toml --out "$work/y" --quiet --set images=20 \
-        --set split.train=0 --set split.val=0 --set split.test=1 --set detect.classical=false > /dev/null
+        --set split.train=0 --set split.val=0 --set split.test=1 > /dev/null
     soig_y+=("$("$py" -c 'import json,sys; print(json.load(open(sys.argv[1]))["detection_per_image"]["yolo"]["median_s"])' "$work/y/report/timing.json")")
+    soig_s+=("$("$py" -c 'import json,sys; print(json.load(open(sys.argv[1]))["detection_per_image"]["streak"]["median_s"])' "$work/y/report/timing.json")")
     peer_y+=("$(med $("$py" scripts/bench/peer.py yolo models/soig-yolov8n-fixed.onnx 1 "$work"/y/images/test/*.png | cut -d' ' -f2))")
 done
 
@@ -100,11 +102,12 @@ done
 ms() { "$py" -c "import sys; print(f'{1000 * float(sys.argv[1]):.1f} ms')" "$1"; }
 ratio() { "$py" -c "import sys; print(f'{float(sys.argv[1]) / float(sys.argv[2]):.2f}x')" "$1" "$2"; }
 se=$(med "${soig_e[@]}") pe=$(med "${peer_e[@]}") sy=$(med "${soig_y[@]}") pyy=$(med "${peer_y[@]}")
-sm=$(med "${soig_m[@]}") pm=$(med "${peer_m[@]}")
+sm=$(med "${soig_m[@]}") pm=$(med "${peer_m[@]}") ss=$(med "${soig_s[@]}")
 echo "| what | soig | peer | peer / soig |"
 echo "|---|---|---|---|"
 echo "| enhancement + PNG, per 1024 px image, 1 thread (peer: numpy + astropy + OpenCV; PNGs differing in a pixel: $differ) | $(ms "$se") | $(ms "$pe") | $(ratio "$pe" "$se") |"
 echo "| YOLOv8n 1024 px, per image, 1 thread (peer: onnxruntime from Python, letterbox + inference) | $(ms "$sy") | $(ms "$pyy") | $(ratio "$pyy" "$sy") |"
+echo "| streak detector, per 1024 px image, 1 thread (no peer runs the same algorithm) | $(ms "$ss") | | |"
 echo "| COCO mAP of $eval_images images, whole command (peer: pycocotools) | ${sm%.*}.$(echo "${sm#*.}" | cut -c1-2) s | ${pm%.*}.$(echo "${pm#*.}" | cut -c1-2) s | $(ratio "$pm" "$sm") |"
 echo
 echo "| soig run, quickstart without detect | images/s | peak memory |"

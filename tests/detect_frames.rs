@@ -276,6 +276,12 @@ fn bad_inputs_fail_naming_the_file_and_leave_no_output() {
             vec![broken_png.to_str().unwrap()],
             vec!["broken.png", "not a readable PNG"],
         ),
+        // A good frame is detected and its files written into the staged output before the
+        // bad one is read: the staged output goes, none is left.
+        (
+            vec![good, text.to_str().unwrap()],
+            vec!["notes.fits", "neither a FITS file"],
+        ),
         (
             vec![good, "--model", bad_model.to_str().unwrap()],
             vec!["not_onnx.onnx"],

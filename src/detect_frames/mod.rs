@@ -155,8 +155,6 @@ pub struct FrameResult {
     /// calibrated frame whose sky was subtracted), so the square root does not clip half of it.
     pub pedestal: f64,
     pub detections: Vec<Found>,
-    #[serde(skip)]
-    pub enhanced: Gray8,
 }
 
 /// The outcome of `soig detect`.
@@ -167,8 +165,9 @@ pub struct Summary {
     pub digest: String,
 }
 
-/// Run the detectors on every input and write `out` whole (see [`crate::output`]). Every
-/// input and the model are read before anything is written.
+/// Run the detectors on every input and write `out` whole (see [`crate::output`]): one frame
+/// in memory at a time, its files written into the staged output as it is done; a bad input
+/// fails the staged output, so nothing is left of it and an earlier `out` stays.
 pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options) -> anyhow::Result<Summary> {
     if inputs.is_empty() {
         bail!("no input frame given");
@@ -183,27 +182,28 @@ pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options) -> anyhow::Result<Sum
         (Which::Yolo, None) => bail!("--detector yolo needs --model M.onnx"),
         (Which::All, None) => None,
     };
-    let frames: Vec<Frame> = inputs
-        .iter()
-        .map(|p| Frame::read(p))
-        .collect::<Result<_, _>>()?;
     let mut stems = std::collections::BTreeSet::new();
-    for f in &frames {
-        if !stems.insert(output::stem(&f.path)) {
+    for p in inputs {
+        if !stems.insert(output::stem(p)) {
             bail!(
                 "{}: another input has the same file stem; its prediction and preview files would collide",
-                f.path.display()
+                p.display()
             );
         }
     }
-    let mut results = Vec::with_capacity(frames.len());
-    for frame in &frames {
-        results.push(detect_frame(frame, opts, yolo.as_mut())?);
-    }
     let keep = crate::output::input_folders(inputs);
     let keep_refs: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
-    let digest =
-        crate::output::write_replacing(out, &keep_refs, |dir| output::write(dir, &results, opts))?;
+    let mut results = Vec::with_capacity(inputs.len());
+    let digest = crate::output::write_replacing(out, &keep_refs, |dir| {
+        output::prepare(dir, opts)?;
+        for p in inputs {
+            let frame = Frame::read(p)?;
+            let (result, enhanced) = detect_frame(&frame, opts, yolo.as_mut())?;
+            output::write_frame(dir, &result, &enhanced, opts)?;
+            results.push(result);
+        }
+        output::finish(dir, &results, opts)
+    })?;
     Ok(Summary {
         frames: results,
         output: out.to_path_buf(),
@@ -212,12 +212,12 @@ pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options) -> anyhow::Result<Sum
 }
 
 /// Enhance one frame, run the detectors on its sky region, put the results into the file's
-/// pixel grid and on the sky.
+/// pixel grid and on the sky. Returns them and the enhanced sky region (for the preview).
 fn detect_frame(
     frame: &Frame,
     opts: &Options,
     yolo: Option<&mut YoloDetector>,
-) -> anyhow::Result<FrameResult> {
+) -> anyhow::Result<(FrameResult, Gray8)> {
     let (rw, rh) = (frame.region.width(), frame.region.height());
     let (enhanced, non_finite, pedestal, format) = match &frame.pixels {
         RegionPixels::Gray(g) => (
@@ -313,7 +313,7 @@ fn detect_frame(
             f.ends_radec = f.ends.map(|e| e.map(sky));
         }
     }
-    Ok(FrameResult {
+    let result = FrameResult {
         file: frame.path.display().to_string(),
         sha256: crate::hash::sha256_file(&frame.path)?.0,
         format,
@@ -329,6 +329,6 @@ fn detect_frame(
         non_finite_pixels: non_finite,
         pedestal,
         detections: found,
-        enhanced,
-    })
+    };
+    Ok((result, enhanced))
 }

@@ -9,6 +9,7 @@ use std::path::Path;
 use image::{Rgb, RgbImage};
 
 use super::{FrameResult, Options, Which};
+use crate::enhance::Gray8;
 use crate::manifest::Manifest;
 
 /// Preview colours: streak boxes red, YOLO boxes yellow, streak ends green, and what lies
@@ -38,13 +39,34 @@ fn detectors(opts: &Options) -> Vec<&'static str> {
     d
 }
 
-/// Write everything into `dir`; returns the manifest's digest.
-pub(super) fn write(dir: &Path, frames: &[FrameResult], opts: &Options) -> anyhow::Result<String> {
+/// The folders of `dir` that frames' files go into.
+pub(super) fn prepare(dir: &Path, opts: &Options) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir.join("previews"))?;
-    let ran = detectors(opts);
-    for d in &ran {
+    for d in detectors(opts) {
         std::fs::create_dir_all(dir.join("predictions").join(d))?;
     }
+    Ok(())
+}
+
+/// One frame's predictions (a file per detector) and preview, as soon as it is done.
+pub(super) fn write_frame(
+    dir: &Path,
+    f: &FrameResult,
+    enhanced: &Gray8,
+    opts: &Options,
+) -> anyhow::Result<()> {
+    let name = stem(Path::new(&f.file));
+    for d in detectors(opts) {
+        let path = dir.join("predictions").join(d).join(format!("{name}.txt"));
+        std::fs::write(path, yolo_txt(f, d))?;
+    }
+    preview(f, enhanced).save(dir.join("previews").join(format!("{name}.png")))?;
+    Ok(())
+}
+
+/// Every frame's rows and records, the settings, and the manifest; returns its digest.
+pub(super) fn finish(dir: &Path, frames: &[FrameResult], opts: &Options) -> anyhow::Result<String> {
+    let ran = detectors(opts);
     std::fs::write(dir.join("detections.csv"), csv(frames))?;
     let settings = serde_json::json!({
         "command": "detect",
@@ -78,14 +100,6 @@ pub(super) fn write(dir: &Path, frames: &[FrameResult], opts: &Options) -> anyho
         dir.join("detections.json"),
         serde_json::to_string_pretty(&json)? + "\n",
     )?;
-    for f in frames {
-        let name = stem(Path::new(&f.file));
-        for d in &ran {
-            let path = dir.join("predictions").join(d).join(format!("{name}.txt"));
-            std::fs::write(path, yolo_txt(f, d))?;
-        }
-        preview(f).save(dir.join("previews").join(format!("{name}.png")))?;
-    }
     let hash = crate::hash::hash_json(&settings);
     let manifest = Manifest::build(dir, &hash, settings, &[])?;
     manifest.write(dir)?;
@@ -159,12 +173,12 @@ fn yolo_txt(f: &FrameResult, detector: &str) -> String {
 }
 
 /// The enhanced sky region in the file's frame, with every detection drawn.
-fn preview(f: &FrameResult) -> RgbImage {
+fn preview(f: &FrameResult, enhanced: &Gray8) -> RgbImage {
     let r = f.region;
     let mut img = RgbImage::from_pixel(f.width as u32, f.height as u32, NOT_SKY);
     for y in 0..r.height() {
         for x in 0..r.width() {
-            let v = f.enhanced.pixels[y * r.width() + x];
+            let v = enhanced.pixels[y * r.width() + x];
             img.put_pixel((x + r.x0) as u32, (y + r.y0) as u32, Rgb([v, v, v]));
         }
     }
