@@ -61,10 +61,15 @@ impl LineNoise {
             let (x_major, t) = slope(j, p.n_angles);
             // The same digital line as `lines`: one step along the major axis, the minor
             // offset rounded.
-            let offset = |i: isize| -> (isize, isize) {
-                let m = (i as f64 * t).round() as isize;
-                if x_major { (i, m) } else { (m, i) }
-            };
+            // Tabulated once per orientation (it was rounded again for every sample: 7% of
+            // the detector); offset(i) is at index i + hmax.
+            let offsets: Vec<(isize, isize)> = (-hmax..=hmax)
+                .map(|i| {
+                    let m = (i as f64 * t).round() as isize;
+                    if x_major { (i, m) } else { (m, i) }
+                })
+                .collect();
+            let offset = |i: isize| offsets[(i + hmax) as usize];
             let model = model_sd(j, p);
             for (l, &hk) in p.half_lengths.iter().enumerate() {
                 let hk = hk as isize;
