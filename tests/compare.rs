@@ -6,14 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, tle_object};
-
-fn soig(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_soig"))
-        .args(args)
-        .output()
-        .expect("soig runs")
-}
+use common::{CampaignToml, ELEMENTS_40649, soig, tle_object};
 
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()

@@ -2,17 +2,12 @@
 //! pixel grid and on the sky; the real NEOSSat streak is found with the documented settings;
 //! every output file is there; bad inputs fail with their file named and leave no output.
 
+mod common;
+use common::soig;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use soig::sky::projection::Tan;
-
-fn soig(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_soig"))
-        .args(args)
-        .output()
-        .expect("soig runs")
-}
 
 fn ok(o: Output) -> Output {
     assert!(

@@ -2,17 +2,9 @@
 //! the run wrote, byte for byte; bad inputs end with exit 2 and leave no output.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, tle_object};
-
-fn soig(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_soig"))
-        .args(args)
-        .output()
-        .expect("soig runs")
-}
+use common::{CampaignToml, ELEMENTS_40649, soig, tle_object};
 
 /// A run of 4 small fixed-pointing images (FITS and PNG); returns its folder.
 fn small_run(dir: &Path) -> (PathBuf, PathBuf) {

@@ -12,6 +12,14 @@ use soig::campaign::Campaign;
 use soig::experiment::{self, Experiment};
 use soig::simulate::{self, ImageProducts};
 
+/// Run the `soig` binary under test.
+pub fn soig(args: &[&str]) -> Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
+        .args(args)
+        .output()
+        .expect("soig runs")
+}
+
 fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
