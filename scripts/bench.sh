@@ -9,7 +9,7 @@
 #   run          `soig run` of the quickstart without the detect stage, 1 and 2 threads,
 #                images/s and peak memory at 100 and 400 images
 # Installs its Python peers into a venv of its own (.venv-bench). Prints Markdown.
-# Usage: bash scripts/bench.sh            (ROUNDS=5 EVAL_IMAGES=50000 by default)
+# Usage: bash scripts/bench.sh            (ROUNDS=5 EVAL_IMAGES=50000 QUIET_WAIT=300 by default)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 rounds="${ROUNDS:-5}"
@@ -26,10 +26,18 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 med() { "$py" -c 'import sys, statistics as s; print(s.median(float(x) for x in sys.argv[1:]))' "$@"; }
 load() { cut -d' ' -f1-3 /proc/loadavg; }
+# A quiet start: wait (up to QUIET_WAIT seconds, 300 by default) for the 1-minute load average
+# to fall below 0.5; the tail of a build or a test run otherwise slows the first rounds.
+quiet_wait="${QUIET_WAIT:-300}"
+waited=0
+while [ "$waited" -lt "$quiet_wait" ] && awk '{exit !($1 >= 0.5)}' /proc/loadavg; do
+    sleep 10
+    waited=$((waited + 10))
+done
 
 echo "# soig benchmark, $(date -u +%Y-%m-%dT%H:%MZ)"
 echo
-echo "Machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(free -g | awk '/Mem:/ {print $2}') GiB; load average before: $(load). $rounds interleaved rounds."
+echo "Machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(free -g | awk '/Mem:/ {print $2}') GiB; load average before: $(load) (after waiting ${waited} s for it to fall below 0.5). $rounds interleaved rounds."
 echo
 
 # Inputs: 20 quickstart images (FITS and PNG), rendered once.
