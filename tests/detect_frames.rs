@@ -2,10 +2,11 @@
 //! pixel grid and on the sky; the real NEOSSat streak is found with the documented settings;
 //! every output file is there; bad inputs fail with their file named and leave no output.
 
-mod common;
-use common::soig;
 use std::path::{Path, PathBuf};
 use std::process::Output;
+
+mod common;
+use common::soig;
 
 use soig::sky::projection::Tan;
 

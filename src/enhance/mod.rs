@@ -336,7 +336,7 @@ mod tests {
                 } else {
                     n
                 };
-                grey_level(y * 255.0)
+                (y * 255.0).round().clamp(0.0, 255.0) as u8
             })
             .collect()
     }

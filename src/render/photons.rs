@@ -76,14 +76,15 @@ pub(super) fn trace(
             1
         }
     };
-    let packets = packets + singles + tail;
+    // Every packet: the full ones (weight_of tells them apart), then the singles or the tail.
+    let total = packets + singles + tail;
     match source.path {
         // All of a trajectory sample's photons arrive at one time, so one jittered position:
         // computed once, not per packet (the same sums in the same order, so the same pixels).
         Path::Instant { t, x, y } => {
             let (jx, jy) = jitter.at(t);
             let (x0, y0) = (x + jx, y + jy);
-            for n in 0..packets {
+            for n in 0..total {
                 let gx: f64 = rng.sample(StandardNormal);
                 let gy: f64 = rng.sample(StandardNormal);
                 canvas.add(
@@ -95,7 +96,7 @@ pub(super) fn trace(
             }
         }
         _ => {
-            for n in 0..packets {
+            for n in 0..total {
                 let t = source.arrival(rng);
                 let (x0, y0) = source.path.at(t);
                 let (jx, jy) = jitter.at(t);
