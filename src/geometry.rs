@@ -363,7 +363,7 @@ pub fn flux_box(img: &[f32], width: usize, height: usize, share: f64) -> Option<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::{Purpose, stream};
+    use crate::rng::{PixelPurpose, pixel_stream};
     use rand::RngExt;
 
     #[test]
@@ -405,8 +405,8 @@ mod tests {
     #[test]
     fn padding_copies_and_fills_with_the_sky_noise() {
         let (w, h) = (64, 48);
-        let mut rng = stream(1, 0, Purpose::Enhance);
-        let mut noise = stream(2, 0, Purpose::Noise);
+        let mut rng = pixel_stream(1, 0, PixelPurpose::Enhance);
+        let mut noise = pixel_stream(2, 0, PixelPurpose::Noise);
         let normal = Normal::new(50.0, 5.0).unwrap();
         let img: Vec<f32> = (0..w * h)
             .map(|_| normal.sample(&mut noise) as f32)
@@ -472,12 +472,12 @@ mod tests {
     fn rotated_fill_has_the_correlation_of_the_resampled_sky() {
         // The paper's noise: background uniform in [190, 210] ADU plus bias in [2, 3].
         let (w, h) = (256, 256);
-        let mut noise = stream(3, 0, Purpose::Noise);
+        let mut noise = pixel_stream(3, 0, PixelPurpose::Noise);
         let img: Vec<f32> = (0..w * h)
             .map(|_| (noise.random_range(190.0..210.0) + noise.random_range(2.0..3.0)) as f32)
             .collect();
         for angle in [30.0, 17.0, -62.0] {
-            let mut rng = stream(1, 0, Purpose::Enhance);
+            let mut rng = pixel_stream(1, 0, PixelPurpose::Enhance);
             let f = Frame::rotated(w, h, angle);
             let out = warp(&img, w, h, &f, Fill::SkyNoise(&mut rng));
             // Inside: at least 1 px from the original's edge (where bilinear clamps); fill: at
@@ -512,7 +512,7 @@ mod tests {
             );
         }
         // The padded frame copies the image: its fill stays white noise, as the sky it borders.
-        let mut rng = stream(1, 0, Purpose::Enhance);
+        let mut rng = pixel_stream(1, 0, PixelPurpose::Enhance);
         let f = Frame::padded(w, h, 32);
         let out = warp(&img, w, h, &f, Fill::SkyNoise(&mut rng));
         let inside = |i: usize, j: usize| (32..32 + w).contains(&i) && (32..32 + h).contains(&j);

@@ -8,11 +8,11 @@
 //! are a property of the sensor: their positions come from the campaign seed alone, the same in
 //! every image; their charge is drawn per image.
 
+use crate::rng::PixelRng;
 use rand::RngExt;
-use rand_chacha::ChaCha12Rng;
 use rand_distr::{Distribution, Normal, Poisson, StandardNormal};
 
-use crate::rng::{Purpose, poisson, stream};
+use crate::rng::{PixelPurpose, pixel_stream, poisson};
 
 /// How the detector turns photo-electrons into ADU.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -108,7 +108,7 @@ impl CosmicRays {
         width: usize,
         height: usize,
         exposure_s: f64,
-        rng: &mut ChaCha12Rng,
+        rng: &mut PixelRng,
     ) -> Vec<Track> {
         let hits = poisson(rng, self.expected_hits(width, height, exposure_s));
         let max_sin2 = MAX_INCIDENCE_DEG.to_radians().sin().powi(2);
@@ -155,7 +155,7 @@ fn deposit(charge: &mut [f64], width: usize, height: usize, t: &Track) {
 
 /// Add a Poisson draw of `mean` to every pixel, the same draws as `rng::poisson` with the
 /// distribution built once rather than per pixel (a 1024 px image: ~100 -> ~70 ms).
-fn add_poisson(charge: &mut [f64], mean: f64, rng: &mut ChaCha12Rng) {
+fn add_poisson(charge: &mut [f64], mean: f64, rng: &mut PixelRng) {
     if mean >= Poisson::<f64>::MAX_LAMBDA {
         charge.iter_mut().for_each(|c| *c += mean.round());
         return;
@@ -170,7 +170,7 @@ impl HotPixels {
     pub fn positions(&self, seed: u64, width: usize, height: usize) -> Vec<usize> {
         let n = width * height;
         let count = ((self.fraction * n as f64).round() as usize).min(n);
-        let mut rng = stream(seed, SENSOR_STREAM, Purpose::HotPixels);
+        let mut rng = pixel_stream(seed, SENSOR_STREAM, PixelPurpose::HotPixels);
         let mut at = rand::seq::index::sample(&mut rng, n, count).into_vec();
         at.sort_unstable();
         at
@@ -188,11 +188,11 @@ impl Physical {
         gain_e_per_adu: f64,
         image: u64,
     ) -> Vec<f32> {
-        let rng = |purpose| stream(self.seed, image, purpose);
+        let rng = |purpose| pixel_stream(self.seed, image, purpose);
         let mut charge: Vec<f64> = electrons.iter().map(|&e| e as f64).collect();
         for (rate, purpose) in [
-            (self.sky_e_per_s, Purpose::Sky),
-            (self.dark_e_per_s, Purpose::Dark),
+            (self.sky_e_per_s, PixelPurpose::Sky),
+            (self.dark_e_per_s, PixelPurpose::Dark),
         ] {
             let mean = rate * exposure_s;
             if mean > 0.0 {
@@ -200,21 +200,26 @@ impl Physical {
             }
         }
         if let Some(hot) = &self.hot_pixels {
-            let mut r = rng(Purpose::HotPixels);
+            let mut r = rng(PixelPurpose::HotPixels);
             let mean = hot.dark_e_per_s * exposure_s;
             for at in hot.positions(self.seed, width, height) {
                 charge[at] += poisson(&mut r, mean) as f64;
             }
         }
         if let Some(cosmic) = &self.cosmic_rays {
-            for t in cosmic.tracks(width, height, exposure_s, &mut rng(Purpose::CosmicRays)) {
+            for t in cosmic.tracks(
+                width,
+                height,
+                exposure_s,
+                &mut rng(PixelPurpose::CosmicRays),
+            ) {
                 deposit(&mut charge, width, height, &t);
             }
         }
         let read = (self.read_noise_e > 0.0).then(|| {
             (
                 Normal::new(0.0, self.read_noise_e).expect("validated read noise"),
-                rng(Purpose::ReadNoise),
+                rng(PixelPurpose::ReadNoise),
             )
         });
         let to_adu = |c: f64| {
@@ -397,7 +402,12 @@ mod tests {
         let mut hits = 0;
         let mut lengths = Vec::new();
         for i in 0..images {
-            let tracks = c.tracks(W, W, 10.0, &mut stream(1, i, Purpose::CosmicRays));
+            let tracks = c.tracks(
+                W,
+                W,
+                10.0,
+                &mut pixel_stream(1, i, PixelPurpose::CosmicRays),
+            );
             hits += tracks.len();
             lengths.extend(
                 tracks

@@ -8,12 +8,10 @@
 
 use std::time::Instant;
 
-use rand_chacha::ChaCha12Rng;
-
 use crate::enhance::{self, Gray8};
 use crate::geometry::{self, BoxPx, Fill, Frame, FrameKind, LABEL_SHARE};
 use crate::render::{self, Exposure};
-use crate::rng::{Purpose, stream};
+use crate::rng::{PixelPurpose, PixelRng, pixel_stream};
 use crate::scene::{self, Inputs, NoScene, Pointing, Scene};
 use crate::sensor::Sensor;
 
@@ -67,8 +65,8 @@ pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProduct
         &x.render,
         &scene,
         inputs.frame(scene.background),
-        &mut stream(seed, index, Purpose::Photons),
-        &mut stream(seed, index, Purpose::Noise),
+        &mut pixel_stream(seed, index, PixelPurpose::Photons),
+        &mut pixel_stream(seed, index, PixelPurpose::Noise),
     );
     let product = x.product.as_ref().map(|p| {
         let started = Instant::now();
@@ -80,7 +78,7 @@ pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProduct
         let frame = Frame::new(p.frame, w, h, p.pad_px, trail_angle_deg);
         // The debris alone is warped like the image, so the label is the tight box of the
         // rendered streak in the final frame.
-        let mut rng = stream(seed, index, Purpose::Enhance);
+        let mut rng = pixel_stream(seed, index, PixelPurpose::Enhance);
         let adu = geometry::warp(&exposure.adu, w, h, &frame, Fill::SkyNoise(&mut rng));
         // In the original frame that is the box the renderer already found (the same
         // computation on the same pixels): not built again (7.5 ms a 1024 px image).
@@ -92,7 +90,7 @@ pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProduct
                 .iter()
                 .map(|&v| v as f32)
                 .collect();
-            let debris = geometry::warp::<ChaCha12Rng>(&debris, w, h, &frame, Fill::Zero);
+            let debris = geometry::warp::<PixelRng>(&debris, w, h, &frame, Fill::Zero);
             geometry::flux_box(&debris, frame.width, frame.height, LABEL_SHARE)
         };
         exposure.truth.frame = Some(frame.clone());

@@ -18,7 +18,7 @@ use crate::geometry::{BoxPx, LABEL_SHARE, flux_box};
 use crate::manifest::Manifest;
 use crate::render::expected::expected_flux;
 use crate::render::{Jitter, RenderMethod, render_with_jitter};
-use crate::rng::{Purpose, stream};
+use crate::rng::{PixelPurpose, pixel_stream};
 use crate::scene::{self, Inputs, MAX_TRAJECTORY_SAMPLES, Scene};
 
 /// The reference takes this many times the campaign's trajectory samples and jitter steps.
@@ -130,7 +130,7 @@ fn study(campaign: &Campaign, dir: &Path, opts: &Options) -> anyhow::Result<Summ
         &reference.sensor,
         &reference.render,
         &ref_scene,
-        &mut stream(reference.seed, opts.image, Purpose::Photons),
+        &mut pixel_stream(reference.seed, opts.image, PixelPurpose::Photons),
     );
     let flux = expected_flux(&reference.sensor, &ref_scene, &jitter);
     let mu: Vec<f64> = flux
@@ -292,12 +292,16 @@ fn measure(
             scene,
             frame,
             jitter,
-            &mut stream(
+            &mut pixel_stream(
                 seed.wrapping_add(1 + k),
                 scene.image_index,
-                Purpose::Photons,
+                PixelPurpose::Photons,
             ),
-            &mut stream(seed.wrapping_add(1 + k), scene.image_index, Purpose::Noise),
+            &mut pixel_stream(
+                seed.wrapping_add(1 + k),
+                scene.image_index,
+                PixelPurpose::Noise,
+            ),
         );
         times.push(t.elapsed().as_secs_f64() * 1e3);
         for (i, &v) in e.electrons.iter().enumerate() {

@@ -8,7 +8,7 @@ use hifitime::{Duration, Epoch};
 use soig::campaign::Campaign;
 use soig::experiment::{self, Experiment};
 use soig::render::{self, Exposure};
-use soig::rng::{Purpose, poisson, stream};
+use soig::rng::{PixelPurpose, pixel_stream, poisson};
 use soig::scene::{self, Scene, TrajectorySample};
 use soig::sensor::Sensor;
 use soig::sky::photometry::{debris_magnitude, diffuse_sphere_phase, photon_rate};
@@ -75,8 +75,8 @@ fn render_scene(c: &Campaign, s: &Scene, seed: u64) -> Exposure {
         &x.render,
         s,
         None,
-        &mut stream(seed, s.image_index, Purpose::Photons),
-        &mut stream(seed, s.image_index, Purpose::Noise),
+        &mut pixel_stream(seed, s.image_index, PixelPurpose::Photons),
+        &mut pixel_stream(seed, s.image_index, PixelPurpose::Noise),
     )
 }
 
@@ -951,7 +951,7 @@ fn streak_leaving_the_image() {
 /// saturated at u32::MAX, and the image finite.
 #[test]
 fn huge_poisson_mean() {
-    let mut r = stream(0, 0, Purpose::Photons);
+    let mut r = pixel_stream(0, 0, PixelPurpose::Photons);
     let limit = rand_distr::Poisson::<f64>::MAX_LAMBDA;
     assert!(limit > 1.8e19 && limit < 1.9e19);
     let below = poisson(&mut r, 1e19) as f64;

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use soig::background::RealFrame;
 use soig::imaging::robust_stats;
-use soig::rng::{Purpose, stream};
+use soig::rng::{PixelPurpose, pixel_stream};
 
 const FRAMES: [&str; 3] = [
     "NEOSSAT_240__30_2020214095318.fits",
@@ -25,7 +25,7 @@ fn frame(name: &str) -> RealFrame {
 
 /// Background `i` of a frame: its own phase and block draws.
 fn background(f: &RealFrame, i: u64, exposure_s: f64, phase: Option<(usize, usize)>) -> Vec<f32> {
-    let mut rng = stream(17, i, Purpose::Noise);
+    let mut rng = pixel_stream(17, i, PixelPurpose::Noise);
     let phase = phase.unwrap_or((37 * i as usize + 5, 91 * i as usize + 11));
     f.background(SIZE, SIZE, exposure_s, phase, &mut rng)
 }

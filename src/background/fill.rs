@@ -11,8 +11,8 @@
 //! sigma stands 11 sd off). Every block comes from an independent random place, so nothing
 //! repeats at the block pitch.
 
+use crate::rng::PixelRng;
 use rand::RngExt;
-use rand_chacha::ChaCha12Rng;
 
 /// Side of a block, pixels, at most (a field smaller than this gives smaller blocks).
 const BLOCK_PX: usize = 256;
@@ -33,7 +33,7 @@ pub fn fluctuations(
     width: usize,
     height: usize,
     phase: (usize, usize),
-    rng: &mut ChaCha12Rng,
+    rng: &mut PixelRng,
 ) -> Vec<f32> {
     let block = BLOCK_PX.min(field.width).min(field.height);
     // A quarter of the block on each side is cross-faded with the neighbour.
@@ -88,10 +88,10 @@ pub fn fluctuations(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::{Purpose, stream};
+    use crate::rng::{PixelPurpose, pixel_stream};
 
     fn white(n: usize, seed: u64) -> Vec<f32> {
-        let mut rng = stream(seed, 0, Purpose::Noise);
+        let mut rng = pixel_stream(seed, 0, PixelPurpose::Noise);
         (0..n).map(|_| rng.random_range(-1.0f32..1.0)).collect()
     }
 
@@ -106,7 +106,7 @@ mod tests {
             height: 300,
             mean: 0.0,
         };
-        let mut rng = stream(4, 0, Purpose::Noise);
+        let mut rng = pixel_stream(4, 0, PixelPurpose::Noise);
         let (w, h) = (1000, 1000);
         let out = fluctuations(&field, w, h, (37, 91), &mut rng);
         for x in 0..w {
@@ -126,7 +126,7 @@ mod tests {
             height: 30,
             mean: 0.0,
         };
-        let mut rng = stream(6, 0, Purpose::Noise);
+        let mut rng = pixel_stream(6, 0, PixelPurpose::Noise);
         let out = fluctuations(&field, 100, 70, (0, 0), &mut rng);
         assert_eq!(out.len(), 7000);
         // Every pixel is one of the field's.

@@ -25,8 +25,8 @@ const MAX_TRAIL_ROUNDS: usize = 12;
 
 use std::path::{Path, PathBuf};
 
+use crate::rng::PixelRng;
 use fitsio::FitsFile;
-use rand_chacha::ChaCha12Rng;
 
 use crate::imaging::robust_stats;
 pub use prepare::Region;
@@ -219,7 +219,7 @@ impl RealFrame {
         height: usize,
         exposure_s: f64,
         phase: (usize, usize),
-        rng: &mut ChaCha12Rng,
+        rng: &mut PixelRng,
     ) -> Vec<f32> {
         let field = fill::Field {
             pixels: &self.pixels,
@@ -268,7 +268,7 @@ pub struct FrameChoice {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::{Purpose, stream};
+    use crate::rng::{PixelPurpose, pixel_stream};
 
     /// A prepared 300 x 300 frame of constant level 100 plus a ramp-free pattern, 10 s.
     fn frame() -> RealFrame {
@@ -303,7 +303,7 @@ mod tests {
         let f = frame();
         assert_eq!(f.level_adu(5.0), 50.0);
         let bg = |t: f64| {
-            let mut rng = stream(1, 2, Purpose::Noise);
+            let mut rng = pixel_stream(1, 2, PixelPurpose::Noise);
             f.background(700, 500, t, (3, 4), &mut rng)
         };
         let (full, half) = (bg(10.0), bg(5.0));

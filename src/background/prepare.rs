@@ -3,7 +3,7 @@
 //! the same neighbourhood.
 
 use crate::imaging::robust_stats;
-use crate::rng::{Purpose, stream};
+use crate::rng::{PixelPurpose, pixel_stream};
 use rand::RngExt;
 
 /// A rectangle of a frame, 0-based, end-exclusive.
@@ -318,7 +318,7 @@ pub fn fill_masked(pixels: &mut [f32], mask: &[bool], width: usize, height: usiz
         return 0;
     }
     let source = pixels.to_vec();
-    let mut rng = stream(0, 0, Purpose::Noise);
+    let mut rng = pixel_stream(0, 0, PixelPurpose::Noise);
     let mut n = 0;
     for i in (0..pixels.len()).filter(|&i| mask[i]) {
         let (x, y) = ((i % width) as i64, (i / width) as i64);
@@ -357,7 +357,7 @@ mod tests {
     #[test]
     fn stepped_edge_columns_are_found_and_a_gradient_is_not() {
         let (w, h) = (400, 64);
-        let mut rng = stream(1, 0, Purpose::Noise);
+        let mut rng = pixel_stream(1, 0, PixelPurpose::Noise);
         let noise: Vec<f32> = (0..w * h).map(|_| rng.random_range(-1.0..1.0)).collect();
         let mut px = noise.clone();
         for y in 0..h {
@@ -379,7 +379,7 @@ mod tests {
     #[test]
     fn a_faint_arc_is_masked_as_a_trail() {
         let (w, h) = (256, 256);
-        let mut rng = stream(2, 0, Purpose::Noise);
+        let mut rng = pixel_stream(2, 0, PixelPurpose::Noise);
         let normal = rand_distr::Normal::new(0.0f32, 1.0).unwrap();
         let mut px: Vec<f32> = (0..w * h)
             .map(|_| rand_distr::Distribution::sample(&normal, &mut rng))

@@ -173,12 +173,12 @@ fn elongated(component: &[usize], width: usize) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::{Purpose, stream};
+    use crate::rng::{PixelPurpose, pixel_stream};
 
     /// A 512 x 512 frame of unit Gaussian noise plus `amplitude` on the pixels of `arc`.
     fn noisy(arc: impl Fn(usize, usize) -> bool, amplitude: f32) -> Vec<f32> {
         let (w, h) = (512, 512);
-        let mut rng = stream(3, 0, Purpose::Noise);
+        let mut rng = pixel_stream(3, 0, PixelPurpose::Noise);
         let normal = rand_distr::Normal::new(0.0f32, 1.0).unwrap();
         (0..w * h)
             .map(|i| {

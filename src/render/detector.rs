@@ -3,8 +3,8 @@
 //! frame's noise matrix scaled by exposure (`background`), the bias uniform per pixel; or the
 //! physical model of `noise`.
 
+use crate::rng::PixelRng;
 use rand::RngExt;
-use rand_chacha::ChaCha12Rng;
 
 use crate::background::RealFrame;
 use crate::noise::Noise;
@@ -17,7 +17,7 @@ pub(super) fn adu(
     electrons: &[u32],
     scene: &Scene,
     frame: Option<&RealFrame>,
-    noise_rng: &mut ChaCha12Rng,
+    noise_rng: &mut PixelRng,
 ) -> Vec<f32> {
     let s = sensor;
     let (width, height) = (s.width_px, s.height_px);
@@ -34,7 +34,7 @@ pub(super) fn adu(
         );
     }
     let (b_lo, b_hi) = (s.bias.min_adu, s.bias.max_adu);
-    let uniform = |r: &mut ChaCha12Rng, lo: f64, hi: f64| {
+    let uniform = |r: &mut PixelRng, lo: f64, hi: f64| {
         if hi > lo { r.random_range(lo..hi) } else { lo }
     };
     match (frame, scene.background) {

@@ -5,7 +5,7 @@
 //! for a fixed jitter path both renderers have the same distribution (without merging), and
 //! this one does work per pixel the PSF reaches instead of per photon.
 
-use rand_chacha::ChaCha12Rng;
+use crate::rng::PixelRng;
 
 use super::{Canvas, Jitter, Path, Source};
 use crate::rng::poisson;
@@ -75,7 +75,7 @@ impl Flux {
     }
 
     /// One Poisson draw per pixel (debris and stars apart, so the debris image stays known).
-    pub(super) fn draw(self, rng: &mut ChaCha12Rng) -> Canvas {
+    pub(super) fn draw(self, rng: &mut PixelRng) -> Canvas {
         let n = self.width * self.height;
         let mut electrons = vec![0u32; n];
         let mut debris = vec![0u32; n];

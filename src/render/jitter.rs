@@ -1,8 +1,8 @@
 //! The shared Brownian pointing jitter (paper Eq. 2): one random path per exposure, applied
 //! on the sky so it is isotropic, as pixel shifts of every source on a regular time grid.
 
+use crate::rng::PixelRng;
 use rand::RngExt;
-use rand_chacha::ChaCha12Rng;
 use rand_distr::StandardNormal;
 
 use super::Settings;
@@ -21,7 +21,7 @@ impl Jitter {
         sensor: &Sensor,
         settings: &Settings,
         scene: &Scene,
-        rng: &mut ChaCha12Rng,
+        rng: &mut PixelRng,
     ) -> Jitter {
         Jitter::draw(
             rng,
@@ -53,7 +53,7 @@ impl Jitter {
     }
 
     fn draw(
-        rng: &mut ChaCha12Rng,
+        rng: &mut PixelRng,
         sigma_deg_sqrt_s: f64,
         exposure_s: f64,
         steps: usize,

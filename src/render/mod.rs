@@ -4,7 +4,7 @@
 //! the detector (Eq. 11). Also the label box and the truth of the debris as rendered.
 //! It reads the sensor and its own settings, never the campaign file.
 
-use rand_chacha::ChaCha12Rng;
+use crate::rng::PixelRng;
 use serde::Serialize;
 
 use crate::background::RealFrame;
@@ -98,8 +98,8 @@ pub fn render(
     settings: &Settings,
     scene: &Scene,
     frame: Option<&RealFrame>,
-    photons_rng: &mut ChaCha12Rng,
-    noise_rng: &mut ChaCha12Rng,
+    photons_rng: &mut PixelRng,
+    noise_rng: &mut PixelRng,
 ) -> Exposure {
     let jitter = Jitter::of_scene(sensor, settings, scene, photons_rng);
     render_with_jitter(
@@ -120,8 +120,8 @@ pub fn render_with_jitter(
     scene: &Scene,
     frame: Option<&RealFrame>,
     jitter: &Jitter,
-    photons_rng: &mut ChaCha12Rng,
-    noise_rng: &mut ChaCha12Rng,
+    photons_rng: &mut PixelRng,
+    noise_rng: &mut PixelRng,
 ) -> Exposure {
     let s = sensor;
     let (width, height) = (s.width_px, s.height_px);

@@ -1,7 +1,7 @@
 //! Photon mapping proper: photons of a source traced one by one (or in packets) to their
 //! arrival time, position, jitter and PSF, and counted per pixel.
 
-use rand_chacha::ChaCha12Rng;
+use crate::rng::PixelRng;
 use rand_distr::StandardNormal;
 
 use super::{Jitter, Path, Source};
@@ -44,7 +44,7 @@ impl Canvas {
 #[allow(clippy::too_many_arguments)]
 pub(super) fn trace(
     canvas: &mut Canvas,
-    rng: &mut ChaCha12Rng,
+    rng: &mut PixelRng,
     count: u64,
     merge: (u64, u32),
     max_packets: u64,

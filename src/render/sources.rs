@@ -2,8 +2,8 @@
 //! (fixed on the detector, or along survey trails sampled on a time grid) and the debris'
 //! trajectory samples, each with its expected photo-electrons and path over the exposure.
 
+use crate::rng::PixelRng;
 use rand::RngExt;
-use rand_chacha::ChaCha12Rng;
 use serde::Serialize;
 
 use super::Jitter;
@@ -65,7 +65,7 @@ pub(super) struct Source<'a> {
 
 impl Source<'_> {
     /// Arrival time of one photon.
-    pub(super) fn arrival(&self, rng: &mut ChaCha12Rng) -> f64 {
+    pub(super) fn arrival(&self, rng: &mut PixelRng) -> f64 {
         match self.path {
             Path::Instant { t, .. } => t,
             _ if self.t_b > self.t_a => rng.random_range(self.t_a..self.t_b),

@@ -1,7 +1,7 @@
 //! Photon counts against Eq. 3, merging, jitter, and the two renderers against each other.
 
 use super::*;
-use crate::rng::{Purpose, stream};
+use crate::rng::{PixelPurpose, pixel_stream};
 use crate::sensor::AduRange;
 use crate::sky::stars::Star;
 
@@ -86,8 +86,8 @@ fn mean_photons_match_eq3_within_poisson_error() {
             &c.render,
             &s,
             None,
-            &mut stream(1, i, Purpose::Photons),
-            &mut stream(1, i, Purpose::Noise),
+            &mut pixel_stream(1, i, PixelPurpose::Photons),
+            &mut pixel_stream(1, i, PixelPurpose::Noise),
         );
         let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
         debris_sum += e.truth.rendered_debris_electrons as f64;
@@ -118,8 +118,8 @@ fn merged_packets_keep_the_total_and_the_label_holds_the_streak() {
         &c.render,
         &s,
         None,
-        &mut stream(2, 0, Purpose::Photons),
-        &mut stream(2, 0, Purpose::Noise),
+        &mut pixel_stream(2, 0, PixelPurpose::Photons),
+        &mut pixel_stream(2, 0, PixelPurpose::Noise),
     );
     let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
     assert_eq!(total, e.truth.rendered_debris_electrons);
@@ -163,8 +163,8 @@ fn star_centroid_lands_where_the_wcs_says() {
             &c.render,
             &s,
             None,
-            &mut stream(3, i, Purpose::Photons),
-            &mut stream(3, i, Purpose::Noise),
+            &mut pixel_stream(3, i, PixelPurpose::Photons),
+            &mut pixel_stream(3, i, PixelPurpose::Noise),
         );
         let st = e.stars[0];
         let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
@@ -252,8 +252,8 @@ fn noise_free(c: &Fixture, s: &Scene, jitter: &Jitter, runs: u64) -> Vec<Vec<u32
                 s,
                 None,
                 jitter,
-                &mut stream(11, i, Purpose::Photons),
-                &mut stream(11, i, Purpose::Noise),
+                &mut pixel_stream(11, i, PixelPurpose::Photons),
+                &mut pixel_stream(11, i, PixelPurpose::Noise),
             )
             .electrons
         })
@@ -291,7 +291,7 @@ fn expected_and_photon_mapping_agree_in_mean_and_variance_per_pixel() {
         &exact.sensor,
         &exact.render,
         &s,
-        &mut stream(10, 0, Purpose::Photons),
+        &mut pixel_stream(10, 0, PixelPurpose::Photons),
     );
     assert!(
         jitter.max_excursion() > 0.5,
@@ -398,7 +398,7 @@ fn matched_filter_snr_matches_numpy() {
             &c.sensor,
             &c.render,
             &s,
-            &mut stream(0, 0, Purpose::Photons),
+            &mut pixel_stream(0, 0, PixelPurpose::Photons),
         );
         let sigma = c.sensor.background_sigma_adu(t, None);
         let snr = expected::matched_filter_snr(&c.sensor, &s, &jitter, sigma);
@@ -437,8 +437,8 @@ fn noise_level_is_the_mean_the_detector_adds() {
             &c.render,
             &s,
             f,
-            &mut stream(1, 0, Purpose::Photons),
-            &mut stream(1, 0, Purpose::Noise),
+            &mut pixel_stream(1, 0, PixelPurpose::Photons),
+            &mut pixel_stream(1, 0, PixelPurpose::Noise),
         );
         let n = e.adu.len() as f64;
         let mean = e.adu.iter().map(|&v| v as f64).sum::<f64>() / n;

@@ -6,7 +6,7 @@
 use super::*;
 use crate::background::RealFrame;
 use crate::enhance::{self, Settings};
-use crate::rng::{Purpose, stream};
+use crate::rng::{PixelPurpose, pixel_stream};
 
 /// The raw 28 s NEOSSat dark frame of `campaigns/base/paper-semisynthetic.toml` (a copy under
 /// tests/fixtures, same sha256).
@@ -34,7 +34,7 @@ fn candidates_on_debris_free_backgrounds(path: &str, n: usize) -> Vec<Candidate>
     let mut all = Vec::new();
     for k in 0..n {
         let exposure_s = 2.0 + 6.0 * k as f64 / (n - 1) as f64;
-        let mut rng = stream(77, k as u64, Purpose::Noise);
+        let mut rng = pixel_stream(77, k as u64, PixelPurpose::Noise);
         let adu = frame.background(1024, 1024, exposure_s, (13 * k, 7 * k), &mut rng);
         let png = enhance::enhance(&adu, 1024, 1024, &settings);
         let c = detect_streaks(&png.pixels, 1024, 1024, &StreakParams::default(), None);
