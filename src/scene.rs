@@ -575,13 +575,15 @@ fn try_draw(
 
     // The trajectory, cut in samples at the centres of equal time slices.
     let mid_tan = sensor.projection(ra_p, dec_p);
+    let track = sighting
+        .track(start, exposure_s)
+        .ok_or("propagation failed")?;
     let sample = |n: usize| -> Result<Vec<TrajectorySample>, &'static str> {
         let dt = exposure_s / n as f64;
         let mut trajectory = Vec::with_capacity(n);
         for k in 0..n {
             let t_s = (k as f64 + 0.5) * dt;
-            let t = start + Duration::from_seconds(t_s);
-            let sight = sighting.at(t).ok_or("propagation failed")?;
+            let sight = track.at(t_s);
             let (o, d) = (sight.observer_km, sight.debris_km);
             let los = sub(d, o);
             let (ra_deg, dec_deg) = radec_deg(sight.direction);

@@ -87,17 +87,24 @@ impl<'a> Sighting<'a> {
 
     /// The sight at `t`; None if either body cannot be propagated.
     pub fn at(&self, t: Epoch) -> Option<Sight> {
-        let (observer_km, observer_km_s) = self.state(self.observer, t)?;
-        let (debris_now_km, debris_km_s) = self.state(self.debris, t)?;
+        let observer = self.state(self.observer, t)?;
+        let debris = self.state(self.debris, t)?;
+        Some(self.sight(observer, debris))
+    }
+
+    /// The sight from the two bodies' GCRS states (position km, velocity km/s).
+    fn sight(&self, observer: (Vec3, Vec3), debris: (Vec3, Vec3)) -> Sight {
+        let (observer_km, observer_km_s) = observer;
+        let (debris_now_km, debris_km_s) = debris;
         let Some(earth_km_s) = self.earth_km_s else {
-            return Some(Sight {
+            return Sight {
                 observer_km,
                 debris_km: debris_now_km,
                 direction: sub(debris_now_km, observer_km),
-            });
+            };
         };
         let (debris_km, _) = retarded_position(observer_km, debris_now_km, debris_km_s);
-        Some(Sight {
+        Sight {
             observer_km,
             debris_km,
             direction: debris_in_catalogue_frame(
@@ -105,6 +112,26 @@ impl<'a> Sighting<'a> {
                 observer_km_s,
                 earth_km_s,
             ),
+        }
+    }
+
+    /// The sights over an exposure from `start` lasting `exposure_s`, interpolated between
+    /// the bodies' states at nodes (see `Track`); None if a node cannot be propagated.
+    pub fn track(&self, start: Epoch, exposure_s: f64) -> Option<Track<'_>> {
+        let segments = ((exposure_s / TRACK_NODE_SPACING_S).ceil() as usize).max(3);
+        let step_s = exposure_s / segments as f64;
+        let mut observer = Vec::with_capacity(segments + 1);
+        let mut debris = Vec::with_capacity(segments + 1);
+        for k in 0..=segments {
+            let t = start + Duration::from_seconds(k as f64 * step_s);
+            observer.push(self.state(self.observer, t)?);
+            debris.push(self.state(self.debris, t)?);
+        }
+        Some(Track {
+            sighting: self,
+            step_s,
+            observer,
+            debris,
         })
     }
 
@@ -127,6 +154,56 @@ impl<'a> Sighting<'a> {
             debris_gcrs_km,
             debris_gcrs_km_s,
         })
+    }
+}
+
+/// Node spacing of a `Track`, seconds (at most; at least 3 segments per exposure).
+const TRACK_NODE_SPACING_S: f64 = 5.0;
+
+/// The sights over one exposure, from the two bodies' SGP4 states at nodes `step_s` apart
+/// (exposure start and end included), each coordinate a cubic through the 4 nodes around the
+/// time (the first or last 4 at the ends). A scene draw needs the sight at every trajectory
+/// sample (2000 or more per attempt); SGP4 at each was two thirds of the draw, and the orbit
+/// is smooth on these scales: a cubic through nodes h apart errs by at most
+/// h^4 max|r''''| / 24, with |r''''| about n^4 r = 1.2e-8 km/s^4 for the lowest orbits (n of a
+/// 90 min period): 0.3 mm at h = 5 s. Measured against SGP4 at every time in the tests below.
+pub struct Track<'a> {
+    sighting: &'a Sighting<'a>,
+    step_s: f64,
+    observer: Vec<(Vec3, Vec3)>,
+    debris: Vec<(Vec3, Vec3)>,
+}
+
+impl Track<'_> {
+    /// The sight `t_s` seconds after the exposure's start (within the exposure).
+    pub fn at(&self, t_s: f64) -> Sight {
+        let segments = self.observer.len() - 1;
+        let u = if self.step_s > 0.0 {
+            t_s / self.step_s
+        } else {
+            0.0
+        };
+        // The 4 nodes around u: i-1, i, i+1, i+2 where u lies in [i, i+1], kept in range.
+        let first = (u.floor() as isize - 1).clamp(0, segments as isize - 3) as usize;
+        let x = u - first as f64;
+        // Lagrange weights of nodes 0, 1, 2, 3 (x counted in node steps from the first).
+        let w = [
+            -(x - 1.0) * (x - 2.0) * (x - 3.0) / 6.0,
+            x * (x - 2.0) * (x - 3.0) / 2.0,
+            -x * (x - 1.0) * (x - 3.0) / 2.0,
+            x * (x - 1.0) * (x - 2.0) / 6.0,
+        ];
+        let at = |states: &[(Vec3, Vec3)]| {
+            let (mut r, mut v) = ([0.0; 3], [0.0; 3]);
+            for (wk, (rk, vk)) in w.iter().zip(&states[first..first + 4]) {
+                for i in 0..3 {
+                    r[i] += wk * rk[i];
+                    v[i] += wk * vk[i];
+                }
+            }
+            (r, v)
+        };
+        self.sighting.sight(at(&self.observer), at(&self.debris))
     }
 }
 
@@ -222,6 +299,76 @@ mod tests {
             let db = rate(a.debris_gcrs_km, b.debris_gcrs_km);
             assert!(norm(sub(ob, e.observer_gcrs_km_s)) < 1e-4);
             assert!(norm(sub(db, e.debris_gcrs_km_s)) < 1e-4);
+        }
+    }
+}
+#[cfg(test)]
+mod track_tests {
+    use super::*;
+    use crate::sky::orbit::OrbitalElements;
+    use crate::sky::{angle_deg, norm};
+
+    fn orbit(
+        period_min: f64,
+        apsides_km: (f64, f64),
+        planes: (f64, f64, f64),
+        id: u64,
+    ) -> Propagator {
+        let el = OrbitalElements {
+            period_min,
+            inclination_deg: planes.0,
+            apogee_km: apsides_km.0,
+            perigee_km: apsides_km.1,
+            raan_deg: planes.1,
+            arg_perigee_deg: 0.0,
+            mean_anomaly_deg: planes.2,
+            epoch: Epoch::from_gregorian_utc_at_midnight(2022, 3, 1),
+        };
+        Propagator::from_elements(&el, id).unwrap()
+    }
+
+    /// Period (min) of a circular orbit at `altitude_km` (Kepler, WGS72).
+    fn period(altitude_km: f64) -> f64 {
+        std::f64::consts::TAU * ((6378.135 + altitude_km).powi(3) / 398_600.8).sqrt() / 60.0
+    }
+
+    /// A track against SGP4 at 401 times of each exposure (0.5 s to 600 s), geometric and
+    /// apparent, for debris in a 300 km orbit, 60-100 km from the observer, and in the paper's
+    /// Table 1 orbit at its perigee (deep space). Measured: at most 0.44 mm and 4.1e-5 arcsec
+    /// (6e-5 px of 0.7"), as the h^4 bound predicts; asserted: 1 mm and 1e-4 arcsec, where a
+    /// wrong node, weight or time would be off by metres.
+    #[test]
+    fn track_follows_sgp4_to_a_millimetre() {
+        let observer = orbit(period(800.0), (805.0, 795.0), (98.6, 0.0, 0.0), 1);
+        let cases = [
+            orbit(period(300.0), (305.0, 295.0), (51.6, 10.0, 20.0), 2),
+            orbit(period(810.0), (815.0, 805.0), (98.6, 0.5, 0.7), 3),
+            orbit(375.48, (20490.0, 1235.0), (52.78, 5.0, 0.0), 4),
+        ];
+        let epoch = Epoch::from_gregorian_utc_at_midnight(2022, 3, 1);
+        for debris in &cases {
+            for apparent in [false, true] {
+                for exposure in [0.5, 5.0, 30.0, 600.0] {
+                    for start_min in [0.0, 13.0, 47.0] {
+                        let start = epoch + Duration::from_seconds(start_min * 60.0);
+                        let mid = start + Duration::from_seconds(exposure / 2.0);
+                        let s = Sighting::new(&observer, debris, mid, apparent);
+                        let track = s.track(start, exposure).unwrap();
+                        for k in 0..=400 {
+                            let t_s = exposure * k as f64 / 400.0;
+                            let exact = s.at(start + Duration::from_seconds(t_s)).unwrap();
+                            let got = track.at(t_s);
+                            let km = norm(sub(got.debris_km, exact.debris_km))
+                                .max(norm(sub(got.observer_km, exact.observer_km)));
+                            let arcsec = angle_deg(got.direction, exact.direction) * 3600.0;
+                            assert!(
+                                km < 1e-6 && arcsec < 1e-4,
+                                "{exposure} s from {start_min} min, t {t_s}: {km} km, {arcsec} arcsec"
+                            );
+                        }
+                    }
+                }
+            }
         }
     }
 }
