@@ -88,8 +88,6 @@ impl Flux {
             debris_total += d;
         }
         Canvas {
-            width: self.width,
-            height: self.height,
             electrons,
             debris,
             debris_total,

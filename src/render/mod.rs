@@ -23,7 +23,7 @@ mod tests;
 mod truth;
 
 pub use jitter::Jitter;
-use photons::{Canvas, trace};
+use photons::{Canvas, Tally, trace};
 pub use sources::TracedStar;
 use sources::{Path, Source, for_each_source};
 pub use truth::Truth;
@@ -88,7 +88,7 @@ pub struct Exposure {
 
 /// Where the photons of the sources go: traced one by one, or as expected flux per pixel.
 enum Photons {
-    Mapped(Canvas),
+    Mapped(Tally),
     Expected(expected::Flux),
 }
 
@@ -130,20 +130,14 @@ pub fn render_with_jitter(
     let jitter_mean = jitter.mean();
     let merge = (settings.merge_threshold, settings.merge_factor);
     let mut photons = match settings.method {
-        RenderMethod::PhotonMapping => Photons::Mapped(Canvas {
-            width,
-            height,
-            electrons: vec![0; width * height],
-            debris: vec![0; width * height],
-            debris_total: 0,
-        }),
+        RenderMethod::PhotonMapping => Photons::Mapped(Tally::new(width, height)),
         RenderMethod::Expected => Photons::Expected(expected::Flux::new(width, height, psf_px)),
     };
     // The debris' trajectory samples share one source's packet budget (2000 samples of a
     // magnitude -1 debris would otherwise trace 2e9 packets).
     let debris_packets = (MAX_PACKETS_PER_SOURCE / scene.trajectory.len().max(1) as u64).max(1);
     let traced = for_each_source(sensor, scene, jitter, |source| match &mut photons {
-        Photons::Mapped(canvas) => {
+        Photons::Mapped(tally) => {
             let count = poisson(photons_rng, source.expected);
             let budget = if source.debris {
                 debris_packets
@@ -151,7 +145,7 @@ pub fn render_with_jitter(
                 MAX_PACKETS_PER_SOURCE
             };
             trace(
-                canvas,
+                tally,
                 photons_rng,
                 count,
                 merge,
@@ -164,7 +158,7 @@ pub fn render_with_jitter(
         Photons::Expected(flux) => flux.add(source, jitter),
     });
     let canvas = match photons {
-        Photons::Mapped(canvas) => canvas,
+        Photons::Mapped(tally) => tally.canvas(),
         Photons::Expected(flux) => flux.draw(photons_rng),
     };
     let (expected_debris, mag_min, mag_max) = scene
