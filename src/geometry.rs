@@ -266,6 +266,31 @@ impl BoxPx {
     }
 }
 
+/// A pixel value `flux_box` reads as f32: an image in any frame (f32), or the renderer's
+/// photo-electron counts or expected flux (u32, f64: read `as f32` in place, not through a
+/// 4 MB copy per image).
+pub trait Flux: Copy {
+    fn flux(self) -> f32;
+}
+
+impl Flux for f32 {
+    fn flux(self) -> f32 {
+        self
+    }
+}
+
+impl Flux for u32 {
+    fn flux(self) -> f32 {
+        self as f32
+    }
+}
+
+impl Flux for f64 {
+    fn flux(self) -> f32 {
+        self as f32
+    }
+}
+
 /// Share of the rendered debris flux the label box must hold.
 pub const LABEL_SHARE: f64 = 0.99;
 
@@ -273,7 +298,7 @@ pub const LABEL_SHARE: f64 = 0.99;
 /// box between the `t` and `1 - t` flux quantiles of each axis, with the largest tail `t` for
 /// which it still holds `share` of the flux. The tightest such box, no wider than needed. None
 /// if the image holds no flux.
-pub fn flux_box(img: &[f32], width: usize, height: usize, share: f64) -> Option<BoxPx> {
+pub fn flux_box<P: Flux>(img: &[P], width: usize, height: usize, share: f64) -> Option<BoxPx> {
     // Only the rectangle around the lit pixels is tabulated: a streak covers a sliver of the
     // image, and the zeros outside it change no sum, so the box (and its bits) is the one a
     // whole-image table gives (that table was 8.4 MB per 1024 px image).
@@ -281,7 +306,7 @@ pub fn flux_box(img: &[f32], width: usize, height: usize, share: f64) -> Option<
     if stride == 0 {
         return None;
     }
-    let lit = |v: &f32| *v > 0.0;
+    let lit = |v: &P| v.flux() > 0.0;
     let (mut x_first, mut x_last, mut y_first, mut y_last) = (stride, 0, height, 0);
     for (j, row) in img.chunks_exact(stride).take(height).enumerate() {
         if let Some(i) = row.iter().position(lit) {
@@ -301,7 +326,7 @@ pub fn flux_box(img: &[f32], width: usize, height: usize, share: f64) -> Option<
     for j in 0..height {
         let mut line = 0.0;
         for i in 0..width {
-            let v = img[(j + y_first) * stride + i + x_first].max(0.0) as f64;
+            let v = img[(j + y_first) * stride + i + x_first].flux().max(0.0) as f64;
             col[i] += v;
             row[j] += v;
             line += v;

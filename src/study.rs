@@ -145,12 +145,7 @@ fn study(campaign: &Campaign, dir: &Path, opts: &Options) -> anyhow::Result<Summ
         total: mu.iter().sum(),
         debris_total: mu_debris.iter().sum(),
         centroid: centroid(&mu_debris, w),
-        label_box: flux_box(
-            &mu_debris.iter().map(|&v| v as f32).collect::<Vec<_>>(),
-            w,
-            h,
-            LABEL_SHARE,
-        ),
+        label_box: flux_box(&mu_debris, w, h, LABEL_SHARE),
         mu,
     };
     anyhow::ensure!(
@@ -316,15 +311,7 @@ fn measure(
         if let (Some(a), Some(b)) = (centroid(&debris, e.width), truth.centroid) {
             centroid_err.push((a.0 - b.0).hypot(a.1 - b.1));
         }
-        let label = flux_box(
-            &e.debris_electrons
-                .iter()
-                .map(|&v| v as f32)
-                .collect::<Vec<_>>(),
-            e.width,
-            e.height,
-            LABEL_SHARE,
-        );
+        let label = flux_box(&e.debris_electrons, e.width, e.height, LABEL_SHARE);
         if let (Some(a), Some(b)) = (label, truth.label_box) {
             box_err.push(
                 [

@@ -190,12 +190,7 @@ pub fn render_with_jitter(
         jitter_mean_px: [jitter_mean.0, jitter_mean.1],
         streak_start_px: first.unwrap_or([f64::NAN; 2]),
         streak_end_px: last.unwrap_or([f64::NAN; 2]),
-        label_box_px: flux_box(
-            &canvas.debris.iter().map(|&v| v as f32).collect::<Vec<_>>(),
-            width,
-            height,
-            LABEL_SHARE,
-        ),
+        label_box_px: flux_box(&canvas.debris, width, height, LABEL_SHARE),
         frame: None,
         label_box_final_px: None,
         magnitude: g.magnitude,
