@@ -168,7 +168,7 @@ const TRACK_NODE_SPACING_S: f64 = 5.0;
 /// is smooth on these scales: a cubic through nodes h apart errs by at most
 /// h^4 max|r''''| / 24, with |r''''| about w^4 r for an angular rate w: 1.2e-8 km/s^4 in a
 /// 90 min circular orbit (0.3 mm at h = 5 s), 2.2e-8 at the perigee of the paper's Table 1
-/// orbit (0.57 mm). Measured against SGP4 in `track_tests`: at most 0.44 mm, 4.1e-5 arcsec.
+/// orbit (0.57 mm). Measured against SGP4 in `tests`: at most 0.44 mm, 4.1e-5 arcsec.
 pub struct Track<'a> {
     sighting: &'a Sighting<'a>,
     step_s: f64,
@@ -216,21 +216,41 @@ mod tests {
     use crate::sky::orbit::OrbitalElements;
     use crate::sky::{angle_deg, dot, norm, scale, unit};
 
-    /// A circular-ish orbit at `altitude_km` (period by Kepler's law, WGS72).
-    fn orbit(altitude_km: f64, inclination_deg: f64, raan_deg: f64, norad: u64) -> Propagator {
-        let a: f64 = 6378.135 + altitude_km;
-        let period_min = std::f64::consts::TAU * (a.powi(3) / 398_600.8).sqrt() / 60.0;
+    /// Period (min) of a circular orbit at `altitude_km` (Kepler, WGS72).
+    fn period(altitude_km: f64) -> f64 {
+        std::f64::consts::TAU * ((6378.135 + altitude_km).powi(3) / 398_600.8).sqrt() / 60.0
+    }
+
+    /// An orbit of this period, (apogee, perigee) altitudes and (inclination, RAAN, mean
+    /// anomaly) in degrees, at 2022-03-01.
+    fn orbit_with(
+        period_min: f64,
+        apsides_km: (f64, f64),
+        angles_deg: (f64, f64, f64),
+        norad: u64,
+    ) -> Propagator {
         let el = OrbitalElements {
             period_min,
-            inclination_deg,
-            apogee_km: altitude_km + 5.0,
-            perigee_km: altitude_km - 5.0,
-            raan_deg,
+            inclination_deg: angles_deg.0,
+            apogee_km: apsides_km.0,
+            perigee_km: apsides_km.1,
+            raan_deg: angles_deg.1,
             arg_perigee_deg: 0.0,
-            mean_anomaly_deg: 0.0,
+            mean_anomaly_deg: angles_deg.2,
             epoch: Epoch::from_gregorian_utc_at_midnight(2022, 3, 1),
         };
         Propagator::from_elements(&el, norad).unwrap()
+    }
+
+    /// A circular-ish orbit at `altitude_km` (period by Kepler's law, WGS72).
+    fn orbit(altitude_km: f64, inclination_deg: f64, raan_deg: f64, norad: u64) -> Propagator {
+        let apsides = (altitude_km + 5.0, altitude_km - 5.0);
+        orbit_with(
+            period(altitude_km),
+            apsides,
+            (inclination_deg, raan_deg, 0.0),
+            norad,
+        )
     }
 
     /// Against the stars the debris moves by its own barycentric velocity times the light time
@@ -303,36 +323,6 @@ mod tests {
             assert!(norm(sub(db, e.debris_gcrs_km_s)) < 1e-4);
         }
     }
-}
-#[cfg(test)]
-mod track_tests {
-    use super::*;
-    use crate::sky::orbit::OrbitalElements;
-    use crate::sky::{angle_deg, norm};
-
-    fn orbit(
-        period_min: f64,
-        apsides_km: (f64, f64),
-        planes: (f64, f64, f64),
-        id: u64,
-    ) -> Propagator {
-        let el = OrbitalElements {
-            period_min,
-            inclination_deg: planes.0,
-            apogee_km: apsides_km.0,
-            perigee_km: apsides_km.1,
-            raan_deg: planes.1,
-            arg_perigee_deg: 0.0,
-            mean_anomaly_deg: planes.2,
-            epoch: Epoch::from_gregorian_utc_at_midnight(2022, 3, 1),
-        };
-        Propagator::from_elements(&el, id).unwrap()
-    }
-
-    /// Period (min) of a circular orbit at `altitude_km` (Kepler, WGS72).
-    fn period(altitude_km: f64) -> f64 {
-        std::f64::consts::TAU * ((6378.135 + altitude_km).powi(3) / 398_600.8).sqrt() / 60.0
-    }
 
     /// A track against SGP4 at 401 times of each exposure (0.5 s to 600 s), geometric and
     /// apparent, for debris in a 300 km orbit, 60-100 km from the observer, and in the paper's
@@ -341,11 +331,11 @@ mod track_tests {
     /// wrong node, weight or time would be off by metres.
     #[test]
     fn track_follows_sgp4_to_a_millimetre() {
-        let observer = orbit(period(800.0), (805.0, 795.0), (98.6, 0.0, 0.0), 1);
+        let observer = orbit(800.0, 98.6, 0.0, 1);
         let cases = [
-            orbit(period(300.0), (305.0, 295.0), (51.6, 10.0, 20.0), 2),
-            orbit(period(810.0), (815.0, 805.0), (98.6, 0.5, 0.7), 3),
-            orbit(375.48, (20490.0, 1235.0), (52.78, 5.0, 0.0), 4),
+            orbit_with(period(300.0), (305.0, 295.0), (51.6, 10.0, 20.0), 2),
+            orbit_with(period(810.0), (815.0, 805.0), (98.6, 0.5, 0.7), 3),
+            orbit_with(375.48, (20490.0, 1235.0), (52.78, 5.0, 0.0), 4),
         ];
         let epoch = Epoch::from_gregorian_utc_at_midnight(2022, 3, 1);
         for debris in &cases {
