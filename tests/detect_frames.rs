@@ -50,11 +50,10 @@ fn pair(v: &serde_json::Value) -> [f64; 2] {
 /// within 5 px of the truth segment, covering at least 80% of its length. Its ends are usually
 /// within 2 px of the truth's, but not always: in image 2 the fitted line ends 22 px early and
 /// 3.8 px off the truth line, which is the detector's accuracy (the campaign metrics measure
-/// it), not a convention. The conventions are checked exactly: the
-/// ends on the sky that `soig detect` computes through the FITS WCS must be where the
-/// renderer's own projection (`Tan`, checked against astropy in src/sky/projection.rs, not the
-/// header) puts the detected pixel ends, to 0.001 px (the header's 12 significant digits
-/// allow 1e-9 deg, about 5e-6 px).
+/// it), not a convention. The conventions are checked exactly: the ends on the sky that
+/// `soig detect` computes through the FITS WCS must be where the renderer's own projection
+/// (`Tan`, checked against astropy in src/sky/projection.rs, not the header) puts the detected
+/// pixel ends, to 0.001 px (the header's 12 significant digits allow 1e-9 deg, about 5e-6 px).
 #[test]
 fn finds_a_rendered_streak_on_the_pixel_grid_and_the_sky() {
     let tmp = tempfile::tempdir().unwrap();
