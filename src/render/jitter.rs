@@ -84,6 +84,15 @@ impl Jitter {
         (a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1))
     }
 
+    /// The shift at `u` grid steps from the start (u in [0, steps]): `at(u dt)` without the
+    /// division, for photons whose arrival is drawn on the grid.
+    pub(super) fn at_step(&self, u: f64) -> (f64, f64) {
+        let i = (u as usize).min(self.shift.len() - 2);
+        let f = u - i as f64;
+        let (a, b) = (self.shift[i], self.shift[i + 1]);
+        (a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1))
+    }
+
     /// Time average of the shift over the exposure (trapezoid rule on the grid).
     pub(super) fn mean(&self) -> (f64, f64) {
         let n = self.shift.len() - 1;

@@ -86,7 +86,8 @@ pub struct Exposure {
     pub stars: Vec<TracedStar>,
 }
 
-/// Where the photons of the sources go: traced one by one, or as expected flux per pixel.
+/// Where the photons of the sources go: traced one by one (the debris' drawn per pixel, the
+/// same distribution), or as expected flux per pixel.
 enum Photons {
     Mapped(Tally),
     Expected(expected::Flux),
@@ -113,6 +114,18 @@ pub fn render(
     )
 }
 
+/// Whether no debris trajectory sample can draw more photons than the merge threshold (so
+/// that photon mapping traces them all singly): the brightest sample's Poisson count exceeds
+/// its mean by 12 standard deviations plus 12 with a chance below 1e-25.
+fn singles_only(scene: &Scene, merge_threshold: u64) -> bool {
+    let most = scene
+        .trajectory
+        .iter()
+        .map(|p| p.expected_electrons)
+        .fold(0.0, f64::max);
+    most + 12.0 * most.sqrt() + 12.0 < merge_threshold as f64
+}
+
 /// Render a scene for a given jitter path.
 pub fn render_with_jitter(
     sensor: &Sensor,
@@ -136,7 +149,14 @@ pub fn render_with_jitter(
     // The debris' trajectory samples share one source's packet budget (2000 samples of a
     // magnitude -1 debris would otherwise trace 2e9 packets).
     let debris_packets = (MAX_PACKETS_PER_SOURCE / scene.trajectory.len().max(1) as u64).max(1);
+    let debris_flux = expected::DebrisFlux::of_scene(sensor, scene, jitter);
+    // Where no trajectory sample can be merged into packets, all its photons are single and
+    // drawn per pixel from the debris' expected flux: the same distribution as tracing them
+    // (`DebrisFlux::draw`), at a fraction of the cost.
+    let debris_per_pixel =
+        settings.method.is_photon_mapping() && singles_only(scene, settings.merge_threshold);
     let traced = for_each_source(sensor, scene, jitter, |source| match &mut photons {
+        Photons::Mapped(_) if source.debris && debris_per_pixel => {}
         Photons::Mapped(tally) => {
             let count = poisson(photons_rng, source.expected);
             let budget = if source.debris {
@@ -158,7 +178,12 @@ pub fn render_with_jitter(
         Photons::Expected(flux) => flux.add(source, jitter),
     });
     let canvas = match photons {
-        Photons::Mapped(tally) => tally.canvas(),
+        Photons::Mapped(mut tally) => {
+            if debris_per_pixel {
+                tally.draw_debris(&debris_flux, photons_rng);
+            }
+            tally.canvas()
+        }
         Photons::Expected(flux) => flux.draw(photons_rng),
     };
     let (expected_debris, mag_min, mag_max) = scene
@@ -208,7 +233,7 @@ pub fn render_with_jitter(
         snr: scene.snr,
         snr_noise_level: scene.snr_noise_level,
         snr_noise_sigma: scene.snr_noise_sigma,
-        snr_matched_filter: expected::matched_filter_snr(sensor, scene, jitter, sigma_adu),
+        snr_matched_filter: debris_flux.matched_filter_snr(sensor.gain_e_per_adu, sigma_adu),
         stars_in_cone: scene.stars.len(),
         stars_traced: traced.len(),
         background_sigma_adu: sigma_adu,

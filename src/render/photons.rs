@@ -1,5 +1,6 @@
 //! Photon mapping proper: photons of a source traced one by one (or in packets) to their
-//! arrival time, position, jitter and PSF, and counted per pixel.
+//! arrival time, position, jitter and PSF, and counted per pixel; the debris' photons, when
+//! none can be merged, drawn per pixel from its expected flux (`DebrisFlux::draw`).
 
 use crate::rng::PixelRng;
 use rand_distr::StandardNormal;
@@ -51,6 +52,11 @@ impl Tally {
         } else {
             self.others[k] = self.others[k].saturating_add(weight);
         }
+    }
+
+    /// The debris' photons drawn per pixel instead of traced (`DebrisFlux::draw`).
+    pub(super) fn draw_debris(&mut self, flux: &super::expected::DebrisFlux, rng: &mut PixelRng) {
+        self.debris_total += flux.draw(rng, &mut self.debris, self.width);
     }
 
     /// All sources per pixel (saturating sums of non-negative counts: the same in any order).
@@ -123,6 +129,22 @@ pub(super) fn trace(
                 canvas.add(
                     x0 + gx * psf_px,
                     y0 + gy * psf_px,
+                    weight_of(n),
+                    source.debris,
+                );
+            }
+        }
+        // A fixed star's photons arrive uniformly over the whole exposure, which the jitter
+        // grid spans: the arrival drawn in grid steps gives the cell and fraction directly.
+        Path::Still { x, y } => {
+            let steps = jitter.steps() as f64;
+            for n in 0..total {
+                let (jx, jy) = jitter.at_step(rng.random_range(0.0..steps));
+                let gx: f64 = rng.sample(StandardNormal);
+                let gy: f64 = rng.sample(StandardNormal);
+                canvas.add(
+                    x + jx + gx * psf_px,
+                    y + jy + gy * psf_px,
                     weight_of(n),
                     source.debris,
                 );

@@ -191,6 +191,87 @@ fn star_centroid_lands_where_the_wcs_says() {
     }
 }
 
+#[test]
+fn debris_drawn_per_pixel_is_distributed_as_its_photons_traced() {
+    // The photon-mapping renderer draws the debris per pixel (`DebrisFlux::draw`) where no
+    // sample can be merged. Against its photons traced singly (`trace`, as before), for a
+    // moving jitter path: the same mean and variance in every pixel with signal (chi-square
+    // over pixels, as above), the same mean total, and the expected flux holds every photon
+    // (the 7-sigma support drops 1e-11 of them).
+    let c = fixture(4e-4);
+    let s = scene(&c, vec![], 14.5, 2.0);
+    let mut settings = c.render.clone();
+    settings.jitter_steps = 50;
+    let jitter = Jitter::of_scene(
+        &c.sensor,
+        &settings,
+        &s,
+        &mut pixel_stream(12, 0, PixelPurpose::Photons),
+    );
+    assert!(
+        jitter.max_excursion() > 0.5,
+        "the jitter path moves the streak"
+    );
+    let flux = expected::DebrisFlux::of_scene(&c.sensor, &s, &jitter);
+    let lambda: f64 = s.trajectory.iter().map(|p| p.expected_electrons).sum();
+    assert!(
+        (flux.total() / lambda - 1.0).abs() < 1e-9,
+        "{} of {lambda}",
+        flux.total()
+    );
+    let psf_px = c.sensor.psf_sigma_px();
+    let runs = 300;
+    let (mut traced, mut drawn) = (Vec::new(), Vec::new());
+    for i in 0..runs {
+        let rng = &mut pixel_stream(13, i, PixelPurpose::Photons);
+        let mut tally = Tally::new(128, 128);
+        for_each_source(&c.sensor, &s, &jitter, |source| {
+            let count = poisson(rng, source.expected);
+            let singles = (u64::MAX, 1);
+            trace(
+                &mut tally,
+                rng,
+                count,
+                singles,
+                u64::MAX,
+                &jitter,
+                psf_px,
+                source,
+            );
+        });
+        traced.push(tally.canvas());
+        let mut tally = Tally::new(128, 128);
+        tally.draw_debris(&flux, rng);
+        drawn.push(tally.canvas());
+    }
+    let total = |v: &[Canvas]| v.iter().map(|c| c.debris_total as f64).sum::<f64>() / runs as f64;
+    let se = (lambda / runs as f64).sqrt();
+    for t in [total(&traced), total(&drawn)] {
+        assert!((t - lambda).abs() < 4.0 * se, "mean total {t} vs {lambda}");
+    }
+    let a = pixel_stats(&traced.into_iter().map(|c| c.debris).collect::<Vec<_>>());
+    let b = pixel_stats(&drawn.into_iter().map(|c| c.debris).collect::<Vec<_>>());
+    let on: Vec<usize> = (0..a.mean.len()).filter(|&k| b.mean[k] >= 5.0).collect();
+    assert!(on.len() > 100, "{} pixels with signal", on.len());
+    let n = a.n;
+    let (chi2, z) = chi2_z(&on, |k| {
+        (a.mean[k] - b.mean[k], ((a.var[k] + b.var[k]) / n).sqrt())
+    });
+    assert!(
+        z.abs() < 4.0,
+        "means: chi2 {chi2} over {} pixels (z {z})",
+        on.len()
+    );
+    let (chi2, z) = chi2_z(&on, |k| {
+        (a.var[k] - b.var[k], a.var_se[k].hypot(b.var_se[k]))
+    });
+    assert!(
+        z.abs() < 4.0,
+        "variances: chi2 {chi2} over {} pixels (z {z})",
+        on.len()
+    );
+}
+
 /// Per-pixel sums over seeds: count, mean, second and fourth central moments.
 struct PixelStats {
     n: f64,
@@ -384,7 +465,7 @@ fn expected_and_photon_mapping_agree_in_mean_and_variance_per_pixel() {
 /// (tests/reference/matched_filter_reference.py: the PSF integrated over every pixel of the
 /// image with math.erfc, no support cut). One diagonal streak leaves the image (only its
 /// in-image pixels count), one short faint streak sits inside it. Tolerance 1e-5 relative:
-/// soig's erfc is good to 1.2e-7 and its 5-sigma PSF support drops ~1e-6 of the flux; anything
+/// soig's erfc is good to 1.2e-7 and its 7-sigma PSF support drops ~1e-11 of the flux; anything
 /// else (a wrong shot-noise term, gain, PSF width or clipping) moves the SNR by percents.
 #[test]
 fn matched_filter_snr_matches_numpy() {
