@@ -204,7 +204,7 @@ impl MedianF32 {
         MedianF32 {
             rank: len / 2,
             high: 0,
-            counts: vec![0; (1 << 16) + 1],
+            counts: vec![0; (1 << 16) + 8],
         }
     }
 
@@ -218,11 +218,13 @@ impl MedianF32 {
     }
 
     fn count_low(&mut self, key: u32) {
-        // Keys of other buckets go to a slot past the end: no branch to mispredict.
+        // Keys of other buckets go to slots past the end: no branch to mispredict. Eight of
+        // them, by the key's last bits, because most keys are elsewhere and increments of one
+        // slot wait on each other (one slot took 2 ms of a 1024 px image).
         let slot = if key >> 16 == self.high {
             key & 0xffff
         } else {
-            1 << 16
+            1 << 16 | (key & 7)
         };
         self.counts[slot as usize] += 1;
     }
