@@ -17,10 +17,11 @@ pub fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// sha256 of a file and its length in bytes.
+/// sha256 of a file and its length in bytes. Read in 1 MiB chunks: `io::copy`'s 8 KiB reads
+/// were 1250 system calls for an image's 10 MB of files.
 pub fn sha256_file(path: &Path) -> std::io::Result<(String, u64)> {
-    let mut f = std::fs::File::open(path)?;
+    let f = std::fs::File::open(path)?;
     let mut h = Sha256::new();
-    let bytes = std::io::copy(&mut f, &mut h)?;
+    let bytes = std::io::copy(&mut std::io::BufReader::with_capacity(1 << 20, f), &mut h)?;
     Ok((hex(&h.finalize()), bytes))
 }
