@@ -65,13 +65,7 @@ impl Flux {
         } else {
             &mut self.stars
         };
-        for (j, wy) in wy.iter().enumerate() {
-            let row = (j0 + j) * self.width + i0;
-            let a = amount * wy;
-            for (v, wx) in image[row..row + wx.len()].iter_mut().zip(&wx) {
-                *v += a * wx;
-            }
-        }
+        add_separable(image, self.width, (i0, &wx), (j0, &wy), amount);
     }
 
     /// One Poisson draw per pixel (debris and stars apart, so the debris image stays known).
@@ -169,16 +163,11 @@ impl DebrisFlux {
             ) else {
                 continue;
             };
-            let (first, end) = (i0 - lo[0], i0 - lo[0] + wx.len());
-            for (j, wy) in wy.iter().enumerate() {
-                let span = &mut spans[j0 + j - lo[1]];
-                *span = (span.0.min(first), span.1.max(end));
-                let row = (j0 + j - lo[1]) * width + first;
-                let a = amount * wy;
-                for (v, wx) in mean[row..row + wx.len()].iter_mut().zip(&wx) {
-                    *v += a * wx;
-                }
+            let (col, row) = (i0 - lo[0], j0 - lo[1]);
+            for span in &mut spans[row..row + wy.len()] {
+                *span = (span.0.min(col), span.1.max(col + wx.len()));
             }
+            add_separable(&mut mean, width, (col, &wx), (row, &wy), amount);
         }
         DebrisFlux {
             x0: lo[0],
@@ -250,11 +239,31 @@ pub fn matched_filter_snr(
         .matched_filter_snr(sensor.gain_e_per_adu, noise_sigma_adu)
 }
 
-/// The first and last pixel (inclusive) of the `support`-sigma PSF support around `c` on an
-/// axis of `n` pixels (pixel i spans [i - 0.5, i + 0.5)); None when it misses the axis.
-fn support(c: f64, sigma: f64, support: f64, n: usize) -> Option<(usize, usize)> {
-    let lo = (c - support * sigma + 0.5).floor().max(0.0);
-    let hi = (c + support * sigma + 0.5).floor().min(n as f64 - 1.0);
+/// `amount` times the PSF shares `wx` (columns from `col0`) by `wy` (rows from `row0`), added
+/// into `image` (rows `width` long): a separable PSF integrated over pixels.
+fn add_separable(
+    image: &mut [f64],
+    width: usize,
+    (col0, wx): (usize, &[f64]),
+    (row0, wy): (usize, &[f64]),
+    amount: f64,
+) {
+    for (j, wy) in wy.iter().enumerate() {
+        let row = (row0 + j) * width + col0;
+        let a = amount * wy;
+        for (v, wx) in image[row..row + wx.len()].iter_mut().zip(wx) {
+            *v += a * wx;
+        }
+    }
+}
+
+/// The first and last pixel (inclusive) of the `support_sigma`-sigma PSF support around `c`
+/// on an axis of `n` pixels (pixel i spans [i - 0.5, i + 0.5)); None when it misses the axis.
+fn support(c: f64, sigma: f64, support_sigma: f64, n: usize) -> Option<(usize, usize)> {
+    let lo = (c - support_sigma * sigma + 0.5).floor().max(0.0);
+    let hi = (c + support_sigma * sigma + 0.5)
+        .floor()
+        .min(n as f64 - 1.0);
     (hi >= lo).then_some((lo as usize, hi as usize))
 }
 

@@ -117,53 +117,47 @@ pub(super) fn trace(
     };
     // Every packet: the full ones (weight_of tells them apart), then the singles or the tail.
     let total = packets + singles + tail;
+    // Every packet lands at its source's position at its arrival time (`at`, which draws the
+    // arrival if it needs one), plus the PSF. Generic, so each path's loop is compiled apart.
+    fn land(
+        canvas: &mut Tally,
+        rng: &mut PixelRng,
+        total: u64,
+        weight_of: impl Fn(u64) -> u32,
+        psf_px: f64,
+        debris: bool,
+        mut at: impl FnMut(&mut PixelRng) -> (f64, f64),
+    ) {
+        for n in 0..total {
+            let (x0, y0) = at(rng);
+            let gx: f64 = rng.sample(StandardNormal);
+            let gy: f64 = rng.sample(StandardNormal);
+            canvas.add(x0 + gx * psf_px, y0 + gy * psf_px, weight_of(n), debris);
+        }
+    }
+    let debris = source.debris;
     match source.path {
         // All of a trajectory sample's photons arrive at one time, so one jittered position:
         // computed once, not per packet (the same sums in the same order, so the same pixels).
         Path::Instant { t, x, y } => {
             let (jx, jy) = jitter.at(t);
             let (x0, y0) = (x + jx, y + jy);
-            for n in 0..total {
-                let gx: f64 = rng.sample(StandardNormal);
-                let gy: f64 = rng.sample(StandardNormal);
-                canvas.add(
-                    x0 + gx * psf_px,
-                    y0 + gy * psf_px,
-                    weight_of(n),
-                    source.debris,
-                );
-            }
+            land(canvas, rng, total, weight_of, psf_px, debris, |_| (x0, y0));
         }
         // A fixed star's photons arrive uniformly over the whole exposure, which the jitter
         // grid spans: the arrival drawn in grid steps gives the cell and fraction directly.
         Path::Still { x, y } => {
             let steps = jitter.steps() as f64;
-            for n in 0..total {
+            land(canvas, rng, total, weight_of, psf_px, debris, |rng| {
                 let (jx, jy) = jitter.at_step(rng.random_range(0.0..steps));
-                let gx: f64 = rng.sample(StandardNormal);
-                let gy: f64 = rng.sample(StandardNormal);
-                canvas.add(
-                    x + jx + gx * psf_px,
-                    y + jy + gy * psf_px,
-                    weight_of(n),
-                    source.debris,
-                );
-            }
+                (x + jx, y + jy)
+            });
         }
-        _ => {
-            for n in 0..total {
-                let t = source.arrival(rng);
-                let (x0, y0) = source.path.at(t);
-                let (jx, jy) = jitter.at(t);
-                let gx: f64 = rng.sample(StandardNormal);
-                let gy: f64 = rng.sample(StandardNormal);
-                canvas.add(
-                    x0 + jx + gx * psf_px,
-                    y0 + jy + gy * psf_px,
-                    weight_of(n),
-                    source.debris,
-                );
-            }
-        }
+        _ => land(canvas, rng, total, weight_of, psf_px, debris, |rng| {
+            let t = source.arrival(rng);
+            let (x0, y0) = source.path.at(t);
+            let (jx, jy) = jitter.at(t);
+            (x0 + jx, y0 + jy)
+        }),
     }
 }

@@ -253,23 +253,7 @@ fn debris_drawn_per_pixel_is_distributed_as_its_photons_traced() {
     let b = pixel_stats(&drawn.into_iter().map(|c| c.debris).collect::<Vec<_>>());
     let on: Vec<usize> = (0..a.mean.len()).filter(|&k| b.mean[k] >= 5.0).collect();
     assert!(on.len() > 100, "{} pixels with signal", on.len());
-    let n = a.n;
-    let (chi2, z) = chi2_z(&on, |k| {
-        (a.mean[k] - b.mean[k], ((a.var[k] + b.var[k]) / n).sqrt())
-    });
-    assert!(
-        z.abs() < 4.0,
-        "means: chi2 {chi2} over {} pixels (z {z})",
-        on.len()
-    );
-    let (chi2, z) = chi2_z(&on, |k| {
-        (a.var[k] - b.var[k], a.var_se[k].hypot(b.var_se[k]))
-    });
-    assert!(
-        z.abs() < 4.0,
-        "variances: chi2 {chi2} over {} pixels (z {z})",
-        on.len()
-    );
+    assert_same_means_and_variances(&a, &b, &on);
 }
 
 /// Per-pixel sums over seeds: count, mean, second and fourth central moments.
@@ -321,6 +305,33 @@ fn chi2_z(on: &[usize], diff_se: impl Fn(usize) -> (f64, f64)) -> (f64, f64) {
         .sum();
     let dof = on.len() as f64;
     (chi2, (chi2 - dof) / (2.0 * dof).sqrt())
+}
+
+/// Two renderers' per-pixel means and variances over the pixels `on` agree within their
+/// standard errors: chi-square z-scores within 4.
+fn assert_same_means_and_variances(a: &PixelStats, b: &PixelStats, on: &[usize]) {
+    let n = a.n;
+    let (chi2, z) = chi2_z(on, |k| {
+        (a.mean[k] - b.mean[k], ((a.var[k] + b.var[k]) / n).sqrt())
+    });
+    eprintln!("means: chi2 {chi2:.1} over {} pixels (z {z:.2})", on.len());
+    assert!(
+        z.abs() < 4.0,
+        "means: chi2 {chi2} over {} pixels (z {z})",
+        on.len()
+    );
+    let (chi2, z) = chi2_z(on, |k| {
+        (a.var[k] - b.var[k], a.var_se[k].hypot(b.var_se[k]))
+    });
+    eprintln!(
+        "variances: chi2 {chi2:.1} over {} pixels (z {z:.2})",
+        on.len()
+    );
+    assert!(
+        z.abs() < 4.0,
+        "variances: chi2 {chi2} over {} pixels (z {z})",
+        on.len()
+    );
 }
 
 /// The noise-free images of `runs` seeds, for a fixed jitter path.
@@ -385,28 +396,8 @@ fn expected_and_photon_mapping_agree_in_mean_and_variance_per_pixel() {
     // Pixels where the Poisson counts are near normal.
     let on: Vec<usize> = (0..a.mean.len()).filter(|&k| b.mean[k] >= 5.0).collect();
     assert!(on.len() > 100, "{} pixels with signal", on.len());
+    assert_same_means_and_variances(&a, &b, &on);
     let n = a.n;
-    let (chi2, z) = chi2_z(&on, |k| {
-        (a.mean[k] - b.mean[k], ((a.var[k] + b.var[k]) / n).sqrt())
-    });
-    eprintln!("means: chi2 {chi2:.1} over {} pixels (z {z:.2})", on.len());
-    assert!(
-        z.abs() < 4.0,
-        "means: chi2 {chi2} over {} pixels (z {z})",
-        on.len()
-    );
-    let (chi2, z) = chi2_z(&on, |k| {
-        (a.var[k] - b.var[k], a.var_se[k].hypot(b.var_se[k]))
-    });
-    eprintln!(
-        "variances: chi2 {chi2:.1} over {} pixels (z {z:.2})",
-        on.len()
-    );
-    assert!(
-        z.abs() < 4.0,
-        "variances: chi2 {chi2} over {} pixels (z {z})",
-        on.len()
-    );
     // Both are Poisson: variance = mean, summed over the pixels.
     let ratio = |st: &PixelStats| {
         on.iter().map(|&k| st.var[k]).sum::<f64>() / on.iter().map(|&k| st.mean[k]).sum::<f64>()
