@@ -1,9 +1,11 @@
 //! Time the scene draw alone (no render) over a campaign's images, and fingerprint the scenes it
 //! accepts, so that a change to the draw can be shown to keep every accepted scene and to cost
 //! less: the same fingerprint before and after means the same scenes, attempts and rejections.
+//! `--set KEY=VALUE` overrides the campaign as `soig run --set` does (e.g. the gate's
+//! `visibility.snr_definition="noise_sigma"`).
 //!
 //! ```sh
-//! cargo run --release --example draw_scenes -- campaigns/paper-fixed-original-small.toml [IMAGES] [EXPOSURE_S]
+//! cargo run --release --example draw_scenes -- campaigns/paper-fixed-original-small.toml [IMAGES] [EXPOSURE_S] [--set KEY=VALUE]...
 //! ```
 
 use std::collections::hash_map::DefaultHasher;
@@ -14,18 +16,25 @@ use std::time::Instant;
 use soig::{Campaign, Experiment};
 
 fn main() -> Result<(), soig::Error> {
-    let args: Vec<String> = std::env::args().collect();
+    let (mut args, mut sets) = (Vec::new(), Vec::new());
+    let mut argv = std::env::args().skip(1);
+    while let Some(a) = argv.next() {
+        match a.as_str() {
+            "--set" => sets.push(argv.next().expect("--set takes KEY=VALUE")),
+            _ => args.push(a),
+        }
+    }
     let path = args
-        .get(1)
+        .first()
         .map(String::as_str)
         .unwrap_or("campaigns/quickstart.toml");
-    let campaign = Campaign::load(Path::new(path))?;
+    let campaign = Campaign::load_with_overrides(Path::new(path), &sets)?;
     let mut x = Experiment::new(&campaign);
     let images: u64 = args
-        .get(2)
+        .get(1)
         .map(|s| s.parse().expect("IMAGES is a count"))
         .unwrap_or(campaign.resolved.images as u64);
-    if let Some(e) = args.get(3) {
+    if let Some(e) = args.get(2) {
         // One exposure for every draw, to see how the draw's cost grows with it.
         let e: f64 = e.parse().expect("EXPOSURE_S is seconds");
         x.scene.exposure_min_s = e;
@@ -65,8 +74,9 @@ fn main() -> Result<(), soig::Error> {
     }
     let ms = drawing.as_secs_f64() * 1e3;
     println!(
-        "{path}: {images} images, {attempts} attempts ({failed} never visible), {:.2} ms per image, fingerprint {:016x}",
+        "{path}: {images} images, {attempts} attempts ({failed} never visible), {:.2} ms per image, {:.1} us per attempt, fingerprint {:016x}",
         ms / images as f64,
+        ms * 1e3 / attempts.max(1) as f64,
         fingerprint.finish()
     );
     println!("rejections: {reasons:?}");

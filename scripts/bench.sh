@@ -8,6 +8,8 @@
 #   metrics      `soig eval --mode coco` against pycocotools on EVAL_IMAGES images
 #   run          `soig run` of the quickstart without the detect stage, 1 and 2 threads,
 #                images/s and peak memory at 100 and 400 images
+#   exposure     the scene draw alone (examples/draw_scenes) at fixed exposures, under the
+#                paper's gate and the sigma gate, and `soig run` CPU per image at fixed exposures
 # Installs its Python peers into a venv of its own (.venv-bench). Prints Markdown.
 # Usage: bash scripts/bench.sh            (ROUNDS=5 EVAL_IMAGES=50000 QUIET_WAIT=300 by default)
 set -euo pipefail
@@ -21,6 +23,7 @@ if ! "$venv/bin/python" -c 'import numpy, astropy, cv2, onnxruntime, pycocotools
 fi
 py="$venv/bin/python"
 cargo build --release --locked -q
+cargo build --release --locked -q --example draw_scenes
 soig=target/release/soig
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -107,6 +110,33 @@ for n in 100 400; do
     done
 done
 
+# Exposure: the scene draw alone over 40 quickstart images at one fixed exposure, under the
+# paper's gate and under the sigma gate (attempts are the draw's own: how rarely the gate
+# passes), and `soig run` of 60 images at one fixed exposure under the sigma gate (the paper's
+# finds no scene for some images beyond ~20 s). Deterministic draws: only the times vary.
+sigma='visibility.snr_definition="noise_sigma"'
+draw_exposures=(2 5 8 12 20 30 120 300)
+run_exposures=(2 8 30 120)
+declare -A draw_ms draw_att run_cpu
+for r in $(seq "$rounds"); do
+    for t in "${draw_exposures[@]}"; do
+        for gate in paper sigma; do
+            [ "$gate" = paper ] && [ "$t" -gt 30 ] && continue
+            set_gate=() && [ "$gate" = sigma ] && set_gate=(--set "$sigma")
+            line=$(target/release/examples/draw_scenes campaigns/quickstart.toml 40 "$t" "${set_gate[@]}" | head -1)
+            draw_ms[$gate-$t]+="$(echo "$line" | sed -E 's/.* ([0-9.]+) ms per image.*/\1/') "
+            draw_att[$gate-$t]=$(echo "$line" | sed -E 's/.* ([0-9]+) attempts \(([0-9]+) never.*/\1 \2/')
+        done
+    done
+    for t in "${run_exposures[@]}"; do
+        rm -rf "$work/x"
+        /usr/bin/time -f "%U %S" -o "$work/time.txt" "$soig" run campaigns/quickstart.toml \
+            --out "$work/x" --quiet --set images=60 --set 'stages=["render","enhance","dataset"]' \
+            --set "exposure.min_s=$t" --set "exposure.max_s=$t" --set "$sigma" > /dev/null
+        run_cpu[$t]+="$(awk '{print ($1 + $2) / 60}' "$work/time.txt") "
+    done
+done
+
 ms() { "$py" -c "import sys; print(f'{1000 * float(sys.argv[1]):.1f} ms')" "$1"; }
 ratio() { "$py" -c "import sys; print(f'{float(sys.argv[1]) / float(sys.argv[2]):.2f}x')" "$1" "$2"; }
 se=$(med "${soig_e[@]}") pe=$(med "${peer_e[@]}") sy=$(med "${soig_y[@]}") pyy=$(med "${peer_y[@]}")
@@ -123,5 +153,21 @@ echo "|---|---|---|"
 echo "| 100 images, 1 thread | ${ips[100-1]} | $((${mem[100-1]} / 1024)) MiB |"
 echo "| 100 images, 2 threads | ${ips[100-2]} ($(ratio "${ips[100-2]}" "${ips[100-1]}") of 1 thread) | $((${mem[100-2]} / 1024)) MiB |"
 echo "| 400 images, 2 threads (one run) | ${ips[400-2]} | $((${mem[400-2]} / 1024)) MiB |"
+echo
+echo "| exposure | paper's gate: draws per image | scene draw per image | per draw | sigma gate: draws per image | scene draw per image | per draw | soig run, sigma gate: CPU per image |"
+echo "|---|---|---|---|---|---|---|---|"
+for t in "${draw_exposures[@]}"; do
+    row="| $t s"
+    for gate in paper sigma; do
+        if [ -z "${draw_ms[$gate-$t]:-}" ]; then row+=" | | | " && continue; fi
+        read -r att failed <<< "${draw_att[$gate-$t]}"
+        m=$(med ${draw_ms[$gate-$t]})
+        none="" && [ "$failed" != 0 ] && none=" ($failed of 40 images find none)"
+        row+=" | $("$py" -c "print(f'{$att / 40:.1f}')")$none"
+        row+=" | $("$py" -c "print(f'{$m:.2f} ms')") | $("$py" -c "print(f'{1000 * $m * 40 / $att:.0f} µs')")"
+    done
+    if [ -n "${run_cpu[$t]:-}" ]; then row+=" | $(ms "$(med ${run_cpu[$t]})") |"; else row+=" | |"; fi
+    echo "$row"
+done
 echo
 echo "COCO AP, soig: $(grep -i -m1 'AP' "$work/soig-eval.txt" | tr -s ' ' | cut -c1-80); pycocotools: $(cut -d' ' -f2 "$work/peer-eval.txt"). Load average after: $(load)."
