@@ -77,18 +77,14 @@ impl Jitter {
 
     /// Linear interpolation between grid points.
     pub(super) fn at(&self, t: f64) -> (f64, f64) {
-        let u = (t / self.dt).max(0.0);
-        let i = (u as usize).min(self.shift.len() - 2);
-        let f = (u - i as f64).min(1.0);
-        let (a, b) = (self.shift[i], self.shift[i + 1]);
-        (a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1))
+        self.at_step((t / self.dt).max(0.0))
     }
 
-    /// The shift at `u` grid steps from the start (u in [0, steps]): `at(u dt)` without the
-    /// division, for photons whose arrival is drawn on the grid.
+    /// The shift at `u` grid steps from the start (u >= 0; past the end, the last shift):
+    /// `at(u dt)` without the division, for photons whose arrival is drawn on the grid.
     pub(super) fn at_step(&self, u: f64) -> (f64, f64) {
         let i = (u as usize).min(self.shift.len() - 2);
-        let f = u - i as f64;
+        let f = (u - i as f64).min(1.0);
         let (a, b) = (self.shift[i], self.shift[i + 1]);
         (a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1))
     }
