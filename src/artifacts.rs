@@ -138,6 +138,33 @@ pub fn write_image(
     })
 }
 
+/// The files `write_image` writes for image `index` (`png`: whether it has a PNG and label).
+pub fn expected_files(
+    index: u64,
+    subset: Option<Subset>,
+    artifacts: &Artifacts,
+    png: bool,
+) -> std::collections::BTreeSet<String> {
+    let stem = stem(index);
+    let mut files = std::collections::BTreeSet::new();
+    if artifacts.fits {
+        files.insert(format!("fits/{stem}.fits"));
+    }
+    if artifacts.noise_free_fits {
+        files.insert(format!("fits/{stem}_clean.fits"));
+    }
+    if artifacts.star_list {
+        files.insert(format!("truth/{stem}_stars.csv"));
+    }
+    files.insert(format!("truth/{stem}.json"));
+    if png {
+        let (p, l) = dataset_paths(index, subset);
+        files.insert(p);
+        files.insert(l);
+    }
+    files
+}
+
 /// The PNG and label of image `index`, relative to the output: in `subset`'s folders when
 /// there is a split.
 pub fn dataset_paths(index: u64, subset: Option<Subset>) -> (String, String) {

@@ -7,6 +7,16 @@
 //! files still hash as recorded, and renders only the rest. Each image is a function of (seed,
 //! index) alone (`rng`), so the resumed run's files, and digest, are the uninterrupted run's.
 //!
+//! Every line ends with the sha256 of its JSON, so a damaged or edited line is dropped (its
+//! image rendered again), and every record is checked against the campaign (`Check`) before it
+//! is trusted: a record naming no file, an index or debris object out of range, or a
+//! non-finite label is dropped in the same way, never an image of the output.
+//!
+//! The header names the build (sha256 of the running executable, see `build_id`) and the
+//! content of the input files (frames, star catalogue, model): a staging directory of the same
+//! campaign left by another build, or made from inputs that changed since, is not resumed but
+//! refused, saying what differs (`--fresh` starts afresh).
+//!
 //! The journal is no artifact: `manifest::list_files` skips it, and the run removes it just
 //! before moving the staging directory into place.
 
@@ -18,6 +28,7 @@ use std::sync::Mutex;
 use anyhow::Context;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use sha2::Digest;
 
 use crate::hash::sha256_file;
 use crate::manifest::{self, MANIFEST, Manifest};
@@ -30,19 +41,49 @@ pub const FILE: &str = manifest::JOURNAL;
 pub struct Identity {
     pub campaign_hash: String,
     pub version: String,
+    /// sha256 of the soig executable that writes (see `build_id`).
+    pub build: String,
+    /// sha256 of the input files' hashes (`Campaign::input_hashes`).
+    pub inputs: String,
     /// (index, count) of a shard run; None for a whole campaign.
     pub shard: Option<(u64, u64)>,
 }
 
 impl Identity {
-    pub fn new(campaign_hash: &str, shard: Option<(u64, u64)>) -> Identity {
+    pub fn new(campaign_hash: &str, inputs: &str, shard: Option<(u64, u64)>) -> Identity {
         Identity {
             campaign_hash: campaign_hash.into(),
             version: env!("CARGO_PKG_VERSION").into(),
+            build: crate::build_id::identity().into(),
+            inputs: inputs.into(),
             shard,
         }
     }
+
+    /// Why a staging directory of `self` cannot be resumed by a run of `other` of the same
+    /// campaign and shard; None if it can, or if it is another campaign or shard's.
+    pub fn conflict(&self, other: &Identity) -> Option<String> {
+        if (&self.campaign_hash, self.shard) != (&other.campaign_hash, other.shard) {
+            return None;
+        }
+        if self.version != other.version || self.build != other.build {
+            Some(format!(
+                "it was written by another soig build (soig {}, executable sha256 {}; this is soig {}, {})",
+                self.version, self.build, other.version, other.build
+            ))
+        } else if self.inputs != other.inputs {
+            Some(
+                "its input files (background frames, star catalogue or model) have changed since it was written"
+                    .into(),
+            )
+        } else {
+            None
+        }
+    }
 }
+
+/// A check of a record against the campaign: why it cannot be one of its images.
+pub type Check<'a> = &'a (dyn Fn(&Record) -> Result<(), String> + Sync);
 
 /// One finished image: its files with their sha256, and what the detect stage needs of it.
 /// Floats are kept as their bit patterns, so that a resumed or merged run's report is built
@@ -87,9 +128,9 @@ impl Journal {
     /// later phase) is removed, and the journal is rewritten with the kept records (written to
     /// a temporary file and renamed, so it is whole at every instant). Otherwise `dir` is
     /// emptied and a fresh journal started.
-    pub fn open(dir: &Path, id: &Identity) -> anyhow::Result<(Journal, Vec<Record>)> {
+    pub fn open(dir: &Path, id: &Identity, check: Check) -> anyhow::Result<(Journal, Vec<Record>)> {
         let kept = if identity_of(dir).as_ref() == Some(id) {
-            verified_records(dir)?
+            verified_records(dir, check)?
         } else {
             Vec::new()
         };
@@ -108,11 +149,11 @@ impl Journal {
                     .with_context(|| format!("cannot remove {}", path.display()))?;
             }
         }
-        let mut text = serde_json::to_string(&Header {
+        let mut text = line(&Header {
             soig_journal: id.clone(),
-        })? + "\n";
+        })?;
         for r in &kept {
-            text += &(serde_json::to_string(r)? + "\n");
+            text += &line(r)?;
         }
         let temp = dir.join(format!("{FILE}.new"));
         write_synced(&temp, text.as_bytes())?;
@@ -133,7 +174,7 @@ impl Journal {
 
     /// Record a finished image: one line, appended and synced to disk before returning.
     pub fn append(&self, record: &Record) -> anyhow::Result<()> {
-        let line = serde_json::to_string(record)? + "\n";
+        let line = line(record)?;
         let mut f = self.file.lock().unwrap_or_else(|e| e.into_inner());
         f.write_all(line.as_bytes())
             .and_then(|()| f.sync_data())
@@ -159,13 +200,33 @@ pub fn remove(dir: &Path) -> anyhow::Result<()> {
     std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))
 }
 
+/// A journal line: the JSON of `value`, a space and the JSON's sha256.
+fn line<T: Serialize>(value: &T) -> anyhow::Result<String> {
+    let json = serde_json::to_string(value)?;
+    let sha = crate::hash::hex(&sha2::Sha256::digest(json.as_bytes()));
+    Ok(format!("{json} {sha}\n"))
+}
+
+/// The JSON of a journal line whose checksum holds.
+fn checked(line: &str) -> Option<&str> {
+    let (json, sha) = line.rsplit_once(' ')?;
+    (crate::hash::hex(&sha2::Sha256::digest(json.as_bytes())) == sha).then_some(json)
+}
+
 /// Whether staging directory `dir`, left by a process that is gone, is one a run of `id` can
 /// take over: its journal is `id`'s, or it is complete (no journal, a manifest of `id` that
-/// verifies: the run was killed while moving it into place).
-pub fn resumable(dir: &Path, id: &Identity) -> bool {
+/// verifies: the run was killed while moving it into place). An error when it is the same
+/// campaign's but of another build or other inputs, saying what differs.
+pub fn resumable(dir: &Path, id: &Identity) -> anyhow::Result<bool> {
     match identity_of(dir) {
-        Some(found) => found == *id,
-        None => complete(dir, id).is_some(),
+        Some(found) => match found.conflict(id) {
+            Some(why) => anyhow::bail!(
+                "cannot resume {}: {why}; run again with --fresh to discard its work",
+                dir.display()
+            ),
+            None => Ok(found == *id),
+        },
+        None => Ok(complete(dir, id).is_some()),
     }
 }
 
@@ -182,6 +243,7 @@ pub fn complete(dir: &Path, id: &Identity) -> Option<Manifest> {
         .and_then(|s| Some((s.get("index")?.as_u64()?, s.get("count")?.as_u64()?)));
     (problems.is_empty()
         && m.tool == "soig"
+        && crate::hash::hash_json(&m.inputs) == id.inputs
         && m.campaign_hash == id.campaign_hash
         && m.version == id.version
         && shard == id.shard)
@@ -190,31 +252,49 @@ pub fn complete(dir: &Path, id: &Identity) -> Option<Manifest> {
 
 /// The identity in the header of `dir`'s journal, if it has a readable one.
 fn identity_of(dir: &Path) -> Option<Identity> {
-    let text = std::fs::read_to_string(dir.join(FILE)).ok()?;
-    let header: Header = serde_json::from_str(text.lines().next()?).ok()?;
+    let text = crate::hash::read_regular_to_string(&dir.join(FILE)).ok()?;
+    let header: Header = serde_json::from_str(checked(text.lines().next()?)?).ok()?;
     Some(header.soig_journal)
 }
 
-/// The records of `dir`'s journal whose files all hash as recorded, by index. A line that does
-/// not parse can only be the last, torn by a kill: it is dropped, as is a record given twice.
-fn verified_records(dir: &Path) -> anyhow::Result<Vec<Record>> {
-    let text = std::fs::read_to_string(dir.join(FILE))?;
+/// The records of `dir`'s journal that `check` accepts and whose files all hash as recorded,
+/// by index. A line whose checksum fails (the last, torn by a kill, or a damaged one) is
+/// dropped, as is a record given twice: their images are rendered again.
+fn verified_records(dir: &Path, check: Check) -> anyhow::Result<Vec<Record>> {
+    let text = crate::hash::read_regular_to_string(&dir.join(FILE))?;
     let mut records: BTreeMap<u64, Record> = BTreeMap::new();
+    let mut twice = BTreeSet::new();
     for line in text.lines().skip(1) {
-        if let Ok(r) = serde_json::from_str::<Record>(line) {
-            records.insert(r.index, r);
+        if let Some(r) = checked(line).and_then(|j| serde_json::from_str::<Record>(j).ok())
+            && check(&r).is_ok()
+            && let Some(old) = records.insert(r.index, r)
+        {
+            twice.insert(old.index);
         }
+    }
+    for i in twice {
+        records.remove(&i);
     }
     Ok(records
         .into_values()
         .collect::<Vec<_>>()
         .into_par_iter()
         .filter(|r| {
-            r.files
-                .iter()
-                .all(|(rel, sha)| sha256_file(&dir.join(rel)).is_ok_and(|(found, _)| found == *sha))
+            r.files.iter().all(|(rel, sha)| {
+                safe_relative(rel)
+                    && sha256_file(&dir.join(rel)).is_ok_and(|(found, _)| found == *sha)
+            })
         })
         .collect())
+}
+
+/// A path inside the output: relative, no `..`, no empty part.
+pub fn safe_relative(rel: &str) -> bool {
+    !rel.is_empty()
+        && !rel.starts_with('/')
+        && rel
+            .split('/')
+            .all(|p| !p.is_empty() && p != "." && p != "..")
 }
 
 /// Write `bytes` to `path` and sync them to disk.
@@ -263,8 +343,9 @@ mod tests {
     fn keeps_what_verifies_and_removes_the_rest() {
         let tmp = tempfile::tempdir().unwrap();
         let d = tmp.path();
-        let id = Identity::new("abc", None);
-        let (j, kept) = Journal::open(d, &id).unwrap();
+        let id = Identity::new("abc", "inputs", None);
+        let any = |_: &Record| Ok(());
+        let (j, kept) = Journal::open(d, &id, &any).unwrap();
         assert!(kept.is_empty());
         let (r0, r1) = (record(d, 0, b"zero"), record(d, 1, b"one"));
         j.append(&r0).unwrap();
@@ -280,16 +361,23 @@ mod tests {
             .unwrap();
         f.write_all(b"{\"index\": 2, \"fil").unwrap();
         drop(f);
-        assert!(resumable(d, &id));
-        assert!(!resumable(d, &Identity::new("abc", Some((0, 2)))));
-        let (_, kept) = Journal::open(d, &id).unwrap();
+        assert!(resumable(d, &id).unwrap());
+        assert!(!resumable(d, &Identity::new("abc", "inputs", Some((0, 2)))).unwrap());
+        // The same campaign from other inputs or another build: refused, saying why.
+        let e = resumable(d, &Identity::new("abc", "changed", None)).unwrap_err();
+        assert!(e.to_string().contains("input files"), "{e}");
+        let mut rebuilt = id.clone();
+        rebuilt.build = "another".into();
+        let e = resumable(d, &rebuilt).unwrap_err();
+        assert!(e.to_string().contains("another soig build"), "{e}");
+        let (_, kept) = Journal::open(d, &id, &any).unwrap();
         assert_eq!(kept, vec![r0.clone()]);
         assert_eq!(
             manifest::list_files(d).unwrap(),
             vec!["truth/img_000000.json"]
         );
         // Another campaign's journal is not resumed: the directory starts afresh.
-        let (_, kept) = Journal::open(d, &Identity::new("other", None)).unwrap();
+        let (_, kept) = Journal::open(d, &Identity::new("other", "inputs", None), &any).unwrap();
         assert!(kept.is_empty());
         assert!(manifest::list_files(d).unwrap().is_empty());
     }

@@ -50,6 +50,7 @@ pub use simulate::{Experiment, ImageProducts};
 
 pub(crate) mod artifacts;
 pub mod background;
+pub mod build_id;
 pub mod campaign;
 pub mod compare;
 pub mod convert;

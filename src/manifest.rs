@@ -40,21 +40,37 @@ pub struct Manifest {
     /// images it holds and the campaign's folder. None for a whole campaign.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<serde_json::Value>,
+    /// sha256 of each input file the run read (background frames, star catalogue, model), by
+    /// its path as the campaign writes it: the campaign hash covers their names, this their
+    /// content.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub inputs: BTreeMap<String, String>,
     /// Values the run resolved late from several fields (effective SNR gate, frame size,
     /// training size and batch, PSF in pixels): a function of the resolved campaign and the
     /// tool version, both hashed, so they are recorded but not part of the digest.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub effective: Option<serde_json::Value>,
     /// Images per debris object (`pipeline::DebrisCount`): a summary of the truth sidecars,
-    /// each of which names its object and is hashed, so recorded but not part of the digest.
+    /// part of the digest like every other statement of a result.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub debris_mix: Option<serde_json::Value>,
-    /// sha256 of the canonical JSON of everything above but `effective` and `debris_mix`.
+    /// sha256 of the canonical JSON of everything above but `effective`.
     pub digest: String,
 }
 
-/// All files under `dir` except the manifest, as sorted relative paths.
+/// All files under `dir` except the manifest and a run's journal (a staging directory's), as
+/// sorted relative paths.
 pub fn list_files(dir: &Path) -> std::io::Result<Vec<String>> {
+    let journal_copy = format!("{JOURNAL}.new");
+    Ok(list_all_files(dir)?
+        .into_iter()
+        .filter(|rel| rel != JOURNAL && *rel != journal_copy)
+        .collect())
+}
+
+/// All files under `dir` except the manifest, as sorted relative paths: what `verify` checks
+/// (a finished output holds no journal, so one there is an extra file like any other).
+pub fn list_all_files(dir: &Path) -> std::io::Result<Vec<String>> {
     fn walk(root: &Path, dir: &Path, out: &mut Vec<String>) -> std::io::Result<()> {
         for entry in std::fs::read_dir(dir)? {
             let entry = entry?;
@@ -68,8 +84,7 @@ pub fn list_files(dir: &Path) -> std::io::Result<Vec<String>> {
                     .map(|c| c.as_os_str().to_string_lossy().into_owned())
                     .collect::<Vec<_>>()
                     .join("/");
-                // The journal (and its temporary copy) are no artifacts.
-                if rel != MANIFEST && !rel.starts_with(JOURNAL) {
+                if rel != MANIFEST {
                     out.push(rel);
                 }
             }
@@ -87,7 +102,6 @@ fn digest_of(m: &Manifest) -> String {
     let fields = v.as_object_mut().expect("object");
     fields.remove("digest");
     fields.remove("effective");
-    fields.remove("debris_mix");
     hex(&Sha256::digest(
         serde_json::to_string(&v).expect("json").as_bytes(),
     ))
@@ -136,6 +150,7 @@ impl Manifest {
             volatile: volatile.to_vec(),
             training: None,
             shard: None,
+            inputs: BTreeMap::new(),
             effective: None,
             debris_mix: None,
             digest: String::new(),
@@ -156,7 +171,8 @@ impl Manifest {
 
     pub fn read(dir: &Path) -> Result<Manifest, Error> {
         let path = dir.join(MANIFEST);
-        let text = std::fs::read_to_string(&path).map_err(|e| Error::input(&path, e))?;
+        let text =
+            crate::hash::read_regular_to_string(&path).map_err(|e| Error::input(&path, e))?;
         serde_json::from_str(&text)
             .map_err(|e| Error::input(&path, format!("not a soig manifest: {e}")))
     }
@@ -200,7 +216,7 @@ pub fn verify(dir: &Path) -> Result<(Manifest, Vec<Problem>), Error> {
     if digest_of(&m) != m.digest {
         problems.push(Problem::Digest);
     }
-    let present = list_files(dir).map_err(|e| Error::input(dir, e))?;
+    let present = list_all_files(dir).map_err(|e| Error::input(dir, e))?;
     for rel in &m.volatile {
         if !present.contains(rel) {
             problems.push(Problem::Missing(rel.clone()));

@@ -56,13 +56,33 @@ pub fn merge(
             first.manifest.campaign_hash
         );
     }
+    for p in &parts {
+        let block = p.section.images[0]..p.section.images[1];
+        let check = crate::pipeline::record_check(&campaign, block);
+        for r in &p.records {
+            check(r).map_err(|why| {
+                anyhow::anyhow!("{}: a record is not the campaign's: {why}", p.dir.display())
+            })?;
+        }
+    }
+    let inputs = campaign.input_hashes()?;
+    if inputs != first.manifest.inputs {
+        bail!(
+            "the input files beside the campaign ({}) are not those the shards were rendered from: {}",
+            first.section.campaign_dir.display(),
+            differing(&first.manifest.inputs, &inputs)
+        );
+    }
     let python = if campaign.resolved.stages.contains(&Stage::Train) {
         Some(crate::train::find_python(python)?)
     } else {
         None
     };
     let started = std::time::Instant::now();
-    let (digest, mix) = write_replacing(output, &[&campaign.base_dir], |dir| {
+    let mut keep = crate::pipeline::keep_paths(&campaign);
+    keep.extend(parts.iter().map(|p| p.dir.clone()));
+    let keep: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
+    let (digest, mix) = write_replacing(output, &keep, |dir| {
         progress.start("merge", parts.len() as u64);
         for p in &parts {
             for rel in p.records.iter().flat_map(|r| r.files.keys()) {
@@ -134,6 +154,32 @@ fn check(shards: &[PathBuf]) -> anyhow::Result<Vec<Part>> {
             );
         }
     }
+    for p in &parts[1..] {
+        if p.section.build != first.section.build {
+            bail!(
+                "not one build: {} was rendered by the soig executable with sha256 {}, {} by {}; render every shard with one build",
+                first.dir.display(),
+                first.section.build,
+                p.dir.display(),
+                p.section.build
+            );
+        }
+        if p.manifest.inputs != first.manifest.inputs {
+            bail!(
+                "not one set of inputs: {} and {} were rendered from input files (frames, catalogue, model) of different content: {}",
+                first.dir.display(),
+                p.dir.display(),
+                differing(&first.manifest.inputs, &p.manifest.inputs)
+            );
+        }
+    }
+    if first.section.build != crate::build_id::identity() {
+        bail!(
+            "the shards were rendered by the soig executable with sha256 {}, this one is {}: merge them with the build that made them",
+            first.section.build,
+            crate::build_id::identity()
+        );
+    }
     if first.manifest.version != env!("CARGO_PKG_VERSION") {
         bail!(
             "the shards were made by soig {}, this is soig {}: merge them with the version that made them",
@@ -204,9 +250,9 @@ fn records_of(p: &Part, images: u64) -> anyhow::Result<Vec<Record>> {
             problems.len()
         );
     }
-    let text = std::fs::read_to_string(p.dir.join(RECORDS))
+    let text = crate::hash::read_regular_to_string(&p.dir.join(RECORDS))
         .with_context(|| format!("cannot read {}", p.dir.join(RECORDS).display()))?;
-    let timing: BTreeMap<u64, f64> = std::fs::read_to_string(p.dir.join(TIMING))
+    let timing: BTreeMap<u64, f64> = crate::hash::read_regular_to_string(&p.dir.join(TIMING))
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
         .unwrap_or_default();
@@ -246,6 +292,17 @@ fn records_of(p: &Part, images: u64) -> anyhow::Result<Vec<Record>> {
         );
     }
     Ok(records)
+}
+
+/// The files whose sha256 differs between two `Manifest::inputs`, for a message.
+fn differing(a: &BTreeMap<String, String>, b: &BTreeMap<String, String>) -> String {
+    let names: std::collections::BTreeSet<&String> = a.keys().chain(b.keys()).collect();
+    names
+        .into_iter()
+        .filter(|n| a.get(*n) != b.get(*n))
+        .map(|n| n.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Hard-link `from` to `to` (no copy of a large dataset), copying across file systems.

@@ -3,26 +3,36 @@
 //! A run fills a hidden staging directory `.NAME.partial-PID` beside its output and moves it
 //! into place only when it succeeded. Before anything is written:
 //!
-//! - the output must not be `/`, the current directory, an input's folder (the campaign's, a
-//!   frame's) or an ancestor of any of them (`name = ".."`, `output = "new/.."` and `--out .`
-//!   resolve to those);
-//! - an existing output is replaced only if it is empty or holds a manifest that soig wrote and
-//!   that parses as one (another tool's `manifest.json` does not count);
-//! - a lock `.NAME.lock` (holding the writer's PID) keeps two runs from writing one output: the
-//!   second is refused while the first lives, and takes over a lock whose process is gone;
-//! - staging directories left by runs that were killed (`kill -9`, a lost machine) are removed,
+//! - the output must not be `/`, the current directory, an input (the campaign, a frame, a
+//!   catalogue, a model) or its folder, or an ancestor of any of them (`name = ".."`,
+//!   `output = "new/.."` and `--out .` resolve to those);
+//! - the output must not lie inside another soig output (a rerun of that one would delete it);
+//! - an existing output is replaced only if it is empty or it is a soig output whose every file
+//!   its own manifest lists (another tool's `manifest.json`, or a user's file added to a soig
+//!   output, makes it foreign), and not a mount point (a volume cannot be renamed: the run is
+//!   refused and told to write into a folder inside it);
+//! - the replacement is whole or nothing: the old output is moved aside (`.NAME.old-PID`), the
+//!   new one moved in, and only then the old one deleted; a failed move puts the old one back,
+//!   and a run killed between the two moves gets it back at the next run;
+//! - a lock `.NAME.lock` keeps two runs from writing one output. It is an `flock` on that file,
+//!   which the kernel releases when its holder dies however it dies, and which holds across PID
+//!   namespaces (containers, a pod's PID 1) and, on NFS, across nodes; the file records the
+//!   holder's PID, host name, boot id and PID namespace for the message;
+//! - whoever holds the lock owns every staging directory of the output: those left by runs that
+//!   were killed (`kill -9`, a lost node, a pod's PID 1 whose retry is PID 1 again) are removed,
 //!   or, by [`write_resumable`], the one that its caller can resume is taken over (see
 //!   `journal`).
 //!
 //! On Ctrl-C or SIGTERM the command line calls [`interrupt`], which removes this process's locks
 //! and its staging directories, but keeps a resumable one for the next run.
 
+use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
 use std::path::{Component, Path, PathBuf};
 use std::sync::Mutex;
 
 use anyhow::{Context, bail};
 
-use crate::manifest::Manifest;
+use crate::manifest::{MANIFEST, Manifest};
 
 /// Staging directories (with whether they are resumable) and locks (false) of this process,
 /// handled by [`interrupt`].
@@ -30,8 +40,9 @@ static IN_PROGRESS: Mutex<Vec<(PathBuf, bool)>> = Mutex::new(Vec::new());
 
 /// How a writer resumes the work of a run that was killed.
 pub struct Resume<'a> {
-    /// Whether a staging directory left by a dead process is one this writer can resume.
-    pub matches: &'a (dyn Fn(&Path) -> bool + Sync),
+    /// Whether a staging directory left by a dead process is one this writer can resume; an
+    /// error (nothing removed) when it must be neither resumed nor discarded.
+    pub matches: &'a (dyn Fn(&Path) -> anyhow::Result<bool> + Sync),
     /// Says what was resumed or removed.
     pub note: &'a dyn Fn(&str),
 }
@@ -68,15 +79,7 @@ fn write_staged<T>(
 ) -> anyhow::Result<T> {
     let target = resolve(output)?;
     refuse_protected(output, &target, keep)?;
-    if target.exists() {
-        let empty = target.is_dir() && std::fs::read_dir(&target)?.next().is_none();
-        if !empty && !is_soig_output(&target) {
-            bail!(
-                "{} exists and is not a soig output (no manifest that soig wrote); refusing to overwrite it",
-                output.display()
-            );
-        }
-    }
+    refuse_inside_output(output, &target)?;
     let name = target
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
@@ -88,33 +91,25 @@ fn write_staged<T>(
         .with_context(|| format!("cannot create {}", parent.display()))?;
 
     let lock = Lock::take(parent, &name, output)?;
-    let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
-    let resumed = take_stale_staging(parent, &name, resume);
-    if staging.exists() {
-        std::fs::remove_dir_all(&staging)?;
+    restore_set_aside(parent, &name, &target, resume);
+    if std::fs::symlink_metadata(&target).is_ok() {
+        check_replaceable(output, &target)?;
     }
-    if let Some(old) = resumed {
-        std::fs::rename(&old, &staging).with_context(|| {
+    let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+    let resumed = take_stale_staging(parent, &name, resume)?;
+    match resumed {
+        Some(old) if old != staging => std::fs::rename(&old, &staging).with_context(|| {
             format!(
                 "cannot take over {} as {}",
                 old.display(),
                 staging.display()
             )
-        })?;
+        })?,
+        _ => {}
     }
     register(&staging, resume.is_some());
     let result = match write(&staging) {
-        Ok(value) => {
-            if target.exists() {
-                std::fs::remove_dir_all(&target)
-                    .with_context(|| format!("cannot replace {}", output.display()))?;
-            }
-            crate::journal::abort_if_testing("rename");
-            std::fs::rename(&staging, &target).with_context(|| {
-                format!("cannot move {} to {}", staging.display(), output.display())
-            })?;
-            Ok(value)
-        }
+        Ok(value) => put_in_place(&staging, &target, output, &name).map(|()| value),
         Err(e) => {
             let _ = std::fs::remove_dir_all(&staging);
             Err(e)
@@ -123,6 +118,181 @@ fn write_staged<T>(
     unregister(&staging);
     drop(lock);
     result
+}
+
+/// Move the finished `staging` directory to `target`, whole or not at all: an old output is
+/// first moved aside, and moved back if the new one cannot take its place.
+fn put_in_place(staging: &Path, target: &Path, output: &Path, name: &str) -> anyhow::Result<()> {
+    if std::fs::symlink_metadata(target).is_err() {
+        crate::journal::abort_if_testing("rename");
+        return std::fs::rename(staging, target)
+            .with_context(|| format!("cannot move {} to {}", staging.display(), output.display()));
+    }
+    let aside = target.with_file_name(format!(".{name}.old-{}", std::process::id()));
+    std::fs::rename(target, &aside).with_context(|| {
+        format!(
+            "cannot move the old {} aside to {} (nothing was replaced; the new output is left in {})",
+            output.display(),
+            aside.display(),
+            staging.display()
+        )
+    })?;
+    crate::journal::abort_if_testing("rename");
+    if let Err(e) = std::fs::rename(staging, target) {
+        let restored = std::fs::rename(&aside, target).is_ok();
+        let _ = std::fs::remove_dir_all(staging);
+        bail!(
+            "cannot move {} to {}: {e}; {}",
+            staging.display(),
+            output.display(),
+            if restored {
+                "the old output is back in place".to_string()
+            } else {
+                format!("the old output is kept in {}", aside.display())
+            }
+        );
+    }
+    std::fs::remove_dir_all(&aside)
+        .with_context(|| format!("cannot remove the old output {}", aside.display()))
+}
+
+/// An old output `.NAME.old-PID` left by a run killed while it replaced `target`: put back when
+/// `target` is missing (the next run replaces it again, whole), else removed (the new output
+/// took its place). Only soig outputs are touched.
+fn restore_set_aside(parent: &Path, name: &str, target: &Path, resume: Option<&Resume>) {
+    let prefix = format!(".{name}.old-");
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let path = e.path();
+        let ours = e.file_name().to_string_lossy().starts_with(&prefix)
+            && e.file_type().is_ok_and(|t| t.is_dir())
+            && is_soig_output(&path);
+        if !ours {
+            continue;
+        }
+        let message = if std::fs::symlink_metadata(target).is_err() {
+            match std::fs::rename(&path, target) {
+                Ok(()) => format!(
+                    "put back the old output {} that a killed run had moved aside",
+                    target.display()
+                ),
+                Err(_) => continue,
+            }
+        } else {
+            let _ = std::fs::remove_dir_all(&path);
+            format!(
+                "removed {}, an old output a killed run had already replaced",
+                path.display()
+            )
+        };
+        if let Some(r) = resume {
+            (r.note)(&message);
+        }
+    }
+}
+
+/// Refuse to replace `target` unless it is an empty folder, or a soig output whose manifest
+/// lists every file in it, and is not a mount point.
+fn check_replaceable(output: &Path, target: &Path) -> anyhow::Result<()> {
+    let meta = std::fs::symlink_metadata(target)
+        .with_context(|| format!("cannot read {}", output.display()))?;
+    if !meta.is_dir() {
+        bail!(
+            "{} exists and is not a folder; refusing to overwrite it",
+            output.display()
+        );
+    }
+    if is_mount_point(target) {
+        bail!(
+            "{} is a mount point (a volume): soig replaces an output by renaming it, which a mount point cannot be; write into a folder inside it (e.g. --out {}/run)",
+            output.display(),
+            output.display()
+        );
+    }
+    if std::fs::read_dir(target)?.next().is_none() {
+        return Ok(());
+    }
+    let m = match Manifest::read(target) {
+        Ok(m) if m.tool == "soig" => m,
+        _ => bail!(
+            "{} exists and is not a soig output (no manifest that soig wrote); refusing to overwrite it",
+            output.display()
+        ),
+    };
+    let foreign =
+        foreign_files(target, &m).with_context(|| format!("cannot list {}", output.display()))?;
+    if let Some(first) = foreign.first() {
+        bail!(
+            "{} holds {} file(s) that its manifest does not list (e.g. {first}): they are not soig's; refusing to replace it (move them out, or choose another output)",
+            output.display(),
+            foreign.len()
+        );
+    }
+    Ok(())
+}
+
+/// The files under `dir` that its manifest `m` neither lists nor names volatile.
+pub fn foreign_files(dir: &Path, m: &Manifest) -> std::io::Result<Vec<String>> {
+    Ok(crate::manifest::list_all_files(dir)?
+        .into_iter()
+        .filter(|rel| rel != MANIFEST && !m.files.contains_key(rel) && !m.volatile.contains(rel))
+        .collect())
+}
+
+/// Whether `dir` is a mount point: on another device than its parent, or listed in this
+/// process's mount table (a bind mount of the same device).
+fn is_mount_point(dir: &Path) -> bool {
+    let parent = dir.parent().unwrap_or(dir);
+    let differs = match (std::fs::metadata(dir), std::fs::metadata(parent)) {
+        (Ok(a), Ok(b)) => a.dev() != b.dev(),
+        _ => false,
+    };
+    differs
+        || std::fs::read_to_string("/proc/self/mountinfo").is_ok_and(|t| {
+            t.lines()
+                .filter_map(|l| l.split(' ').nth(4))
+                .any(|m| Path::new(&unescape_mountinfo(m)) == dir)
+        })
+}
+
+/// A mount point as /proc/self/mountinfo writes it: space, tab, newline and backslash as
+/// three octal digits after a backslash.
+fn unescape_mountinfo(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'\\'
+            && i + 3 < b.len()
+            && let Some(v) = std::str::from_utf8(&b[i + 1..i + 4])
+                .ok()
+                .and_then(|d| u8::from_str_radix(d, 8).ok())
+        {
+            out.push(v);
+            i += 4;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// Refuse an output inside another soig output: replacing or rerunning that one would delete
+/// it (`soig merge --out SHARD/merged`).
+fn refuse_inside_output(output: &Path, target: &Path) -> anyhow::Result<()> {
+    for a in target.ancestors().skip(1) {
+        if a.join(MANIFEST).is_file() && is_soig_output(a) {
+            bail!(
+                "refusing to write {}: it lies inside the soig output {}, which a rerun of that output would delete; choose a folder outside it",
+                output.display(),
+                a.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 /// On Ctrl-C or SIGTERM: remove this process's locks and staging directories but the
@@ -214,7 +384,10 @@ fn refuse_protected(output: &Path, target: &Path, keep: &[&Path]) -> anyhow::Res
     }
     for k in keep {
         if let Ok(p) = resolve(k) {
-            protected.push((p, "an input's folder (the campaign's, a frame's)"));
+            protected.push((
+                p,
+                "an input (the campaign, a frame, a catalogue, a model) or its folder",
+            ));
         }
     }
     for (p, what) in &protected {
@@ -235,36 +408,36 @@ fn is_soig_output(dir: &Path) -> bool {
     Manifest::read(dir).is_ok_and(|m| m.tool == "soig")
 }
 
-/// Whether a process with this PID runs on this machine.
-fn alive(pid: u32) -> bool {
-    Path::new("/proc").join(pid.to_string()).exists()
-}
-
-/// The staging directories `.NAME.partial-PID` whose process is gone: the one with the most
-/// work that `resume` matches is returned, the others removed (and said so, when resuming).
-fn take_stale_staging(parent: &Path, name: &str, resume: Option<&Resume>) -> Option<PathBuf> {
+/// The staging directories `.NAME.partial-*`, all left by runs that are gone (the caller holds
+/// the output's lock, so no live run writes one): the one with the most work that `resume`
+/// matches is returned, the others removed (and said so, when resuming).
+fn take_stale_staging(
+    parent: &Path,
+    name: &str,
+    resume: Option<&Resume>,
+) -> anyhow::Result<Option<PathBuf>> {
     let prefix = format!(".{name}.partial-");
     let Ok(entries) = std::fs::read_dir(parent) else {
-        return None;
+        return Ok(None);
     };
     let stale: Vec<PathBuf> = entries
         .flatten()
-        .filter(|entry| {
-            let file = entry.file_name().to_string_lossy().into_owned();
-            file.strip_prefix(&prefix)
-                .and_then(|p| p.parse::<u32>().ok())
-                .is_some_and(|pid| pid != std::process::id() && !alive(pid))
+        .filter(|e| {
+            e.file_name().to_string_lossy().starts_with(&prefix)
+                && e.file_type().is_ok_and(|t| t.is_dir())
         })
-        .map(|entry| entry.path())
+        .map(|e| e.path())
         .collect();
     let size = |p: &PathBuf| crate::manifest::list_files(p).map_or(0, |f| f.len());
-    let chosen = resume.and_then(|r| {
-        stale
-            .iter()
-            .filter(|p| (r.matches)(p))
-            .max_by_key(|p| size(p))
-            .cloned()
-    });
+    let mut matching = Vec::new();
+    if let Some(r) = resume {
+        for p in &stale {
+            if (r.matches)(p)? {
+                matching.push(p.clone());
+            }
+        }
+    }
+    let chosen = matching.into_iter().max_by_key(size);
     for p in stale.iter().filter(|p| Some(*p) != chosen.as_ref()) {
         let _ = std::fs::remove_dir_all(p);
         if let Some(r) = resume {
@@ -281,57 +454,92 @@ fn take_stale_staging(parent: &Path, name: &str, resume: Option<&Resume>) -> Opt
             size(p)
         ));
     }
-    chosen
+    Ok(chosen)
 }
 
-/// The lock of an output directory, released when dropped.
-struct Lock(PathBuf);
+/// Open `path` for reading and writing, created if missing, refusing anything but a regular
+/// file (a FIFO would block, a link could point anywhere).
+fn open_lock_file(path: &Path) -> std::io::Result<std::fs::File> {
+    let f = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .custom_flags(nix::libc::O_NONBLOCK | nix::libc::O_NOFOLLOW)
+        .open(path)?;
+    if !f.metadata()?.is_file() {
+        return Err(std::io::Error::other("not a regular file"));
+    }
+    Ok(f)
+}
+
+/// Who holds a lock: PID, host name, boot id and PID namespace, so that a PID of another
+/// machine or container is never mistaken for one of this one.
+fn holder() -> String {
+    let read =
+        |p: &str| std::fs::read_to_string(p).map_or_else(|_| "?".into(), |t| t.trim().to_string());
+    let pidns = std::fs::read_link("/proc/self/ns/pid")
+        .map_or_else(|_| "?".into(), |l| l.display().to_string());
+    format!(
+        "pid {} on host {} (boot {}, {pidns})",
+        std::process::id(),
+        read("/proc/sys/kernel/hostname"),
+        read("/proc/sys/kernel/random/boot_id")
+    )
+}
+
+/// The lock of an output directory: an `flock` on `.NAME.lock`, released when dropped (or
+/// by the kernel when the process dies).
+struct Lock {
+    path: PathBuf,
+    _file: std::fs::File,
+}
 
 impl Lock {
     fn take(parent: &Path, name: &str, output: &Path) -> anyhow::Result<Lock> {
         use std::io::Write;
         let path = parent.join(format!(".{name}.lock"));
-        // Two tries: the second after removing a lock whose process is gone.
-        for _ in 0..2 {
-            match std::fs::OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .open(&path)
-            {
-                Ok(mut f) => {
-                    write!(f, "{}", std::process::id())
-                        .with_context(|| format!("cannot write {}", path.display()))?;
-                    register(&path, false);
-                    return Ok(Lock(path));
+        // A holder removes the file as it lets go: the lock taken must be on the file that is
+        // at `path` now, else try again.
+        for _ in 0..10 {
+            let mut file = open_lock_file(&path).with_context(|| {
+                format!(
+                    "cannot open the lock {} of {}",
+                    path.display(),
+                    output.display()
+                )
+            })?;
+            match file.try_lock() {
+                Ok(()) => {}
+                Err(std::fs::TryLockError::WouldBlock) => {
+                    let who = std::fs::read_to_string(&path).unwrap_or_default();
+                    bail!(
+                        "{} is being written by another soig run ({}, lock {}): wait for it to finish",
+                        output.display(),
+                        if who.trim().is_empty() {
+                            "starting"
+                        } else {
+                            who.trim()
+                        },
+                        path.display()
+                    );
                 }
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let holder = std::fs::read_to_string(&path)
-                        .ok()
-                        .and_then(|t| t.trim().parse::<u32>().ok());
-                    // A lock without a PID yet is being taken right now.
-                    let fresh = std::fs::metadata(&path)
-                        .and_then(|m| m.modified())
-                        .is_ok_and(|t| t.elapsed().is_ok_and(|age| age.as_secs() < 5));
-                    match holder {
-                        None if fresh => bail!(
-                            "{} is being written by another soig run (lock {}): wait for it to finish",
-                            output.display(),
-                            path.display()
-                        ),
-                        Some(pid) if alive(pid) => bail!(
-                            "{} is being written by another soig run (pid {pid}, lock {}): wait for it to finish",
-                            output.display(),
-                            path.display()
-                        ),
-                        _ => {
-                            let _ = std::fs::remove_file(&path);
-                        }
-                    }
-                }
-                Err(e) => {
-                    return Err(e).with_context(|| format!("cannot create {}", path.display()));
+                Err(std::fs::TryLockError::Error(e)) => {
+                    return Err(e).with_context(|| format!("cannot lock {}", path.display()));
                 }
             }
+            let same = std::fs::symlink_metadata(&path)
+                .ok()
+                .zip(file.metadata().ok())
+                .is_some_and(|(a, b)| a.ino() == b.ino() && a.dev() == b.dev());
+            if !same {
+                continue;
+            }
+            file.set_len(0)
+                .and_then(|()| file.write_all(holder().as_bytes()))
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            register(&path, false);
+            return Ok(Lock { path, _file: file });
         }
         bail!(
             "cannot take the lock {} of {}",
@@ -343,7 +551,7 @@ impl Lock {
 
 impl Drop for Lock {
     fn drop(&mut self) {
-        unregister(&self.0);
-        let _ = std::fs::remove_file(&self.0);
+        unregister(&self.path);
+        let _ = std::fs::remove_file(&self.path);
     }
 }

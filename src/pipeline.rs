@@ -121,14 +121,27 @@ pub fn run_with(
         YoloDetector::load(&path, yolo_params(campaign))
             .map_err(|e| campaign.error_at("detect.model", e.to_string()))?;
     }
-    let id = Identity::new(&campaign.hash, options.shard.map(|s| (s.index, s.count)));
-    let matches = |dir: &Path| !options.fresh && journal::resumable(dir, &id);
+    let inputs = campaign.input_hashes()?;
+    let id = Identity::new(
+        &campaign.hash,
+        &crate::hash::hash_json(&inputs),
+        options.shard.map(|s| (s.index, s.count)),
+    );
+    let matches = |dir: &Path| -> anyhow::Result<bool> {
+        if options.fresh {
+            Ok(false)
+        } else {
+            journal::resumable(dir, &id)
+        }
+    };
     let note = |message: &str| progress.note(message);
     let resume = Resume {
         matches: &matches,
         note: &note,
     };
-    let summary = write_resumable(output, &[&campaign.base_dir], &resume, |staging| {
+    let keep = keep_paths(campaign);
+    let keep: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
+    let summary = write_resumable(output, &keep, &resume, |staging| {
         write_all(
             campaign,
             staging,
@@ -142,6 +155,92 @@ pub fn run_with(
         output: output.to_path_buf(),
         ..summary
     })
+}
+
+/// What an output of `campaign` may not be or contain: the campaign's folder and its inputs.
+pub(crate) fn keep_paths(campaign: &Campaign) -> Vec<PathBuf> {
+    let mut keep = vec![campaign.base_dir.clone()];
+    keep.extend(campaign.input_paths());
+    keep
+}
+
+/// The check of a journal or shard record against `campaign` (see `journal::Check`): its
+/// index within `share`, its debris object one of the campaign's, its files exactly those
+/// its image writes, its PNG there exactly when the campaign enhances, with a finite label
+/// inside it, and a finite trail angle.
+pub(crate) fn record_check(
+    campaign: &Campaign,
+    share: std::ops::Range<u64>,
+) -> impl Fn(&Record) -> Result<(), String> + Sync + use<'_> {
+    let c = &campaign.resolved;
+    let n = c.images as usize;
+    let enhance = c.stages.contains(&Stage::Enhance);
+    let subsets = c
+        .stages
+        .contains(&Stage::Dataset)
+        .then(|| dataset::assign(c.seed, n, c.split.train, c.split.val));
+    move |r: &Record| {
+        if !share.contains(&r.index) {
+            return Err(format!(
+                "image {} is not one of images {}..{}",
+                r.index, share.start, share.end
+            ));
+        }
+        if r.debris_index >= campaign.debris.len() {
+            return Err(format!(
+                "debris index {} of image {}, the campaign has {} debris object(s)",
+                r.debris_index,
+                r.index,
+                campaign.debris.len()
+            ));
+        }
+        let subset = subsets.as_ref().map(|s| s[r.index as usize]);
+        let expected = artifacts::expected_files(r.index, subset, &c.artifacts, enhance);
+        if !r.files.keys().eq(expected.iter()) {
+            return Err(format!(
+                "image {} names files {:?}, not its {:?}",
+                r.index,
+                r.files.keys().collect::<Vec<_>>(),
+                expected
+            ));
+        }
+        if r.files.values().any(|sha| sha.len() != 64) {
+            return Err(format!("image {}: a file hash is not a sha256", r.index));
+        }
+        match (&r.png, enhance) {
+            (None, false) => {}
+            (Some(p), true) => {
+                let inside = |b: &[u64; 4]| {
+                    let [x0, y0, x1, y1] = b.map(f64::from_bits);
+                    [x0, y0, x1, y1].iter().all(|v| v.is_finite())
+                        && 0.0 <= x0
+                        && x0 <= x1
+                        && x1 <= p.width as f64
+                        && 0.0 <= y0
+                        && y0 <= y1
+                        && y1 <= p.height as f64
+                };
+                if p.width == 0 || p.height == 0 || !p.label_bits.as_ref().is_none_or(inside) {
+                    return Err(format!(
+                        "image {}: its PNG size or label box is impossible",
+                        r.index
+                    ));
+                }
+            }
+            _ => {
+                return Err(format!(
+                    "image {}: a PNG where the campaign writes none, or none where it does",
+                    r.index
+                ));
+            }
+        }
+        if r.trail_angle_bits
+            .is_some_and(|b| !f64::from_bits(b).is_finite())
+        {
+            return Err(format!("image {}: its trail angle is not finite", r.index));
+        }
+        Ok(())
+    }
 }
 
 /// `soig train`: train on the dataset in `out` (written first if it is missing or does not
@@ -222,6 +321,7 @@ fn seal(
     if training.is_some() {
         m.training = training;
     }
+    m.inputs = campaign.input_hashes()?;
     m.seal();
     m.write(dir)?;
     Ok(())
@@ -253,10 +353,11 @@ fn write_all(
             mix,
         });
     }
-    let (journal, done) = Journal::open(dir, id)?;
-    let resumed = done.len();
     let n = u64::from(campaign.resolved.images);
     let share = shard.map_or(0..n, |s| s.images(n));
+    let check = record_check(campaign, share.clone());
+    let (journal, done) = Journal::open(dir, id, &check)?;
+    let resumed = done.len();
     let (records, rendered, seconds) = render(campaign, dir, &journal, done, share, progress)?;
     let (digest, mix) = match shard {
         Some(s) => (crate::shard::seal(campaign, dir, s, &records)?, Vec::new()),

@@ -39,6 +39,9 @@ pub(crate) struct Section {
     pub images: [u64; 2],
     /// The folder of the campaign file, where a merge reads its model and frames.
     pub campaign_dir: PathBuf,
+    /// The build that rendered it (`build_id`): a merge takes the shards of one build only.
+    #[serde(default)]
+    pub build: String,
 }
 
 impl Shard {
@@ -174,10 +177,12 @@ pub(crate) fn seal(
         count: shard.count,
         images: [images.start, images.end],
         campaign_dir,
+        build: crate::build_id::identity().into(),
     };
     let resolved = serde_json::to_value(&campaign.resolved)?;
     let mut m = Manifest::build(dir, &campaign.hash, resolved, &[TIMING.into()])?;
     m.shard = Some(serde_json::to_value(section)?);
+    m.inputs = campaign.input_hashes()?;
     m.seal();
     m.write(dir)?;
     Ok(m.digest)

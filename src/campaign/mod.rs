@@ -66,6 +66,58 @@ pub struct Campaign {
 const RUN_FIELDS: [&str; 3] = ["background.paths", "detect.model", "stars.path"];
 
 impl Campaign {
+    /// The files a run reads besides the campaign and its TLE files (whose lines the campaign
+    /// hash covers): background frames, the star catalogue and the model, each with its field
+    /// and its path as the campaign writes it.
+    pub fn input_files(&self) -> Vec<(String, String)> {
+        let c = &self.resolved;
+        let mut files = Vec::new();
+        if let Background::Frames { paths, .. } = &c.background {
+            for (i, p) in paths.iter().enumerate() {
+                files.push((format!("background.paths[{i}]"), p.clone()));
+            }
+        }
+        if let Stars::Catalog { path, .. } = &c.stars {
+            files.push(("stars.path".into(), path.clone()));
+        }
+        if let Some(m) = &c.detect.model {
+            files.push(("detect.model".into(), m.clone()));
+        }
+        files
+    }
+
+    /// The real paths of [`Campaign::input_files`] and of the campaign file: what an output may
+    /// not be or contain.
+    pub fn input_paths(&self) -> Vec<PathBuf> {
+        let mut paths: Vec<PathBuf> = self
+            .input_files()
+            .into_iter()
+            .map(|(_, p)| self.base_dir.join(p))
+            .collect();
+        paths.push(self.source.clone());
+        paths
+    }
+
+    /// sha256 of each of [`Campaign::input_files`], by path as written: what identifies the
+    /// run's inputs by content (`Manifest::inputs`).
+    pub fn input_hashes(
+        &self,
+    ) -> Result<std::collections::BTreeMap<String, String>, CampaignError> {
+        let mut hashes = std::collections::BTreeMap::new();
+        for (field, p) in self.input_files() {
+            let full = self.base_dir.join(&p);
+            let (sha, _) = crate::hash::sha256_file(&full).map_err(|e| {
+                let base = field.split('[').next().unwrap_or(&field);
+                self.error_at(
+                    base,
+                    format!("{field}: cannot read {}: {e}", full.display()),
+                )
+            })?;
+            hashes.insert(p, sha);
+        }
+        Ok(hashes)
+    }
+
     /// Read, parse, validate and resolve a campaign file (and the files it `extends`).
     pub fn load(path: &Path) -> Result<Campaign, CampaignError> {
         Campaign::load_with_overrides(path, &[])
