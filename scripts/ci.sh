@@ -16,7 +16,7 @@ BASELINE=results/ci-quickstart
 "$SOIG" run campaigns/quickstart.toml --out "$OUT" --quiet
 if [ "${1:-}" = "--pin" ]; then
   mkdir -p "$BASELINE"
-  cp "$OUT"/report/report.json "$OUT"/report/metrics.csv "$OUT"/report/report.md "$BASELINE"/
+  cp "$OUT"/report/report.json "$OUT"/report/metrics.csv "$OUT"/report/report.md "$OUT"/report/timing.md "$BASELINE"/
   "$SOIG" verify "$OUT" | sed -n 's/.*digest //p' > "$BASELINE"/digest.txt
   echo "pinned $OUT as $BASELINE (digest $(cat "$BASELINE"/digest.txt))"
 else

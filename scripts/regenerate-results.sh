@@ -16,7 +16,7 @@ for campaign in results/campaigns/*.toml; do
     mkdir -p "results/$name"
     python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["digest"])' \
         "$scratch/$name/manifest.json" > "results/$name/digest.txt"
-    for f in metrics.csv report.json report.md pr_curve.png efficiency.png efficiency.csv; do
+    for f in metrics.csv report.json report.md timing.md pr_curve.png efficiency.png efficiency.csv; do
         cp "$scratch/$name/report/$f" "results/$name/$f"
     done
 done

@@ -44,8 +44,8 @@ impl Side {
         if dir.join(MANIFEST).is_file() {
             let (m, problems) = manifest::verify(dir)?;
             let report = dir.join("report/report.json");
-            let report = report
-                .is_file()
+            let report = std::fs::symlink_metadata(&report)
+                .is_ok()
                 .then(|| Report::read(&report))
                 .transpose()?;
             return Ok(Side {
@@ -193,6 +193,34 @@ pub fn compare(baseline: &Path, run: &Path, tolerances: &Tolerances) -> anyhow::
         reasons.push(format!(
             "{} file(s) do not match their manifest (tampered or damaged)",
             tampered.len()
+        ));
+    }
+    if b.campaign_hash != r.campaign_hash {
+        reasons.push(format!(
+            "different campaigns (campaign hash {} against {}): their metrics measure different things",
+            b.campaign_hash, r.campaign_hash
+        ));
+    }
+    let images = |files: &[String]| {
+        files
+            .iter()
+            .filter(|f| f.starts_with("truth/img_") && f.ends_with(".json"))
+            .count()
+    };
+    if let Some(a) = &artifacts {
+        let (only_b, only_r) = (images(&a.removed), images(&a.added));
+        if only_b + only_r > 0 {
+            reasons.push(format!(
+                "different image sets: {only_b} image(s) only in the baseline, {only_r} only in the run"
+            ));
+        }
+    }
+    if let (Some(rb), Some(rr)) = (&b.report, &r.report)
+        && (rb.images, rb.objects) != (rr.images, rr.objects)
+    {
+        reasons.push(format!(
+            "different test sets: {} images and {} objects in the baseline, {} and {} in the run",
+            rb.images, rb.objects, rr.images, rr.objects
         ));
     }
     if !same && metrics.is_empty() {

@@ -63,7 +63,8 @@ pub fn run(
             );
         }
     }
-    let keep = crate::output::input_folders(inputs);
+    let mut keep = crate::output::input_folders(inputs);
+    keep.extend(campaign.map(Path::to_path_buf));
     let keep_refs: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
     let mut converted = Vec::new();
     // One frame in memory at a time; a bad input fails the staged output, so none is left.

@@ -11,6 +11,54 @@ use fitsio::images::{ImageDescription, ImageType};
 
 use crate::sky::projection::{Tan, WcsValue};
 
+/// A file name cfitsio cannot misread. cfitsio parses every name for its extended syntax
+/// (`f.fits[1]`, `f.fits(template)`, a leading `!`, `-` for stdin, ...), so a folder named
+/// `My Project (copy)` made it read or create another file than the one meant. soig hands it
+/// `/proc/self/fd/N` instead: to read, N is the file itself, opened (as a regular file only)
+/// by soig; to write, N is the file's folder and the name that follows is soig's own.
+pub struct CfitsioName {
+    /// Kept open while cfitsio uses `name`.
+    _open: std::fs::File,
+    pub name: std::path::PathBuf,
+}
+
+impl CfitsioName {
+    /// The name of existing file `path`, to read: refused unless it is a regular file.
+    pub fn to_read(path: &Path) -> std::io::Result<CfitsioName> {
+        use std::os::fd::AsRawFd;
+        let f = crate::hash::open_regular(path)?;
+        let name = format!("/proc/self/fd/{}", f.as_raw_fd()).into();
+        Ok(CfitsioName { _open: f, name })
+    }
+
+    /// The name of new file `path`, to create: its file name must be a plain one (letters,
+    /// digits, `._-`, not leading `-`), as soig's are.
+    pub fn to_create(path: &Path) -> std::io::Result<CfitsioName> {
+        use std::os::fd::AsRawFd;
+        let file = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .filter(|n| {
+                !n.starts_with('-')
+                    && n.chars()
+                        .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c))
+            })
+            .ok_or_else(|| {
+                std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    format!("{}: not a plain FITS file name", path.display()),
+                )
+            })?;
+        let parent = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let dir = std::fs::File::open(parent)?;
+        let name = format!("/proc/self/fd/{}/{file}", dir.as_raw_fd()).into();
+        Ok(CfitsioName { _open: dir, name })
+    }
+}
+
 /// A header card value.
 #[derive(Clone, Debug)]
 pub enum Card {
@@ -60,7 +108,10 @@ pub fn write_image(
         data_type,
         dimensions: &[height, width],
     };
-    let mut f = FitsFile::create(path).with_custom_primary(&desc).open()?;
+    let safe = CfitsioName::to_create(path)?;
+    let mut f = FitsFile::create(&safe.name)
+        .with_custom_primary(&desc)
+        .open()?;
     let hdu = f.primary_hdu()?;
     for (key, value, comment) in cards {
         match value {
@@ -101,7 +152,7 @@ fn read<T: fitsio::images::ReadImage>(
     // than the file holds would have cfitsio allocate them all.
     let len = crate::input_file::regular(path).map_err(|why| refuse(&why))?;
     let mut head = [0u8; 9];
-    let n = std::fs::File::open(path)
+    let n = crate::hash::open_regular(path)
         .and_then(|mut f| std::io::Read::read(&mut f, &mut head))
         .map_err(|e| refuse(&e.to_string()))?;
     if n < head.len() || &head != b"SIMPLE  =" {
@@ -109,7 +160,8 @@ fn read<T: fitsio::images::ReadImage>(
             "not a FITS file ({len} bytes, not beginning with a SIMPLE card)"
         )));
     }
-    let mut f = FitsFile::open(path).map_err(plain)?;
+    let safe = CfitsioName::to_read(path).map_err(|e| refuse(&e.to_string()))?;
+    let mut f = FitsFile::open(&safe.name).map_err(plain)?;
     let hdu = f.primary_hdu().map_err(plain)?;
     let (rows, cols, bitpix) = match &hdu.info {
         fitsio::hdu::HduInfo::ImageInfo { shape, image_type } if shape.len() == 2 => {

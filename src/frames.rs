@@ -85,7 +85,8 @@ impl Frame {
         let mut head = [0u8; 8];
         {
             use std::io::Read;
-            let mut f = std::fs::File::open(path).map_err(|e| err(format!("cannot open: {e}")))?;
+            let mut f =
+                crate::hash::open_regular(path).map_err(|e| err(format!("cannot open: {e}")))?;
             let n = f
                 .read(&mut head)
                 .map_err(|e| err(format!("cannot read: {e}")))?;
@@ -106,8 +107,35 @@ impl Frame {
     }
 }
 
+/// Most pixels of a frame `soig detect` or `enhance` reads: 8192 x 8192, a large survey CCD,
+/// ~1.5 GB in the f32 and f64 copies processing makes. A 388 kB PNG can claim 20000 x 20000
+/// (10 GB to decode), so the claim is checked before anything is allocated.
+pub const MAX_FRAME_PIXELS: u64 = 1 << 26;
+
+/// Refuse a frame of `width` x `height` pixels beyond [`MAX_FRAME_PIXELS`].
+fn check_pixels(width: u64, height: u64) -> Result<(), String> {
+    if width.saturating_mul(height) > MAX_FRAME_PIXELS {
+        return Err(format!(
+            "{width} x {height} pixels, more than the {MAX_FRAME_PIXELS} (8192 x 8192) soig reads"
+        ));
+    }
+    Ok(())
+}
+
 fn read_png(path: &Path) -> Result<Frame, String> {
-    let img = image::open(path)
+    let open = || {
+        image::ImageReader::new(std::io::BufReader::new(
+            crate::hash::open_regular(path).map_err(|e| format!("cannot open: {e}"))?,
+        ))
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read: {e}"))
+    };
+    let (w, h) = open()?
+        .into_dimensions()
+        .map_err(|e| format!("not a readable PNG ({e})"))?;
+    check_pixels(w.into(), h.into())?;
+    let img = open()?
+        .decode()
         .map_err(|e| format!("not a readable PNG ({e})"))?
         .to_luma8();
     let (width, height) = (img.width() as usize, img.height() as usize);
@@ -129,7 +157,9 @@ fn read_png(path: &Path) -> Result<Frame, String> {
 }
 
 fn read_fits(path: &Path) -> Result<Frame, String> {
-    let mut f = FitsFile::open(path).map_err(|e| format!("not a readable FITS file ({e})"))?;
+    let safe = crate::fits::CfitsioName::to_read(path).map_err(|e| format!("cannot open: {e}"))?;
+    let mut f =
+        FitsFile::open(&safe.name).map_err(|e| format!("not a readable FITS file ({e})"))?;
     // The first HDU holding a 2-D image (a compressed or extension image included).
     let mut found = None;
     for i in 0.. {
@@ -148,6 +178,7 @@ fn read_fits(path: &Path) -> Result<Frame, String> {
         }
     }
     let (hdu, height, width) = found.ok_or_else(|| "no HDU holds a 2-D image".to_string())?;
+    check_pixels(width as u64, height as u64)?;
     let mut header = HashMap::new();
     for key in SECTION_KEYS.iter().chain(WCS_KEYS.iter()) {
         if let Ok(v) = hdu.read_key::<String>(&mut f, key) {

@@ -1,5 +1,5 @@
 //! Launchers: the files that run a campaign as N shards on a cluster engine and merge them.
-//! `slurm` writes a Slurm job array (one `soig run --shard auto` per task), a merge job and a
+//! `slurm` writes a Slurm job array (one `soig run --shard K/N` per task), a merge job and a
 //! `submit.sh` that chains them with `afterok`; `k8s` writes a Kubernetes Indexed Job (one
 //! `soig run --shard auto/N` per completion index, outputs on a shared volume), a merge Job
 //! and a `submit.sh` that applies the second once the first is complete. Every shard output
@@ -123,10 +123,10 @@ pub fn slurm(l: &Launch) -> Vec<File> {
          #SBATCH --job-name={name}\n\
          #SBATCH --array=0-{last}\n\
          #SBATCH --output={name}-%A_%a.out\n\
-         # One task per shard: task K renders shard K of {n} (`--shard auto` reads\n\
-         # SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT). A task that is requeued resumes.\n\
+         # One task per shard: task K renders shard K of {n}, named in full so that one task\n\
+         # run again alone (sbatch --array=K) renders its shard. A task requeued resumes.\n\
          set -euo pipefail\n\
-         exec {run} --shard auto --out {out}\n",
+         exec {run} --shard \"${{SLURM_ARRAY_TASK_ID}}/{n}\" --out {out}\n",
         n = l.shards,
         run = shell_line(&l.run_args()),
     );
@@ -242,10 +242,22 @@ pub fn k8s(l: &Launch, image: &str, claim: &str) -> Vec<File> {
          # Start the shards, wait until every index has completed, then start the merge.\n\
          set -euo pipefail\n\
          cd \"$(dirname \"$0\")\"\n\
+         # A Job ends Complete or Failed: wait for either (`kubectl wait` on one condition\n\
+         # never returns for the other), and stop with the failure.\n\
+         finished() {{\n\
+           while true; do\n\
+             state=$(kubectl get \"job/$1\" -o jsonpath='{{range .status.conditions[?(@.status==\"True\")]}}{{.type}} {{end}}')\n\
+             case \" $state \" in\n\
+               *\" Complete \"*) return 0 ;;\n\
+               *\" Failed \"*) echo \"job $1 failed:\" >&2; kubectl logs \"job/$1\" >&2 || true; return 1 ;;\n\
+             esac\n\
+             sleep 10\n\
+           done\n\
+         }}\n\
          kubectl apply -f shards.yaml\n\
-         kubectl wait --for=condition=complete --timeout=-1s job/{name}\n\
+         finished {name}\n\
          kubectl apply -f merge.yaml\n\
-         kubectl wait --for=condition=complete --timeout=-1s job/{name}-merge\n\
+         finished {name}-merge\n\
          kubectl logs job/{name}-merge\n"
     );
     vec![
@@ -327,9 +339,45 @@ fn block(v: &Value, indent: usize, s: &mut String) {
     }
 }
 
-/// Write `files` into `dir` (created if missing).
-pub fn write(dir: &Path, files: &[File]) -> anyhow::Result<()> {
+/// What `write` wrote into a folder: file name to sha256, so a second run can tell a file it
+/// wrote and nobody edited (which it may replace) from one a user edited or made.
+const WRITTEN: &str = ".soig-launch.json";
+
+/// Write `files` into `dir` (created if missing). A file already there is replaced only if it
+/// is what soig wrote there last, unedited, or is already the new text: a hand-edited
+/// `array.sbatch` (an added `#SBATCH --partition`) or a user's own file of that name is never
+/// overwritten; nothing is written unless every file can be. `keep` (the campaign) may not be
+/// `dir` or inside it.
+pub fn write(dir: &Path, files: &[File], keep: &[&Path]) -> anyhow::Result<()> {
+    use sha2::{Digest, Sha256};
+    crate::output::check_folder(dir, keep)?;
+    let sha = |t: &[u8]| crate::hash::hex(&Sha256::digest(t));
+    let record = dir.join(WRITTEN);
+    let mut written: std::collections::BTreeMap<String, String> =
+        crate::hash::read_regular_to_string(&record)
+            .ok()
+            .and_then(|t| serde_json::from_str(&t).ok())
+            .unwrap_or_default();
+    for f in files {
+        let path = dir.join(f.name);
+        if std::fs::symlink_metadata(&path).is_err() {
+            continue;
+        }
+        let now = crate::hash::read_regular_to_string(&path)
+            .with_context(|| format!("{} exists and cannot be read as a file", path.display()))?;
+        if now != f.text && written.get(f.name) != Some(&sha(now.as_bytes())) {
+            anyhow::bail!(
+                "{} was edited since soig wrote it, or is not soig's: refusing to overwrite it (move it away, or write the scripts elsewhere with --scripts)",
+                path.display()
+            );
+        }
+    }
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    for f in files {
+        written.insert(f.name.to_string(), sha(f.text.as_bytes()));
+    }
+    std::fs::write(&record, serde_json::to_string_pretty(&written)? + "\n")
+        .with_context(|| format!("writing {}", record.display()))?;
     for f in files {
         let path = dir.join(f.name);
         std::fs::write(&path, &f.text).with_context(|| format!("writing {}", path.display()))?;
@@ -386,7 +434,7 @@ mod tests {
         assert!(array.contains("\n#SBATCH --output=soig-quick-start-%A_%a.out\n"));
         assert!(array.contains(
             "exec /opt/soig/bin/soig run '/home/me/my campaigns/quick start.toml' --quiet \
-             --set images=6 --set 'name=it'\\''s' --shard auto \
+             --set images=6 --set 'name=it'\\''s' --shard \"${SLURM_ARRAY_TASK_ID}/3\" \
              --out '/scratch/run s/q'-shard-${SLURM_ARRAY_TASK_ID}-of-3\n"
         ));
         let merge = text(&files, "merge.sbatch");

@@ -73,7 +73,7 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
-    /// Write a Slurm job array that runs the campaign as N shards (`soig run --shard auto`), a
+    /// Write a Slurm job array that runs the campaign as N shards (`soig run --shard K/N`), a
     /// merge job that depends on it (afterok), and submit.sh, which submits the two.
     Slurm {
         #[command(flatten)]
@@ -331,6 +331,13 @@ fn launch(
     files: impl FnOnce(&soig::launch::Launch) -> Vec<soig::launch::File>,
 ) -> anyhow::Result<()> {
     let campaign = Campaign::load_with_overrides(&a.campaign, &a.set)?;
+    let images = u64::from(campaign.resolved.images);
+    if a.shards > images {
+        anyhow::bail!(
+            "--shards {}: more shards than the campaign's {images} images (at most one shard per image)",
+            a.shards
+        );
+    }
     let out = a.out.unwrap_or_else(|| campaign.output_dir.clone());
     let path = |p: PathBuf| {
         if local {
@@ -356,7 +363,7 @@ fn launch(
         d.push(format!("-{engine}"));
         d.into()
     });
-    soig::launch::write(&dir, &files(&l))?;
+    soig::launch::write(&dir, &files(&l), &[&campaign.source])?;
     println!("{}", dir.join("submit.sh").display());
     Ok(())
 }

@@ -295,6 +295,14 @@ fn refuse_inside_output(output: &Path, target: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuse `output` as a folder to write into in place (`soig experiment`, `slurm`, `k8s`) if it
+/// is `/`, the current directory, one of `keep` or an ancestor, or lies inside a soig output.
+pub fn check_folder(output: &Path, keep: &[&Path]) -> anyhow::Result<()> {
+    let target = resolve(output)?;
+    refuse_protected(output, &target, keep)?;
+    refuse_inside_output(output, &target)
+}
+
 /// On Ctrl-C or SIGTERM: remove this process's locks and staging directories but the
 /// resumable ones, which are returned (the next run of the same command resumes them).
 pub fn interrupt() -> Vec<PathBuf> {

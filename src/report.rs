@@ -24,7 +24,7 @@ use crate::detect::Detection;
 use crate::metrics::{self, AtThreshold, CocoMetrics, ImageEval, UltralyticsMetrics};
 
 /// Files of the report that hold run-dependent timing: present, but not hashed.
-pub const VOLATILE: [&str; 2] = ["report/report.md", "report/timing.json"];
+pub const VOLATILE: [&str; 2] = ["report/timing.md", "report/timing.json"];
 
 /// One test image: its PNG and ground truth in pixel-edge coordinates.
 pub struct TestImage {
@@ -103,7 +103,8 @@ pub struct Report {
 impl Report {
     /// Read a `report.json` (of a run's `report/` or a pinned `results/` row).
     pub fn read(path: &Path) -> Result<Report, crate::Error> {
-        let text = std::fs::read_to_string(path).map_err(|e| crate::Error::input(path, e))?;
+        let text =
+            crate::hash::read_regular_to_string(path).map_err(|e| crate::Error::input(path, e))?;
         serde_json::from_str(&text)
             .map_err(|e| crate::Error::input(path, format!("not a soig report: {e}")))
     }
@@ -337,18 +338,18 @@ pub fn write(
     )?;
     std::fs::write(
         rdir.join("report.md"),
-        markdown(&report, &efficiencies, &conversion, &detection, conf),
+        markdown(&report, &efficiencies, conf),
+    )?;
+    std::fs::write(
+        rdir.join("timing.md"),
+        timing_markdown(&conversion, &detection),
     )?;
     Ok(())
 }
 
-fn markdown(
-    r: &Report,
-    efficiencies: &[Efficiency],
-    conversion: &Timing,
-    detection: &[(String, Timing)],
-    conf: f64,
-) -> String {
+/// The report: every figure in it a function of the output's hashed files, so it is hashed
+/// too (the times, which are not, are in `timing.md`).
+fn markdown(r: &Report, efficiencies: &[Efficiency], conf: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# soig report: {}\n", r.campaign);
     let _ = writeln!(
@@ -398,7 +399,18 @@ fn markdown(
     efficiency_markdown(&mut s, efficiencies, conf);
     let _ = writeln!(
         s,
-        "\n## Time per image (the shape of Table 6; this machine, this run)\n"
+        "\nTime per image (the shape of Table 6) depends on the machine: it is in `timing.md`, outside the digest.\n\n![precision-recall](pr_curve.png)\n\nPreviews of true positives, false positives and misses are in `previews/` (ground truth green, predictions red)."
+    );
+    s
+}
+
+/// Table 6's shape: conversion and detection time per image on this machine, this run
+/// (volatile: listed in the manifest, not hashed).
+fn timing_markdown(conversion: &Timing, detection: &[(String, Timing)]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "## Time per image (the shape of Table 6; this machine, this run)\n"
     );
     let _ = writeln!(s, "| step | median | min | max | n |");
     let _ = writeln!(s, "|---|---|---|---|---|");
@@ -416,10 +428,6 @@ fn markdown(
     for (name, t) in detection {
         row(&mut s, &format!("detection: {name}"), t);
     }
-    let _ = writeln!(
-        s,
-        "\n![precision-recall](pr_curve.png)\n\nPreviews of true positives, false positives and misses are in `previews/` (ground truth green, predictions red)."
-    );
     s
 }
 

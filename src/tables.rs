@@ -4,7 +4,7 @@
 //! [`END`]) and CSV.
 //!
 //! A row is placed by its report's test set ("fixed, original frame, synthetic"); timing comes
-//! from the report's Markdown (`report.md`, the one file holding it in both a run and a row).
+//! from `timing.md` (before issue #31, from `report.md`), which both a run and a row hold.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -81,7 +81,12 @@ impl Row {
             .find(|(long, _)| *long == frame)
             .map(|(_, short)| *short)
             .with_context(|| format!("{}: unknown frame `{frame}`", rdir.display()))?;
-        let md = rdir.join("report.md");
+        // The times: `timing.md` since issue #31 (report.md is hashed), in report.md before.
+        let md = ["timing.md", "report.md"]
+            .map(|f| rdir.join(f))
+            .into_iter()
+            .find(|p| p.is_file())
+            .unwrap_or_else(|| rdir.join("timing.md"));
         let md =
             std::fs::read_to_string(&md).with_context(|| format!("reading {}", md.display()))?;
         let (conversion_ms, detection_ms) = timing(&md);
@@ -360,15 +365,28 @@ pub fn write(dirs: &[PathBuf], out: Option<&Path>, readme: Option<&Path>) -> any
     let md = t.markdown();
     print!("{md}");
     if let Some(out) = out {
-        std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-        for (name, text) in [
+        // An output folder like a run's: written whole, with a manifest, replacing only a
+        // folder of soig's own (never a user's `tables.md`), never a run it reads.
+        let files = [
             ("tables.md", md.clone()),
             ("metrics.csv", t.metrics_csv()?),
             ("timing.csv", t.timing_csv()?),
-        ] {
-            let path = out.join(name);
-            std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
-        }
+        ];
+        let mut keep: Vec<&Path> = dirs.iter().map(PathBuf::as_path).collect();
+        keep.extend(readme);
+        crate::output::write_replacing(out, &keep, |dir| {
+            std::fs::create_dir_all(dir)?;
+            for (name, text) in &files {
+                let path = dir.join(name);
+                std::fs::write(&path, text)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
+            let record = serde_json::json!({ "tables_of": dirs });
+            let hash = crate::hash::hash_json(&record);
+            crate::manifest::Manifest::build(dir, &hash, record, &["timing.csv".to_string()])?
+                .write(dir)?;
+            Ok(())
+        })?;
     }
     if let Some(readme) = readme {
         let text = std::fs::read_to_string(readme)

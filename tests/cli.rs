@@ -599,16 +599,19 @@ fn one_writer_per_output_and_no_junk_from_killed_runs() {
     let tmp = tempfile::tempdir().unwrap();
     let campaign = small_campaign(tmp.path(), "");
     let out = tmp.path().join("out");
-    // A live writer's lock (this test's own PID) refuses a second run.
+    // A live writer's lock (an flock this test holds) refuses a second run.
     let lock = tmp.path().join(".out.lock");
-    std::fs::write(&lock, std::process::id().to_string()).unwrap();
+    let held = std::fs::File::create(&lock).unwrap();
+    held.lock().unwrap();
     assert_refused(
         &run(&campaign, &out, None),
         "being written by another soig run",
     );
     assert!(!out.exists());
-    // A dead writer's lock and staging directory (PIDs above Linux's 2^22 limit) are cleared.
-    std::fs::write(&lock, "999999999").unwrap();
+    drop(held);
+    // A dead writer's lock (a file nobody holds, naming PID 1, alive in every namespace) and
+    // staging directory are cleared.
+    std::fs::write(&lock, "1").unwrap();
     let stale = tmp.path().join(".out.partial-999999999");
     std::fs::create_dir(&stale).unwrap();
     std::fs::write(stale.join("big.fits"), vec![0u8; 4096]).unwrap();

@@ -66,6 +66,59 @@ struct Case {
     /// Directories to create.
     #[serde(default)]
     dirs: Vec<String>,
+    /// FIFOs to create (after the files).
+    #[serde(default)]
+    fifos: Vec<String>,
+    /// soig commands run first, in order (their effects are the starting state).
+    #[serde(default)]
+    step: Vec<Step>,
+    /// After the steps: files (re)written, text appended, paths removed, files copied from
+    /// the repository, lines appended to a journal with their checksum, FIFOs made; a `*` in
+    /// the last part of a path matches any run of characters (a staging folder's PID).
+    #[serde(default)]
+    then_files: BTreeMap<String, String>,
+    #[serde(default)]
+    then_append: BTreeMap<String, String>,
+    #[serde(default)]
+    then_remove: Vec<String>,
+    #[serde(default)]
+    then_copy: BTreeMap<String, String>,
+    #[serde(default)]
+    then_journal: BTreeMap<String, Vec<String>>,
+    #[serde(default)]
+    then_fifos: Vec<String>,
+    /// After the steps: [path, text, replacement], the first occurrence replaced.
+    #[serde(default)]
+    then_replace: Vec<[String; 3]>,
+    /// A tmpfs mounted here (as root; the case is skipped, saying so, otherwise).
+    #[serde(default)]
+    tmpfs: Vec<String>,
+    /// Environment of the attack.
+    #[serde(default)]
+    env: BTreeMap<String, String>,
+    /// Further paths (relative) that the attack may change: a lock a killed step left.
+    #[serde(default)]
+    may_change: Vec<String>,
+    /// The attack must succeed (done correctly rather than refused); then `verify` each of
+    /// `verifies` and require each of `exists`.
+    #[serde(default)]
+    ok: bool,
+    #[serde(default)]
+    verifies: Vec<String>,
+    #[serde(default)]
+    exists: Vec<String>,
+}
+
+/// A soig command run before the attack.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Step {
+    args: Vec<String>,
+    #[serde(default)]
+    env: BTreeMap<String, String>,
+    /// It may fail (a run killed on purpose by `SOIG_TEST_ABORT_AT`).
+    #[serde(default)]
+    may_fail: bool,
 }
 
 /// A FITS primary HDU: the header cards given (SIMPLE, BITPIX, NAXIS and NAXISn from the fields,
@@ -80,6 +133,14 @@ struct Fits {
     data_bytes: u64,
     #[serde(default)]
     fill: f32,
+}
+
+fn nix_is_root() -> bool {
+    std::fs::read_to_string("/proc/self/status").is_ok_and(|s| {
+        s.lines()
+            .find(|l| l.starts_with("Uid:"))
+            .is_some_and(|l| l.split_whitespace().nth(2) == Some("0"))
+    })
 }
 
 fn repo() -> &'static Path {
@@ -184,14 +245,131 @@ fn prepare(case: &Case, dir: &Path) {
     for (p, target) in &case.symlink {
         std::os::unix::fs::symlink(target, at(p)).unwrap();
     }
+    for p in &case.fifos {
+        mkfifo(&at(p));
+    }
+}
+
+fn mkfifo(path: &Path) {
+    let ok = Command::new("mkfifo").arg(path).status().unwrap().success();
+    assert!(ok, "mkfifo {}", path.display());
+}
+
+/// `dir.join(p)`, a `*` in any of its parts matched against what is there (the first match).
+fn glob(dir: &Path, p: &str) -> PathBuf {
+    let mut path = dir.to_path_buf();
+    for part in p.split('/') {
+        let Some((pre, post)) = part.split_once('*') else {
+            path.push(part);
+            continue;
+        };
+        let found = std::fs::read_dir(&path)
+            .into_iter()
+            .flatten()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .find(|n| n.starts_with(pre) && n.ends_with(post) && n.len() >= pre.len() + post.len());
+        path.push(found.unwrap_or_else(|| part.to_string()));
+    }
+    path
+}
+
+/// Run the steps and the edits after them: the error if a step that must succeed failed.
+fn set_up(case: &Case, dir: &Path) -> Result<(), String> {
+    use std::io::Write;
+    for step in &case.step {
+        let args: Vec<String> = step.args.iter().map(|a| expand(a)).collect();
+        let o = Command::new(env!("CARGO_BIN_EXE_soig"))
+            .args(&args)
+            .current_dir(dir)
+            .env("RAYON_NUM_THREADS", "1")
+            .envs(&step.env)
+            .stdin(Stdio::null())
+            .output()
+            .unwrap();
+        if !o.status.success() && !step.may_fail {
+            return Err(format!(
+                "step soig {} failed: {}",
+                args.join(" "),
+                String::from_utf8_lossy(&o.stderr)
+            ));
+        }
+    }
+    for (p, text) in &case.then_files {
+        std::fs::write(glob(dir, p), expand(text)).unwrap();
+    }
+    for (p, text) in &case.then_append {
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(glob(dir, p))
+            .unwrap();
+        f.write_all(expand(text).as_bytes()).unwrap();
+    }
+    for p in &case.then_remove {
+        std::fs::remove_file(glob(dir, p)).unwrap();
+    }
+    for (p, from) in &case.then_copy {
+        std::fs::copy(repo().join(from), glob(dir, p)).unwrap();
+    }
+    for (p, lines) in &case.then_journal {
+        use sha2::Digest;
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(glob(dir, p))
+            .unwrap();
+        for l in lines {
+            let sha: String = sha2::Sha256::digest(l.as_bytes())
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect();
+            writeln!(f, "{l} {sha}").unwrap();
+        }
+    }
+    for p in &case.then_fifos {
+        mkfifo(&glob(dir, p));
+    }
+    for [p, from, to] in &case.then_replace {
+        let path = glob(dir, p);
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            text.contains(from.as_str()),
+            "{from:?} not in {}",
+            path.display()
+        );
+        std::fs::write(&path, text.replacen(from.as_str(), to, 1)).unwrap();
+    }
+    Ok(())
+}
+
+/// A tmpfs mounted at `path` while it lives.
+struct Tmpfs(PathBuf);
+
+impl Tmpfs {
+    fn mount(path: &Path) -> Result<Tmpfs, String> {
+        std::fs::create_dir_all(path).unwrap();
+        let o = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", "size=64m", "tmpfs"])
+            .arg(path)
+            .output()
+            .map_err(|e| e.to_string())?;
+        if !o.status.success() {
+            return Err(String::from_utf8_lossy(&o.stderr).into_owned());
+        }
+        Ok(Tmpfs(path.to_path_buf()))
+    }
+}
+
+impl Drop for Tmpfs {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.0).status();
+    }
 }
 
 /// Every path under `dir` but `skip`, with what identifies its content: the target of a link,
 /// else size, modification time and mode.
-fn snapshot(dir: &Path, skip: &Path, into: &mut BTreeMap<PathBuf, String>) {
+fn snapshot(dir: &Path, skip: &[PathBuf], into: &mut BTreeMap<PathBuf, String>) {
     for e in std::fs::read_dir(dir).unwrap() {
         let path = e.unwrap().path();
-        if path == skip {
+        if skip.contains(&path) {
             continue;
         }
         let meta = std::fs::symlink_metadata(&path).unwrap();
@@ -219,9 +397,10 @@ fn non_finite(dir: &Path, found: &mut Vec<String>) {
     };
     for e in entries {
         let path = e.unwrap().path();
-        if std::fs::symlink_metadata(&path).unwrap().is_dir() {
+        let meta = std::fs::symlink_metadata(&path).unwrap();
+        if meta.is_dir() {
             non_finite(&path, found);
-        } else {
+        } else if meta.is_file() {
             non_finite_file(&path, found);
         }
     }
@@ -249,10 +428,30 @@ fn run(case: &Case) -> Vec<String> {
     let dir = tmp.path().join("case");
     std::fs::create_dir(&dir).unwrap();
     prepare(case, &dir);
+    let mut mounts = Vec::new();
+    for p in &case.tmpfs {
+        if !nix_is_root() {
+            eprintln!("{}: skipped: mounting a tmpfs needs root", case.name);
+            return Vec::new();
+        }
+        match Tmpfs::mount(&dir.join(p)) {
+            Ok(m) => mounts.push(m),
+            Err(e) => {
+                eprintln!("{}: skipped: cannot mount a tmpfs: {e}", case.name);
+                return Vec::new();
+            }
+        }
+    }
+    if let Err(e) = set_up(case, &dir) {
+        return vec![e];
+    }
     let out = case.out.as_deref().unwrap_or("out");
     let out_path = dir.join(out);
+    let skip: Vec<PathBuf> = std::iter::once(out_path.clone())
+        .chain(case.may_change.iter().map(|p| glob(&dir, p)))
+        .collect();
     let mut before = BTreeMap::new();
-    snapshot(&dir, &out_path, &mut before);
+    snapshot(&dir, &skip, &mut before);
 
     let default_args = ["run", "c.toml", "--quiet", "--out", "out"].map(String::from);
     let args: Vec<String> = match &case.args {
@@ -260,13 +459,15 @@ fn run(case: &Case) -> Vec<String> {
         None => default_args.to_vec(),
     };
     let stderr_path = tmp.path().join("stderr");
+    let stdout_path = tmp.path().join("stdout");
     let started = Instant::now();
     let mut child = Command::new(env!("CARGO_BIN_EXE_soig"))
         .args(&args)
         .current_dir(dir.join(case.cwd.as_deref().unwrap_or(".")))
         .env("RAYON_NUM_THREADS", "1")
+        .envs(&case.env)
         .stdin(Stdio::null())
-        .stdout(Stdio::null())
+        .stdout(std::fs::File::create(&stdout_path).unwrap())
         .stderr(std::fs::File::create(&stderr_path).unwrap())
         .spawn()
         .expect("soig starts");
@@ -282,18 +483,38 @@ fn run(case: &Case) -> Vec<String> {
         std::thread::sleep(Duration::from_millis(20));
     };
     let err = String::from_utf8_lossy(&std::fs::read(&stderr_path).unwrap()).into_owned();
+    // What soig said: stderr, and stdout (`compare` reports there).
+    let said = err.clone() + &String::from_utf8_lossy(&std::fs::read(&stdout_path).unwrap());
     let mut problems = Vec::new();
     match status {
         None => problems.push(format!("still running after {LIMIT:?}: killed")),
         Some(s) if s.code().is_none() => problems.push(format!("ended by a signal: {s}")),
-        Some(s) if s.success() => problems.push("exit 0".into()),
+        Some(s) if s.success() && !case.ok => problems.push("exit 0".into()),
+        Some(s) if !s.success() && case.ok => problems.push(format!("failed: {s}")),
         Some(_) => {}
+    }
+    for v in &case.verifies {
+        let o = Command::new(env!("CARGO_BIN_EXE_soig"))
+            .args(["verify", &glob(&dir, v).display().to_string()])
+            .output()
+            .unwrap();
+        if !o.status.success() {
+            problems.push(format!(
+                "{v} does not verify: {}",
+                String::from_utf8_lossy(&o.stderr)
+            ));
+        }
+    }
+    for e in &case.exists {
+        if std::fs::symlink_metadata(dir.join(e)).is_err() {
+            problems.push(format!("{e} is missing"));
+        }
     }
     if err.contains("panicked") {
         problems.push("panicked".into());
     }
     for e in &case.expect {
-        if !err.contains(e.as_str()) {
+        if !said.contains(e.as_str()) {
             problems.push(format!("no {e:?} in the error"));
         }
     }
@@ -305,7 +526,7 @@ fn run(case: &Case) -> Vec<String> {
         return problems;
     }
     let mut after = BTreeMap::new();
-    snapshot(&dir, &out_path, &mut after);
+    snapshot(&dir, &skip, &mut after);
     for (path, id) in &before {
         match after.get(path) {
             None => problems.push(format!("deleted {}", path.display())),
@@ -327,6 +548,7 @@ fn run(case: &Case) -> Vec<String> {
         }
     }
     problems.extend(nan.into_iter().map(|f| format!("non-finite number in {f}")));
+    drop(mounts);
     if !problems.is_empty() {
         problems.push(format!(
             "soig {} ({:.1} s) said: {}",

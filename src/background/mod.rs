@@ -79,7 +79,8 @@ impl RealFrame {
             fitsio::errors::Error::Message(m) => err(&m),
             e => err(&format!("not a readable 2-D FITS image ({e})")),
         })?;
-        let mut f = FitsFile::open(path).map_err(|e| err(&e))?;
+        let safe = crate::fits::CfitsioName::to_read(path).map_err(|e| err(&e))?;
+        let mut f = FitsFile::open(&safe.name).map_err(|e| err(&e))?;
         let hdu = f.primary_hdu().map_err(|e| err(&e))?;
         let exposure_s: f64 = ["EXPTIME", "EXPOSURE", "AEXPTIME"]
             .iter()
@@ -243,18 +244,35 @@ pub enum BackgroundModel {
     Frames(Vec<RealFrame>),
 }
 
+/// Most pixels all background frames may hold together: 2^28, 256 NEOSSat-sized frames, about
+/// 3 GB with the noise field prepared for each.
+pub const MAX_BACKGROUND_PIXELS: u64 = 1 << 28;
+
 impl BackgroundModel {
     /// The uniform model without frames, else every frame loaded.
     pub fn load(frames: &[PathBuf]) -> Result<BackgroundModel, FrameError> {
         if frames.is_empty() {
             return Ok(BackgroundModel::Uniform);
         }
-        Ok(BackgroundModel::Frames(
-            frames
-                .iter()
-                .map(|p| RealFrame::load(p))
-                .collect::<Result<_, _>>()?,
-        ))
+        // Every frame stays in memory for the whole run: bound them all together, so that
+        // 2000 frames fail at once with a message instead of exhausting memory.
+        let mut loaded = Vec::with_capacity(frames.len());
+        let mut pixels = 0usize;
+        for p in frames {
+            let f = RealFrame::load(p)?;
+            pixels += f.width * f.height;
+            if pixels as u64 > MAX_BACKGROUND_PIXELS {
+                return Err(FrameError {
+                    path: p.clone(),
+                    message: format!(
+                        "the background frames up to this one hold {pixels} pixels, more than the {MAX_BACKGROUND_PIXELS} (~{} GB in memory) soig keeps: use fewer frames",
+                        MAX_BACKGROUND_PIXELS * 12 >> 30
+                    ),
+                });
+            }
+            loaded.push(f);
+        }
+        Ok(BackgroundModel::Frames(loaded))
     }
 }
 

@@ -250,6 +250,7 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "observer.weight",
         "only debris objects have a weight (the observer is in every image)",
     )?;
+    let mut total = 0.0;
     for (i, d) in c.debris.iter().enumerate() {
         if let Some(w) = d.weight {
             check(
@@ -258,6 +259,13 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
                 "must be a positive, finite number",
             )?;
         }
+        // The weights are drawn from by their running sum, which must stay finite.
+        total += d.weight.unwrap_or(1.0);
+        check(
+            total.is_finite(),
+            &format!("debris[{i}].weight"),
+            "makes the debris weights sum beyond the largest number (1.8e308): give smaller weights",
+        )?;
     }
     let v = &c.visibility;
     for (f, x) in [

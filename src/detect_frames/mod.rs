@@ -191,7 +191,8 @@ pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options) -> anyhow::Result<Sum
             );
         }
     }
-    let keep = crate::output::input_folders(inputs);
+    let mut keep = crate::output::input_folders(inputs);
+    keep.extend(opts.model.iter().chain(&opts.campaign).cloned());
     let keep_refs: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
     let mut results = Vec::with_capacity(inputs.len());
     let digest = crate::output::write_replacing(out, &keep_refs, |dir| {

@@ -33,6 +33,7 @@ pub fn run(
     out: &Path,
     progress: &dyn Progress,
 ) -> anyhow::Result<Finished> {
+    check_output(experiment, out)?;
     std::fs::create_dir_all(out)?;
     let outcomes = run::run_points(experiment, out, progress)?;
     let summary = summary::Summary::new(experiment, &outcomes);
@@ -78,6 +79,58 @@ pub fn run(
         reused: outcomes.iter().filter(|o| o.reused).count(),
         failures,
     })
+}
+
+/// What `run` writes at the top of its output: anything else there is not soig's.
+const WRITTEN: [&str; 7] = [
+    "points",
+    "plots",
+    "summary.csv",
+    "summary.md",
+    MANIFEST,
+    "digest.txt",
+    "times.json",
+];
+
+/// Refuse an output that is `/`, the current directory, the experiment's folder or an ancestor,
+/// lies inside a soig output, or exists and is not an experiment's output (its manifest, and
+/// nothing at its top but what `run` writes): `run` rewrites its files in place.
+fn check_output(experiment: &Experiment, out: &Path) -> anyhow::Result<()> {
+    let folder = experiment.source.parent().unwrap_or(Path::new("."));
+    crate::output::check_folder(out, &[folder, &experiment.source])?;
+    let Ok(entries) = std::fs::read_dir(out) else {
+        if out.exists() {
+            anyhow::bail!(
+                "{} exists and is not a folder; refusing to write into it",
+                out.display()
+            );
+        }
+        return Ok(());
+    };
+    let names: Vec<String> = entries
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    if names.is_empty() {
+        return Ok(());
+    }
+    let ours = crate::hash::read_regular_to_string(&out.join(MANIFEST))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .is_some_and(|m| m["tool"] == "soig" && m["points"].is_array() && m["digest"].is_string());
+    if !ours {
+        anyhow::bail!(
+            "{} exists and is not an experiment's output (no {MANIFEST} that soig wrote); refusing to write into it",
+            out.display()
+        );
+    }
+    if let Some(foreign) = names.iter().find(|n| !WRITTEN.contains(&n.as_str())) {
+        anyhow::bail!(
+            "{} holds {foreign}, which soig experiment does not write; refusing to write into it (move it out, or choose another output)",
+            out.display()
+        );
+    }
+    Ok(())
 }
 
 /// The JSON Schema of the experiment file format, generated from the Rust types.

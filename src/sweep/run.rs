@@ -10,7 +10,6 @@ use serde::{Deserialize, Serialize};
 
 use super::file::{Experiment, Point, Setting};
 use crate::hash::hash_json;
-use crate::manifest::Manifest;
 use crate::progress::Progress;
 use crate::report::{Efficiency, HalfRecall, Report};
 
@@ -96,9 +95,16 @@ fn run_point(
     dir: &Path,
     progress: &dyn Progress,
 ) -> anyhow::Result<(String, bool, Option<f64>)> {
-    if let Ok(m) = Manifest::read(dir)
+    // Reused only if it verifies (an edited report must not reach summary.csv) and was made
+    // from input files of the same content.
+    if let Ok((m, problems)) = crate::manifest::verify(dir)
+        && problems.is_empty()
         && m.campaign_hash == point.campaign.hash
         && m.shard.is_none()
+        && point
+            .campaign
+            .input_hashes()
+            .is_ok_and(|inputs| inputs == m.inputs)
     {
         return Ok((m.digest, true, None));
     }
