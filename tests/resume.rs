@@ -163,3 +163,69 @@ fn sigterm_keeps_the_work_and_the_same_command_resumes_it() {
     assert_eq!(digest(&resumed), reference);
     assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
 }
+
+/// Issue #31: soig as PID 1 of its own PID namespace (a Kubernetes pod), killed with SIGKILL,
+/// then run again the same way (the retried pod's soig is PID 1 again, its lock and staging
+/// folder named after PID 1): the retry resumes and ends with the uninterrupted run's digest.
+/// Needs root for `unshare -p`; skipped, saying so, without it.
+#[test]
+fn a_killed_pid_1_in_its_own_namespace_resumes_on_retry() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let c = campaign(t, "pod", 60);
+    let out = t.join("out");
+    let pod = || {
+        let mut cmd = Command::new("unshare");
+        cmd.args(["-p", "-f", "--mount-proc", env!("CARGO_BIN_EXE_soig"), "run"])
+            .arg(&c)
+            .args(["--quiet", "--out"])
+            .arg(&out)
+            .env("RAYON_NUM_THREADS", "1")
+            .env_remove("SOIG_TEST_ABORT_AT");
+        cmd
+    };
+    let probe = Command::new("unshare")
+        .args(["-p", "-f", "--mount-proc", "true"])
+        .output();
+    if !probe.is_ok_and(|o| o.status.success()) {
+        eprintln!("skipped: `unshare -p -f --mount-proc` is not available here (needs root)");
+        return;
+    }
+    let mut child = pod().stderr(std::process::Stdio::piped()).spawn().unwrap();
+    let started = Instant::now();
+    while journaled(&out, 1) < 3 && started.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(journaled(&out, 1) >= 3, "the pod's run never got going");
+    // The pod's soig is unshare's only child: SIGKILL it, as a node would.
+    let children = std::fs::read_to_string(format!(
+        "/proc/{0}/task/{0}/children",
+        child.id()
+    ))
+    .unwrap();
+    let soig: i32 = children.split_whitespace().next().unwrap().parse().unwrap();
+    let lock = std::fs::read_to_string(t.join(".out.lock")).unwrap();
+    assert!(lock.starts_with("pid 1 on host"), "{lock}");
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(soig),
+        nix::sys::signal::Signal::SIGKILL,
+    )
+    .unwrap();
+    let killed = child.wait_with_output().unwrap();
+    assert!(!killed.status.success());
+    assert!(t.join(".out.partial-1").is_dir(), "no staging folder left");
+
+    let retry = pod().output().unwrap();
+    let said = String::from_utf8_lossy(&retry.stderr);
+    assert!(retry.status.success(), "{said}");
+    assert!(said.contains("resuming the run killed earlier"), "{said}");
+    let verify = Command::new(env!("CARGO_BIN_EXE_soig"))
+        .arg("verify")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(verify.status.success(), "{verify:?}");
+    let reference = digest(&command(&c, &t.join("reference")).output().unwrap());
+    assert_eq!(digest(&retry), reference);
+    assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
+}
