@@ -62,6 +62,7 @@ pub fn merge(
         None
     };
     let started = std::time::Instant::now();
+    let mut steps = Vec::new();
     let (digest, mix) = write_replacing(output, &[&campaign.base_dir], |dir| {
         progress.start("merge", parts.len() as u64);
         for p in &parts {
@@ -71,8 +72,12 @@ pub fn merge(
             progress.advance();
         }
         progress.finish();
+        steps.push(("merge", started.elapsed().as_secs_f64()));
         let records: Vec<Record> = parts.iter().flat_map(|p| p.records.clone()).collect();
-        pipeline::finish(&campaign, dir, &records, python.as_deref(), progress)
+        let (digest, mix, finished) =
+            pipeline::finish(&campaign, dir, &records, python.as_deref(), progress)?;
+        steps.extend(finished);
+        Ok((digest, mix))
     })?;
     Ok(RunSummary {
         output: output.to_path_buf(),
@@ -81,6 +86,7 @@ pub fn merge(
         resumed: parts.iter().map(|p| p.records.len()).sum(),
         seconds: started.elapsed().as_secs_f64(),
         mix,
+        steps,
     })
 }
 
