@@ -1,7 +1,8 @@
 //! The FITS `soig run` writes, read by astropy as an astronomer would: every header card
 //! parses, BUNIT is a unit of the FITS standard, the WCS loads, and the keywords of a
 //! space-based exposure are there (telescope, instrument, observer and its GCRS state, start,
-//! middle and end of the exposure). Needs astropy in the project's .venv (scripts/setup.sh);
+//! middle and end of the exposure), and the truth's pixel convention is the WCS's (0-based
+//! pixel centres). Needs astropy in the project's .venv (scripts/setup.sh);
 //! without it the test says so and passes, unless SOIG_REQUIRE_ONNXRUNTIME is set (the test
 //! command, scripts/test.sh, sets it after the set-up), when it fails.
 
@@ -34,7 +35,17 @@ for path in sys.argv[1:]:
         r = sum(h[f"OBSPOS-{a}"] ** 2 for a in "XYZ") ** 0.5
         v = sum(h[f"OBSVEL-{a}"] ** 2 for a in "XYZ") ** 0.5
         assert 6500 < r < 8000 and 6.5 < v < 8, (r, v)
-        WCS(h)
+        wcs = WCS(h)
+        # The truth's convention (0-based pixel centres at integers) is the WCS's with origin 0:
+        # its streak ends and the RA/Dec it says the WCS gives there agree to 1e-6 deg (0.005 px;
+        # the cards hold 15+ digits).
+        import json
+        truth = path.replace("/fits/", "/truth/").replace("_clean.fits", ".fits")[:-5] + ".json"
+        t = json.load(open(truth))
+        for end in ["start", "end"]:
+            (x, y), (ra, dec) = t[f"streak_{end}_px"], t[f"streak_{end}_wcs_radec_deg"]
+            wra, wdec = wcs.all_pix2world(x, y, 0)
+            assert abs(wra - ra) < 1e-6 and abs(wdec - dec) < 1e-6, (end, wra, wdec, ra, dec)
         print(path.rsplit("/", 1)[-1], unit, h["TELESCOP"], h["DATE-AVG"])
 "#;
 
