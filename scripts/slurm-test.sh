@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The one-node Slurm test (run as root; idempotent): installs Debian's slurm-wlm and munge,
-# starts a cluster on localhost as ../shared/design/slurm.md describes, runs a small campaign
-# as a job array of 3 shards plus the dependent merge (`soig slurm`), and compares the merged
+# starts a one-node cluster on localhost, runs a small campaign
+# as a job array of 3 shards plus the dependent merge (`soig slurm`, with a partition, time,
+# memory and CPUs that `sbatch --test-only` must accept), and compares the merged
 # digest with a local single run's. Prints the timings; exits non-zero on any mismatch.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -70,7 +71,16 @@ sinfo -h -o %T | grep -q idle || { echo "slurm-test: the node is not idle: $(sin
 
 work=$(mktemp -d /tmp/soig-slurm-test.XXXXXX)
 out="$work/out dir/quickstart"   # a space, so the quoting is tested too
-"$SOIG" slurm "$CAMPAIGN" --shards "$SHARDS" "${SETS[@]}" --out "$out" --scripts "$work/jobs"
+"$SOIG" slurm "$CAMPAIGN" --shards "$SHARDS" "${SETS[@]}" --out "$out" --scripts "$work/jobs" \
+    --partition test --time 01:00:00 --mem 1G --cpus-per-task 1 --sbatch=--requeue
+# sbatch accepts the job files with those options (--test-only: checked, not queued).
+for job in array merge; do
+    (cd "$work/jobs" && sbatch --test-only "$job.sbatch") 2>&1 | grep -q "to start at" || {
+        echo "slurm-test: sbatch --test-only refuses $job.sbatch:" >&2
+        (cd "$work/jobs" && sbatch --test-only "$job.sbatch") >&2 || true
+        exit 1
+    }
+done
 
 t0=$(date +%s.%N)
 ids=$("$work/jobs/submit.sh")

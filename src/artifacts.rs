@@ -12,6 +12,7 @@ use crate::dataset::Subset;
 use crate::enhance;
 use crate::fits::{self, Card, Cards, Pixels};
 use crate::render::Exposure;
+use crate::render::iso_utc;
 use crate::scene::{Pointing, Scene};
 use crate::sensor::Sensor;
 use crate::simulate::ImageProducts;
@@ -87,8 +88,9 @@ pub fn write_image(
         write_fits(
             format!("{stem}_clean.fits"),
             Pixels::I32(&e),
-            "electron",
-            "noise-free photo-electrons",
+            // The FITS standard has no electron unit; astropy reads `count` as `ct`.
+            "count",
+            "noise-free photo-electron counts",
         )?;
     }
     if artifacts.star_list {
@@ -214,6 +216,16 @@ fn provenance_cards(p: &Provenance, sensor: &Sensor, scene: &Scene, exposure: &E
         "NORAD catalogue number of the debris",
     );
     push(
+        "TELESCOP",
+        Card::Str(p.observer.clone()),
+        "satellite carrying the simulated telescope",
+    );
+    push(
+        "INSTRUME",
+        Card::Str("soig simulated imager".into()),
+        "sensor of the campaign's [sensor] table",
+    );
+    push(
         "OBSERVER",
         Card::Str(p.observer.clone()),
         "observing satellite",
@@ -229,7 +241,48 @@ fn provenance_cards(p: &Provenance, sensor: &Sensor, scene: &Scene, exposure: &E
         Card::Real(scene.start.to_mjd_utc_days()),
         "[d] UTC start of exposure",
     );
+    let after = |s: f64| iso_utc(scene.start + hifitime::Duration::from_seconds(s));
+    push(
+        "DATE-AVG",
+        Card::Str(after(t.exposure_s / 2.0)),
+        "UTC mid-exposure",
+    );
+    push(
+        "DATE-END",
+        Card::Str(after(t.exposure_s)),
+        "UTC end of exposure",
+    );
+    // wcslib derives MJD-* from DATE-* when they are missing (astropy warns): both written.
+    let mjd = |s: f64| (scene.start + hifitime::Duration::from_seconds(s)).to_mjd_utc_days();
+    push(
+        "MJD-AVG",
+        Card::Real(mjd(t.exposure_s / 2.0)),
+        "[d] UTC mid-exposure",
+    );
+    push(
+        "MJD-END",
+        Card::Real(mjd(t.exposure_s)),
+        "[d] UTC end of exposure",
+    );
     push("EXPTIME", Card::Real(t.exposure_s), "[s] exposure time");
+    // The observer's state as the truth gives it: no FITS standard keyword holds a
+    // spacecraft's GCRS state (OBSGEO-* are Earth-fixed).
+    if let Some(e) = &t.ephemeris {
+        for (axis, v) in ["X", "Y", "Z"].iter().zip(e.observer_gcrs_km) {
+            push(
+                &format!("OBSPOS-{axis}"),
+                Card::Real(v),
+                "[km] observer GCRS position at DATE-AVG",
+            );
+        }
+        for (axis, v) in ["X", "Y", "Z"].iter().zip(e.observer_gcrs_km_s) {
+            push(
+                &format!("OBSVEL-{axis}"),
+                Card::Real(v),
+                "[km/s] observer GCRS velocity at DATE-AVG",
+            );
+        }
+    }
     push("GAIN", Card::Real(sensor.gain_e_per_adu), "[e-/ADU]");
     match scene.pointing {
         Pointing::Fixed { .. } => push("POINTING", Card::Str("fixed".into()), "fixed or survey"),

@@ -25,6 +25,75 @@ pub struct Launch {
     pub shards: u64,
     /// The campaign's name, from which job names are made.
     pub name: String,
+    /// Slurm only: `#SBATCH` options of every job (partition, account, time, memory, CPUs,
+    /// or any raw option), each `--option=value`, in order (see [`sbatch_options`]).
+    pub sbatch: Vec<String>,
+}
+
+/// What `soig slurm` asks of the cluster for each job, as sbatch would take it.
+#[derive(Default)]
+pub struct SlurmResources {
+    pub partition: Option<String>,
+    pub account: Option<String>,
+    /// Wall-time limit: `MM`, `MM:SS`, `HH:MM:SS`, `D-HH`, `D-HH:MM` or `D-HH:MM:SS`.
+    pub time: Option<String>,
+    /// Memory per node: a number of megabytes, or with a unit suffix K, M, G or T.
+    pub mem: Option<String>,
+    pub cpus_per_task: Option<u32>,
+    /// Raw sbatch options (`--qos=high`), written as they are, after the others.
+    pub raw: Vec<String>,
+}
+
+/// The `#SBATCH` options of `r`, checked enough that a typo fails here rather than at submit:
+/// values are single words, the time and memory in sbatch's formats, raw options start `-`.
+pub fn sbatch_options(r: &SlurmResources) -> anyhow::Result<Vec<String>> {
+    let word = |flag: &str, v: &str| {
+        anyhow::ensure!(
+            !v.is_empty() && !v.chars().any(|c| c.is_whitespace() || c.is_control()),
+            "--{flag} {v:?}: must be one word without spaces"
+        );
+        Ok(format!("--{flag}={v}"))
+    };
+    let digits = |s: &str| !s.is_empty() && s.chars().all(|c| c.is_ascii_digit());
+    let mut out = Vec::new();
+    if let Some(p) = &r.partition {
+        out.push(word("partition", p)?);
+    }
+    if let Some(a) = &r.account {
+        out.push(word("account", a)?);
+    }
+    if let Some(t) = &r.time {
+        let (days, clock) = match t.split_once('-') {
+            Some((d, rest)) => (Some(d), rest),
+            None => (None, t.as_str()),
+        };
+        let fields: Vec<&str> = clock.split(':').collect();
+        let ok = days.is_none_or(digits) && fields.iter().all(|f| digits(f)) && fields.len() <= 3;
+        anyhow::ensure!(
+            ok,
+            "--time {t:?}: expected MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS"
+        );
+        out.push(format!("--time={t}"));
+    }
+    if let Some(m) = &r.mem {
+        let number = m.strip_suffix(['K', 'M', 'G', 'T']).unwrap_or(m);
+        anyhow::ensure!(
+            digits(number),
+            "--mem {m:?}: expected megabytes, or a number with K, M, G or T (e.g. 4G)"
+        );
+        out.push(format!("--mem={m}"));
+    }
+    if let Some(n) = r.cpus_per_task {
+        out.push(format!("--cpus-per-task={n}"));
+    }
+    for raw in &r.raw {
+        anyhow::ensure!(
+            raw.starts_with('-') && !raw.contains('\n'),
+            "--sbatch {raw:?}: expected one sbatch option, e.g. --sbatch=--qos=high"
+        );
+        out.push(raw.clone());
+    }
+    Ok(out)
 }
 
 /// One file a launcher writes.
@@ -118,11 +187,13 @@ pub fn slurm(l: &Launch) -> Vec<File> {
         shell_word(&l.out.display().to_string()),
         l.shards
     );
+    let options: String = l.sbatch.iter().map(|o| format!("#SBATCH {o}\n")).collect();
     let array = format!(
         "#!/bin/bash\n\
          #SBATCH --job-name={name}\n\
          #SBATCH --array=0-{last}\n\
          #SBATCH --output={name}-%A_%a.out\n\
+         {options}\
          # One task per shard: task K renders shard K of {n}, named in full so that one task\n\
          # run again alone (sbatch --array=K) renders its shard. A task requeued resumes.\n\
          set -euo pipefail\n\
@@ -134,6 +205,7 @@ pub fn slurm(l: &Launch) -> Vec<File> {
         "#!/bin/bash\n\
          #SBATCH --job-name={name}-merge\n\
          #SBATCH --output={name}-merge-%j.out\n\
+         {options}\
          # Runs after every task of the array succeeded (submit.sh: --dependency=afterok).\n\
          set -euo pipefail\n\
          exec {}\n",
@@ -402,6 +474,7 @@ mod tests {
             out: "/scratch/run s/q".into(),
             shards,
             name: "Quick_Start".into(),
+            sbatch: Vec::new(),
         }
     }
 
@@ -452,6 +525,58 @@ mod tests {
                 .unwrap()
                 .executable
         );
+    }
+
+    #[test]
+    fn sbatch_options_reach_both_jobs_and_typos_are_refused() {
+        let r = SlurmResources {
+            partition: Some("p".into()),
+            account: Some("proj-1".into()),
+            time: Some("01:00:00".into()),
+            mem: Some("4G".into()),
+            cpus_per_task: Some(4),
+            raw: vec!["--qos=high".into()],
+        };
+        let mut l = launch(2);
+        l.sbatch = sbatch_options(&r).unwrap();
+        let files = slurm(&l);
+        let lines = "#SBATCH --partition=p\n#SBATCH --account=proj-1\n#SBATCH --time=01:00:00\n\
+                     #SBATCH --mem=4G\n#SBATCH --cpus-per-task=4\n#SBATCH --qos=high\n";
+        for f in ["array.sbatch", "merge.sbatch"] {
+            assert!(text(&files, f).contains(lines), "{}", text(&files, f));
+        }
+        for time in ["30", "30:00", "1-12", "1-12:30", "2-00:00:00"] {
+            let r = SlurmResources {
+                time: Some(time.into()),
+                ..Default::default()
+            };
+            assert_eq!(sbatch_options(&r).unwrap(), [format!("--time={time}")]);
+        }
+        let bad = [
+            SlurmResources {
+                time: Some("1h".into()),
+                ..Default::default()
+            },
+            SlurmResources {
+                time: Some("1:2:3:4".into()),
+                ..Default::default()
+            },
+            SlurmResources {
+                mem: Some("4GB".into()),
+                ..Default::default()
+            },
+            SlurmResources {
+                partition: Some("a b".into()),
+                ..Default::default()
+            },
+            SlurmResources {
+                raw: vec!["qos=high".into()],
+                ..Default::default()
+            },
+        ];
+        for r in bad {
+            assert!(sbatch_options(&r).is_err());
+        }
     }
 
     #[test]

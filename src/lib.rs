@@ -57,6 +57,7 @@ pub mod convert;
 pub mod dataset;
 pub mod detect;
 pub mod detect_frames;
+pub mod disk;
 pub mod enhance;
 pub mod error;
 pub mod experiment;

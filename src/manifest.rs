@@ -58,6 +58,15 @@ pub struct Manifest {
     pub digest: String,
 }
 
+/// Whether `rel` is the label cache Ultralytics writes beside a split's label folder when it
+/// trains on the dataset (`labels/train.cache` for `labels/train/`): derived from the labels, so
+/// a dataset trained by plain `yolo train data=OUT/data.yaml` still verifies.
+fn is_ultralytics_cache(rel: &str) -> bool {
+    rel.strip_prefix("labels/")
+        .and_then(|name| name.strip_suffix(".cache"))
+        .is_some_and(|split| !split.is_empty() && !split.contains('/'))
+}
+
 /// All files under `dir` except the manifest and a run's journal (a staging directory's), as
 /// sorted relative paths.
 pub fn list_files(dir: &Path) -> std::io::Result<Vec<String>> {
@@ -84,7 +93,8 @@ pub fn list_all_files(dir: &Path) -> std::io::Result<Vec<String>> {
                     .map(|c| c.as_os_str().to_string_lossy().into_owned())
                     .collect::<Vec<_>>()
                     .join("/");
-                if rel != MANIFEST {
+                // Ultralytics' label caches are derived from the labels: no artifacts.
+                if rel != MANIFEST && !is_ultralytics_cache(&rel) {
                     out.push(rel);
                 }
             }
@@ -272,6 +282,35 @@ mod tests {
                 Problem::Mismatch("a/x.txt".into()),
                 Problem::Missing("y.txt".into()),
                 Problem::Extra("new.txt".into())
+            ]
+        );
+    }
+
+    #[test]
+    fn verify_ignores_ultralytics_label_caches_only() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::create_dir_all(d.join("labels/train")).unwrap();
+        std::fs::write(d.join("labels/train/a.txt"), b"0 0.5 0.5 0.1 0.1\n").unwrap();
+        Manifest::build(d, "h", serde_json::json!({}), &[])
+            .unwrap()
+            .write(d)
+            .unwrap();
+        // What `yolo train` leaves: one cache per split, beside the split's folder.
+        std::fs::write(d.join("labels/train.cache"), b"c").unwrap();
+        std::fs::write(d.join("labels/val.cache"), b"c").unwrap();
+        assert_eq!(verify(d).unwrap().1, vec![]);
+        // Anything else named .cache is still an extra file.
+        for other in ["train.cache", "labels/train/a.cache", "images/train.cache"] {
+            std::fs::create_dir_all(d.join(other).parent().unwrap()).unwrap();
+            std::fs::write(d.join(other), b"c").unwrap();
+        }
+        assert_eq!(
+            verify(d).unwrap().1,
+            vec![
+                Problem::Extra("images/train.cache".into()),
+                Problem::Extra("labels/train/a.cache".into()),
+                Problem::Extra("train.cache".into()),
             ]
         );
     }

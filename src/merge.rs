@@ -79,6 +79,7 @@ pub fn merge(
         None
     };
     let started = std::time::Instant::now();
+    let mut steps = Vec::new();
     let mut keep = crate::pipeline::keep_paths(&campaign);
     keep.extend(parts.iter().map(|p| p.dir.clone()));
     let keep: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
@@ -91,8 +92,12 @@ pub fn merge(
             progress.advance();
         }
         progress.finish();
+        steps.push(("merge", started.elapsed().as_secs_f64()));
         let records: Vec<Record> = parts.iter().flat_map(|p| p.records.clone()).collect();
-        pipeline::finish(&campaign, dir, &records, python.as_deref(), progress)
+        let (digest, mix, finished) =
+            pipeline::finish(&campaign, dir, &records, python.as_deref(), progress)?;
+        steps.extend(finished);
+        Ok((digest, mix))
     })?;
     Ok(RunSummary {
         output: output.to_path_buf(),
@@ -101,6 +106,7 @@ pub fn merge(
         resumed: parts.iter().map(|p| p.records.len()).sum(),
         seconds: started.elapsed().as_secs_f64(),
         mix,
+        steps,
     })
 }
 

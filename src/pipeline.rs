@@ -44,7 +44,13 @@ pub struct RunSummary {
     pub seconds: f64,
     /// The realised debris mix: images of each object, in the campaign's order.
     pub mix: Vec<DebrisCount>,
+    /// Wall time of each step this run took (render, dataset, train, detect, manifest),
+    /// seconds, in order: the final line gives each one's share of the whole run.
+    pub steps: Vec<Step>,
 }
+
+/// A step of a run and its wall time, seconds.
+pub type Step = (&'static str, f64);
 
 /// How many images of a run show one debris object.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -121,6 +127,12 @@ pub fn run_with(
         YoloDetector::load(&path, yolo_params(campaign))
             .map_err(|e| campaign.error_at("detect.model", e.to_string()))?;
     }
+    let n = u64::from(campaign.resolved.images);
+    let images = options.shard.map_or(n, |s| {
+        let share = s.images(n);
+        share.end - share.start
+    });
+    crate::disk::check(campaign, images, output, &|m| progress.note(m))?;
     let inputs = campaign.input_hashes()?;
     let id = Identity::new(
         &campaign.hash,
@@ -351,6 +363,7 @@ fn write_all(
             resumed: 0,
             seconds: 0.0,
             mix,
+            steps: Vec::new(),
         });
     }
     let n = u64::from(campaign.resolved.images);
@@ -359,9 +372,19 @@ fn write_all(
     let (journal, done) = Journal::open(dir, id, &check)?;
     let resumed = done.len();
     let (records, rendered, seconds) = render(campaign, dir, &journal, done, share, progress)?;
+    let mut steps = vec![("render", seconds)];
     let (digest, mix) = match shard {
-        Some(s) => (crate::shard::seal(campaign, dir, s, &records)?, Vec::new()),
-        None => finish(campaign, dir, &records, python, progress)?,
+        Some(s) => {
+            let started = Instant::now();
+            let digest = crate::shard::seal(campaign, dir, s, &records)?;
+            steps.push(("manifest", started.elapsed().as_secs_f64()));
+            (digest, Vec::new())
+        }
+        None => {
+            let (digest, mix, finished) = finish(campaign, dir, &records, python, progress)?;
+            steps.extend(finished);
+            (digest, mix)
+        }
     };
     journal::remove(dir)?;
     Ok(RunSummary {
@@ -371,6 +394,7 @@ fn write_all(
         resumed,
         seconds,
         mix,
+        steps,
     })
 }
 
@@ -502,14 +526,21 @@ fn render(
 
 /// The steps after rendering, on the images of `records` (every image of the campaign, by
 /// index) in `dir`: `data.yaml`, training, detection and report, and the manifest, whose
-/// digest is returned. A single run and a merge of shards both end here.
+/// digest is returned with the debris mix and each step's wall time. A single run and a merge
+/// of shards both end here.
 pub(crate) fn finish(
     campaign: &Campaign,
     dir: &Path,
     records: &[Record],
     python: Option<&Path>,
     progress: &dyn Progress,
-) -> anyhow::Result<(String, Vec<DebrisCount>)> {
+) -> anyhow::Result<(String, Vec<DebrisCount>, Vec<Step>)> {
+    let mut steps = Vec::new();
+    let mut step = Instant::now();
+    let mut lap = |name: &'static str| {
+        steps.push((name, step.elapsed().as_secs_f64()));
+        step = Instant::now();
+    };
     let c = &campaign.resolved;
     let stages = &c.stages;
     let dataset_stage = stages.contains(&Stage::Dataset);
@@ -553,10 +584,14 @@ pub(crate) fn finish(
     } else {
         String::new()
     };
+    lap("dataset");
     let trained = match python {
         Some(python) => Some(fit(campaign, dir, python, Chunk::default(), progress)?),
         None => None,
     };
+    if trained.is_some() {
+        lap("train");
+    }
     if stages.contains(&Stage::Detect) {
         // A train stage's model, else the campaign's (validation allows one, not both).
         let model = match &trained {
@@ -571,6 +606,7 @@ pub(crate) fn finish(
             model.as_deref(),
             progress,
         )?;
+        lap("detect");
     }
     let mut volatile: Vec<String> = report::VOLATILE
         .iter()
@@ -591,7 +627,8 @@ pub(crate) fn finish(
     manifest.debris_mix = Some(serde_json::to_value(&mix)?);
     seal(&mut manifest, dir, campaign, trained.map(|t| t.record))?;
     journal::abort_if_testing("manifest");
-    Ok((manifest.digest, mix))
+    lap("manifest");
+    Ok((manifest.digest, mix, steps))
 }
 
 /// The campaign fields that decide a scene-draw rejection reason (`scene::try_draw`).

@@ -36,7 +36,7 @@ impl Progress for Bars {
         let bar = ProgressBar::new(total);
         bar.set_style(
             ProgressStyle::with_template(
-                "{msg:>7} [{bar:30}] {pos:>5}/{len:5}  elapsed {elapsed:>4}  ETA {eta:>4}",
+                "{msg:>7} [{bar:30}] {pos:>5}/{len:5}  {per_sec:>11}  elapsed {elapsed:>4}  ETA {eta:>4}",
             )
             .expect("valid template")
             .progress_chars("=> "),

@@ -34,13 +34,35 @@ impl RunSummary {
         let rate = match self.images {
             0 => String::new(),
             n => format!(
-                " in {:.1} s ({:.2} images/s)",
+                " rendered in {:.1} s ({:.2} images/s)",
                 self.seconds,
                 n as f64 / self.seconds
             ),
         };
         let head = format!("{} images{resumed}{rate}", self.images);
         self.lines(&head)
+    }
+
+    /// The last line of `soig run` and `soig merge`: the whole command's wall time
+    /// `total_s` and each step's share of it; "other" is the rest (loading the campaign,
+    /// checks, moving the output into place).
+    pub fn timing_line(&self, total_s: f64) -> String {
+        let share = |s: f64| {
+            if total_s > 0.0 {
+                100.0 * s / total_s
+            } else {
+                0.0
+            }
+        };
+        let other = (total_s - self.steps.iter().map(|(_, s)| s).sum::<f64>()).max(0.0);
+        let parts: Vec<String> = self
+            .steps
+            .iter()
+            .copied()
+            .chain(std::iter::once(("other", other)))
+            .map(|(name, s)| format!("{name} {s:.1} s ({:.0}%)", share(s)))
+            .collect();
+        format!("total {total_s:.1} s: {}\n", parts.join(", "))
     }
 
     /// What `soig merge` of `shards` shard outputs ends with: `final_lines`, its first line

@@ -1,6 +1,6 @@
 //! Extreme and stiff cases (issue #6, part 3). Each test pins a defined outcome: a valid image
 //! (finite, non-negative, photons where Eq. 3 says) or a clear rejection naming the file, line
-//! and field. The README's "Extreme cases" table lists every case with its outcome and test.
+//! and field. docs/extreme-cases.md's table lists every case with its outcome and test.
 
 use std::path::Path;
 

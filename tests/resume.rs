@@ -133,7 +133,7 @@ fn killed_at_any_phase_a_run_resumes_to_the_same_digest() {
         .write(&t.join("other.toml"));
     let o = command(&other, &out).output().unwrap();
     digest(&o);
-    assert!(String::from_utf8_lossy(&o.stdout).starts_with("4 images in"));
+    assert!(String::from_utf8_lossy(&o.stdout).starts_with("4 images rendered in"));
     assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
 }
 

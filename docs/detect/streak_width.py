@@ -10,7 +10,7 @@ Usage: python3 docs/detect/streak_width.py  (needs numpy and astropy)
 import numpy as np
 from astropy.io import fits
 
-d = fits.getdata("../shared/data/neossat/NEOSSAT_240__30_2026025124741.fits").astype(float)
+d = fits.getdata("tests/fixtures/neossat/NEOSSAT_240__30_2026025124741.fits").astype(float)
 widths = []
 for y in range(20, 190, 10):
     row = np.median(d[y - 2:y + 3, 680:760], axis=0)

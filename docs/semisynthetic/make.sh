@@ -10,7 +10,7 @@ soig=target/release/soig
 tmp=$(mktemp -d)
 # All three frames (the paper's campaigns use the dark frame only; see README).
 "$soig" run campaigns/paper-fixed-original-semisynthetic-small.toml --out "$tmp/semi" --quiet \
-    --set 'background.paths=["../../shared/data/neossat/NEOSSAT_240__30_2020214095318.fits", "../../shared/data/neossat/NEOSSAT_240__30_2026025124741.fits", "../../shared/data/neossat/NEOS_SCI_2024239174545_cord.fits"]'
+    --set 'background.paths=["../tests/fixtures/neossat/NEOSSAT_240__30_2020214095318.fits", "../tests/fixtures/neossat/NEOSSAT_240__30_2026025124741.fits", "../tests/fixtures/neossat/NEOS_SCI_2024239174545_cord.fits"]'
 "$soig" run campaigns/paper-fixed-original-small.toml --out "$tmp/syn" --quiet
 png_of() { find "$1/images" -name "$2.png" | head -1; }
 first_on() { # the first image whose truth names frame $2

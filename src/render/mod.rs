@@ -205,7 +205,24 @@ pub fn render_with_jitter(
     let first = at(scene.trajectory.first());
     let last = at(scene.trajectory.last());
     let g = &scene.geometry;
+    // The FITS WCS: the mid-exposure projection moved by the mean jitter (artifacts).
+    let wcs = scene
+        .projection(sensor)
+        .shifted(jitter_mean.0, jitter_mean.1);
+    let through_wcs = |p: Option<[f64; 2]>| {
+        p.map_or([f64::NAN; 2], |[x, y]| {
+            let (ra, dec) = wcs.sky(x, y);
+            [ra, dec]
+        })
+    };
+    let coordinates = match scene.pointing {
+        crate::scene::Pointing::Survey(_) => {
+            format!("{} {}", truth::COORDINATES, truth::SURVEY_COORDINATES)
+        }
+        crate::scene::Pointing::Fixed { .. } => truth::COORDINATES.to_string(),
+    };
     let truth = Truth {
+        coordinates,
         image_index: scene.image_index,
         object: scene.debris_name.clone(),
         norad: scene.norad,
@@ -215,6 +232,8 @@ pub fn render_with_jitter(
         jitter_mean_px: [jitter_mean.0, jitter_mean.1],
         streak_start_px: first.unwrap_or([f64::NAN; 2]),
         streak_end_px: last.unwrap_or([f64::NAN; 2]),
+        streak_start_wcs_radec_deg: through_wcs(first),
+        streak_end_wcs_radec_deg: through_wcs(last),
         label_box_px: flux_box(&canvas.debris, width, height, LABEL_SHARE),
         frame: None,
         label_box_final_px: None,

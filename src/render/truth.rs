@@ -8,6 +8,9 @@ use crate::scene::Pointing;
 /// The truth of one image, written as the JSON sidecar.
 #[derive(Clone, Debug, Serialize)]
 pub struct Truth {
+    /// What the coordinates below mean: [`COORDINATES`], and in survey pointing
+    /// [`SURVEY_COORDINATES`] too.
+    pub coordinates: String,
     pub image_index: u64,
     pub object: String,
     pub norad: u64,
@@ -22,6 +25,11 @@ pub struct Truth {
     /// included (may lie outside the image).
     pub streak_start_px: [f64; 2],
     pub streak_end_px: [f64; 2],
+    /// The (RA, Dec), degrees, that the image's FITS WCS gives at `streak_start_px` and
+    /// `streak_end_px`: what an astrometric measurement of the streak's ends reads. In survey
+    /// pointing they differ from the ephemeris' start and end (see [`SURVEY_COORDINATES`]).
+    pub streak_start_wcs_radec_deg: [f64; 2],
+    pub streak_end_wcs_radec_deg: [f64; 2],
     /// The label box of the debris as rendered, in the original image (None when no debris
     /// photon landed).
     pub label_box_px: Option<BoxPx>,
@@ -63,6 +71,22 @@ pub struct Truth {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ephemeris: Option<crate::sighting::Ephemeris>,
 }
+
+/// The pixel and sky conventions of every truth, written into it so that it says them itself.
+pub const COORDINATES: &str = "pixels (*_px): 0-based, pixel centres at integers: pixel i spans \
+[i - 0.5, i + 0.5), FITS pixel p is at p - 1, row 0 is the first row of the FITS array and the \
+top row of the PNG (YOLO labels and soig detect's outputs use pixel edges instead: pixel i spans \
+[i, i + 1], +0.5 from these); streak_*_px, label_box_px in the original image, \
+label_box_final_px in the PNG's frame (frame.matrix maps one to the other). RA/Dec in degrees \
+on GCRS axes (ICRS to milliarcseconds), geometric unless render.apparent_positions; the FITS \
+WCS is the pointing at mid-exposure.";
+
+/// The survey addendum: why the ephemeris' start and end do not land on the streak's ends.
+pub const SURVEY_COORDINATES: &str = "Survey pointing: the boresight drifts during the \
+exposure, so ephemeris.debris_radec_start_deg and _end_deg (where the debris is on the sky at \
+those instants) fall away from streak_start_px and streak_end_px through the mid-exposure WCS \
+(by the drift over half the exposure); streak_start_wcs_radec_deg and streak_end_wcs_radec_deg \
+are what that WCS gives at the streak's ends.";
 
 /// ISO 8601 UTC with microseconds, e.g. `2022-03-04T05:06:07.891234` (a millisecond is 6 px
 /// of LEO motion; the FITS `DATE-OBS` and the truth's `start_utc`). Truncated, not rounded, so

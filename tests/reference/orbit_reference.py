@@ -29,7 +29,7 @@ from astropy.coordinates import GCRS, TEME, CartesianRepresentation
 from astropy.time import Time
 from sgp4.api import WGS72, Satrec
 
-CATALOG = sys.argv[1] if len(sys.argv) > 1 else "/work/shared/data/tle/catalog-2022-01-22.tle"
+CATALOG = sys.argv[1] if len(sys.argv) > 1 else "campaigns/data/catalog-2022-01-22.tle"
 DATES = ["2022-01-01T00:00:00", "2022-06-15T12:34:56", "2022-12-31T23:00:00"]
 SGP4_EPOCH0 = datetime(1949, 12, 31)  # sgp4init's epoch: days since 1949-12-31 00:00 UT
 
