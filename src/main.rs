@@ -173,6 +173,10 @@ enum Command {
         /// Replace the generated block of this Markdown file (e.g. results/README.md).
         #[arg(long)]
         readme: Option<PathBuf>,
+        /// The model queue (models/queue.toml): add a table of what trained each row's model
+        /// (file, epochs, stages) and its gap to the paper.
+        #[arg(long)]
+        models: Option<PathBuf>,
     },
     /// Run soig's detectors on real frames (FITS of any numeric type, PNG): detections.csv and
     /// .json (pixel boxes, streak ends, RA/Dec through the frame's WCS), YOLO-format
@@ -551,9 +555,14 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Tables { runs, out, readme } => {
-            user_errors(|| soig::tables::write(&runs, out.as_deref(), readme.as_deref()))
-        }
+        Command::Tables {
+            runs,
+            out,
+            readme,
+            models,
+        } => user_errors(|| {
+            soig::tables::write(&runs, models.as_deref(), out.as_deref(), readme.as_deref())
+        }),
         Command::Enhance {
             inputs,
             out,
