@@ -155,11 +155,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-survey-original-semisynthetic.toml",
-        "224434a8b68ea27a20b66d9fc477b66f36f5818cc293f29d4de2ae5b203e9a5a",
+        "c549274b817132ac0b7accf031b6b1de96d42c739f0fae5110d7109b02942924",
     ),
     (
         "results/campaigns/results-survey-original-synthetic.toml",
-        "1a32135041fc75d97f6762abe6857ac83437443abb86b6ec93e2e75c04527148",
+        "baf9ddd965079d0ae8be2ca4aabc82fa954eadc6208c81b67bcdf3383d598476",
     ),
     (
         "results/campaigns/results-survey-rotated-semisynthetic.toml",
