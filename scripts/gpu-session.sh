@@ -4,7 +4,8 @@
 # $OUT/<model>/stage<N>/ exactly the files to commit, which `python3 scripts/relay.py adopt`
 # takes into models/ here. Needs what scripts/relay-carry.sh puts in .carry/ (the stripped
 # soig and the training wheels the machine lacks; torch is there). Extra arguments go to
-# `relay.py stage` (e.g. --model fixed-original).
+# `relay.py stage` (e.g. --model fixed-original). $RELAY_CARRY, $RELAY_QUEUE and $RELAY_PYTHON
+# override .carry, models/queue.toml and python3 (scripts/relay-test.sh runs this on CPU).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 : "${OUT:?gpu-session: \$OUT is not set (run this on the lent machine, through the device tool)}"
@@ -15,4 +16,5 @@ if compgen -G "$carry/whl/*.whl" > /dev/null; then
   python3 -m pip install -q --no-index --no-deps --target /tmp/relay-site "$carry"/whl/*.whl
   export PYTHONPATH=/tmp/relay-site${PYTHONPATH:+:$PYTHONPATH}
 fi
-python3 scripts/relay.py stage --soig "$carry/soig" --python python3 --out "$OUT" --monitor "$@"
+python3 scripts/relay.py --queue "${RELAY_QUEUE:-models/queue.toml}" stage --soig "$carry/soig" \
+  --python "${RELAY_PYTHON:-python3}" --out "$OUT" --monitor "$@"

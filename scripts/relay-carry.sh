@@ -9,5 +9,5 @@ cargo build --release --locked
 mkdir -p .carry/whl
 strip -o .carry/soig target/release/soig
 python3 -m pip download -q --no-deps --only-binary=:all: --python-version 3.12 -d .carry/whl \
-  ultralytics==8.4.190 ultralytics-thop onnxslim
+  ultralytics==8.4.190 ultralytics-thop ultralytics-platform onnxslim
 du -sh .carry

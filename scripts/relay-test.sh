@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The training relay end to end on CPU (issue 32): a queue of one tiny model (12 images of
 # 256 px, imgsz 64, 2 epochs a stage, 4 in all) goes queue -> stage -> adopt twice, the second
-# stage training on from the first's adopted weights; a stage adopted twice, a stage whose
+# stage training on from the first's adopted weights and run by the loan's own command,
+# scripts/gpu-session.sh (with the stage settings the queue gives the paper models: amp, which
+# stays off on CPU, and validation at the end only); a stage adopted twice, a stage whose
 # file was changed, and a finished queue are refused. Needs a Python with Ultralytics
 # (`bash scripts/setup-train.sh`; $SOIG_TRAIN_PYTHON overrides) and target/release/soig.
 set -euo pipefail
@@ -20,7 +22,7 @@ weights = "$work/models/tiny.pt"
 onnx = "$work/models/tiny.onnx"
 records = "$work/models/training/tiny"
 epochs_target = 4
-stage = { epochs = 2, set = ["images=12", "sensor.width_px=256", "sensor.height_px=256", 'stages=["render","enhance","dataset"]', "train.device=cpu", "train.workers=0", "train.imgsz=64", "train.batch=4"] }
+stage = { epochs = 2, set = ["images=12", "sensor.width_px=256", "sensor.height_px=256", 'stages=["render","enhance","dataset"]', "train.device=cpu", "train.workers=0", "train.imgsz=64", "train.batch=4", "train.amp=true", "train.val=false"] }
 stages_done = 0   # progress, rewritten by adopt
 epochs_done = 0
 weights_sha256 = ""
@@ -38,7 +40,9 @@ relay adopt "$work/out1/tiny/stage1"
 [ "$(relay next)" = "tiny stage 2 (2 of 4 epochs done)" ]
 expect_fail "the queue's next is stage 2" adopt "$work/out1/tiny/stage1"
 cp "$work/models/tiny.pt" "$work/stage1.pt"
-relay stage --out "$work/out2" --python "$PY" --work "$work/w2" > "$work/stage2.txt"
+mkdir "$work/carry" && cp target/release/soig "$work/carry/soig"
+OUT="$work/out2" RELAY_CARRY="$work/carry" RELAY_QUEUE="$Q" RELAY_PYTHON="$PY" \
+  bash scripts/gpu-session.sh --work "$work/w2" > "$work/stage2.txt"
 cp -r "$work/out2" "$work/bad"
 printf 'x' >> "$work/bad/tiny/stage2/model.onnx"
 expect_fail "model.onnx: sha256" adopt "$work/bad/tiny/stage2"
@@ -64,6 +68,8 @@ m2 = json.loads((w / "models/training/tiny/stage2/manifest-summary.json").read_t
 assert m2["training"]["start_weights"]["sha256"] == s1["weights_sha256"], m2["training"]
 assert m2["training"]["finished"] is True and "files" not in m2, m2.keys()
 for n in (1, 2):
+    args = json.loads((w / f"models/training/tiny/stage{n}/summary.json").read_text())["args"]
+    assert args["amp"] is True and args["no_val"] is True and args["epochs"] == 2, args
     d = w / f"models/training/tiny/stage{n}"
     assert sorted(p.name for p in d.iterdir()) == sorted(
         ["stage.json", "summary.json", "results.csv", "soig-train.txt", "manifest-summary.json"]), n
