@@ -39,5 +39,5 @@ for experiment in experiments/*.toml; do
     done
 done
 SOIG="$soig" OUT="$scratch/ci-quickstart" bash scripts/ci.sh --pin
-"$soig" tables results/results-* --readme results/README.md > /dev/null
+"$soig" tables results/results-* --models models/queue.toml --readme results/README.md > /dev/null
 echo "results regenerated (scratch: $scratch)"

@@ -203,6 +203,10 @@ enum Command {
         /// and `<!-- soig tables end -->`, which it must already hold.
         #[arg(long)]
         readme: Option<PathBuf>,
+        /// The model queue (models/queue.toml): add a table of what trained each row's model
+        /// (file, epochs, stages) and its gap to the paper.
+        #[arg(long)]
+        models: Option<PathBuf>,
     },
     /// Run soig's detectors on real frames (FITS of any numeric type, PNG): detections.csv and
     /// .json (pixel boxes, streak ends, RA/Dec through the frame's WCS), YOLO-format
@@ -640,9 +644,14 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Tables { runs, out, readme } => {
-            user_errors(|| soig::tables::write(&runs, out.as_deref(), readme.as_deref()))
-        }
+        Command::Tables {
+            runs,
+            out,
+            readme,
+            models,
+        } => user_errors(|| {
+            soig::tables::write(&runs, models.as_deref(), out.as_deref(), readme.as_deref())
+        }),
         Command::Enhance {
             inputs,
             out,

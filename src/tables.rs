@@ -5,6 +5,9 @@
 //!
 //! A row is placed by its report's test set ("fixed, original frame, synthetic"); timing comes
 //! from `timing.md` (before issue #31, from `report.md`), which both a run and a row hold.
+//! Given the model queue (`models/queue.toml`), a last table says what trained each row's
+//! model (found by the ONNX sha256 the report records): its file, epochs and stages, and the
+//! row's gap to the paper.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -148,19 +151,110 @@ fn timing(md: &str) -> (Option<f64>, Vec<(String, f64)>) {
     (conversion, detection)
 }
 
+/// A model of `models/queue.toml` (`[[model]]`, trained by the relay, or `[[retired]]`): what
+/// the tables need of it.
+#[derive(serde::Deserialize)]
+struct QueuedModel {
+    onnx: String,
+    onnx_sha256: String,
+    epochs_done: u32,
+    stages_done: u32,
+    epochs_target: Option<u32>,
+}
+
+#[derive(serde::Deserialize)]
+struct Queue {
+    #[serde(default)]
+    model: Vec<QueuedModel>,
+    #[serde(default)]
+    retired: Vec<QueuedModel>,
+}
+
+impl Queue {
+    fn read(path: &Path) -> anyhow::Result<Queue> {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        toml::from_str(&text).with_context(|| format!("{}: not a model queue", path.display()))
+    }
+
+    fn find(&self, sha256: &str) -> Option<&QueuedModel> {
+        // An entry not trained yet has an empty sha256, which no report records.
+        self.model
+            .iter()
+            .chain(&self.retired)
+            .find(|m| m.onnx_sha256 == sha256)
+    }
+}
+
 /// The tables of `dirs` (run folders or `results/` rows), in the paper's row order.
 pub struct Tables {
     rows: Vec<Row>,
+    /// The model queue, when given.
+    queue: Option<Queue>,
 }
 
 impl Tables {
-    pub fn load(dirs: &[PathBuf]) -> anyhow::Result<Tables> {
+    pub fn load(dirs: &[PathBuf], queue: Option<&Path>) -> anyhow::Result<Tables> {
         let mut rows = dirs
             .iter()
             .map(|d| Row::load(d))
             .collect::<anyhow::Result<Vec<_>>>()?;
         rows.sort_by_key(Row::place);
-        Ok(Tables { rows })
+        let queue = queue.map(Queue::read).transpose()?;
+        Ok(Tables { rows, queue })
+    }
+
+    /// What trained each row's model, and the row's mAP50-95 against the paper's.
+    fn models_markdown(&self, s: &mut String) {
+        let Some(queue) = &self.queue else {
+            return;
+        };
+        let _ = writeln!(s, "### What trained each row's model\n");
+        let _ = writeln!(
+            s,
+            "| row | detector | model | epochs | stages | mAP50-95 | paper mAP50-95 | gap |"
+        );
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
+        for r in &self.rows {
+            let paper = r.paper_metrics()[3].parse::<f64>().ok();
+            for d in &r.report.detectors {
+                let Some(sha) = &d.model_sha256 else {
+                    continue;
+                };
+                let (model, epochs, stages) = match queue.find(sha) {
+                    Some(m) => (
+                        format!(
+                            "`{}`",
+                            Path::new(&m.onnx)
+                                .file_name()
+                                .map_or(m.onnx.clone(), |f| f.to_string_lossy().into_owned())
+                        ),
+                        match m.epochs_target {
+                            Some(target) => format!("{} of {target}", m.epochs_done),
+                            None => format!("{} (not in the relay)", m.epochs_done),
+                        },
+                        m.stages_done.to_string(),
+                    ),
+                    None => (
+                        format!("sha256 `{}…`, not in the queue", &sha[..sha.len().min(8)]),
+                        "-".into(),
+                        "-".into(),
+                    ),
+                };
+                let ours = d.ultralytics.map50_95;
+                let (p, gap) = paper.map_or(("-".into(), "-".into()), |p| {
+                    (format!("{p}"), format!("{:+.3}", ours - p))
+                });
+                let _ = writeln!(
+                    s,
+                    "| {}, {} | {} | {model} | {epochs} | {stages} | {ours:.3} | {p} | {gap} |",
+                    capitalised(&r.pointing),
+                    r.label(),
+                    d.detector,
+                );
+            }
+        }
+        let _ = writeln!(s);
     }
 
     /// Tables 3, 5 and 6 as Markdown.
@@ -206,6 +300,7 @@ impl Tables {
             }
             let _ = writeln!(s);
         }
+        self.models_markdown(&mut s);
         if !self.rows.is_empty() {
             let detectors = self.detectors();
             let _ = writeln!(
@@ -359,9 +454,15 @@ pub fn block(text: &str) -> Option<&str> {
     Some(text[start..end].trim_matches('\n'))
 }
 
-/// `soig tables`: print the Markdown; write the files into `out`, and the block of `readme`.
-pub fn write(dirs: &[PathBuf], out: Option<&Path>, readme: Option<&Path>) -> anyhow::Result<()> {
-    let t = Tables::load(dirs)?;
+/// `soig tables`: print the Markdown; write the files into `out`, and the block of `readme`;
+/// with `queue`, say what trained each row's model.
+pub fn write(
+    dirs: &[PathBuf],
+    queue: Option<&Path>,
+    out: Option<&Path>,
+    readme: Option<&Path>,
+) -> anyhow::Result<()> {
+    let t = Tables::load(dirs, queue)?;
     let md = t.markdown();
     print!("{md}");
     if let Some(out) = out {

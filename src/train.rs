@@ -193,6 +193,13 @@ pub fn fit(
     if let Some(cache) = t.cache {
         args.extend(["--cache".into(), cache.as_str().into()]);
     }
+    // Only when set, so that the command line of a campaign without them is what it was.
+    if t.amp == Some(true) {
+        args.push("--amp".into());
+    }
+    if t.val == Some(false) {
+        args.push("--no-val".into());
+    }
     if let Some(b) = chunk.budget_s {
         args.extend(["--budget-s".into(), b.to_string()]);
     }

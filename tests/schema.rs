@@ -159,7 +159,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-survey-original-synthetic.toml",
-        "1a32135041fc75d97f6762abe6857ac83437443abb86b6ec93e2e75c04527148",
+        "baf9ddd965079d0ae8be2ca4aabc82fa954eadc6208c81b67bcdf3383d598476",
     ),
     (
         "results/campaigns/results-survey-rotated-semisynthetic.toml",

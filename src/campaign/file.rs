@@ -450,6 +450,14 @@ pub struct Train {
     /// beside the PNGs); left out, each epoch decodes every PNG again (models/README.md).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cache: Option<TrainCache>,
+    /// Mixed precision on a CUDA GPU, without Ultralytics' AMP check (it downloads weights
+    /// to compare with); left out or false, full precision (`amp=False`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amp: Option<bool>,
+    /// `false`: validate only at the schedule's end (and when Ultralytics stops it), not after
+    /// every epoch; left out, every epoch (Ultralytics' default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub val: Option<bool>,
 }
 
 /// Where Ultralytics keeps decoded training images between epochs.
