@@ -180,8 +180,13 @@ pub fn dataset_paths(index: u64, subset: Option<Subset>) -> (String, String) {
     }
 }
 
-/// WCS and provenance keywords of an image.
-fn provenance_cards(p: &Provenance, sensor: &Sensor, scene: &Scene, exposure: &Exposure) -> Cards {
+/// WCS and provenance keywords of an image (both of its FITS carry them, with their BUNIT).
+pub fn provenance_cards(
+    p: &Provenance,
+    sensor: &Sensor,
+    scene: &Scene,
+    exposure: &Exposure,
+) -> Cards {
     let t = &exposure.truth;
     let [jx, jy] = t.jitter_mean_px;
     let mut cards = fits::wcs_cards(&scene.projection(sensor).shifted(jx, jy));

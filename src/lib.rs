@@ -40,6 +40,7 @@
 //! `examples/render_one.rs` builds its campaign in code; [`run`] writes a whole campaign with a
 //! [`Progress`] callback of the caller's.
 
+pub use artifacts::{Provenance, provenance_cards};
 pub use campaign::{Campaign, CampaignError};
 pub use error::{Error, Result};
 pub use manifest::{Manifest, verify};

@@ -157,6 +157,16 @@ impl Campaign {
         Campaign::compose(text, path, &[])
     }
 
+    /// `from_toml`, with `key.path=value` overrides applied on top, in order, as `--set` does:
+    /// the Python bindings keep a campaign as (text, path, overrides).
+    pub fn from_toml_with_overrides(
+        text: &str,
+        path: &Path,
+        overrides: &[String],
+    ) -> Result<Campaign, CampaignError> {
+        Campaign::compose(text, path, overrides)
+    }
+
     fn compose(text: &str, path: &Path, overrides: &[String]) -> Result<Campaign, CampaignError> {
         let layers = Layers::read(text, path, overrides)?;
         let file = layers.parse()?;

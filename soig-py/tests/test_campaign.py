@@ -1,0 +1,182 @@
+"""soig from Python against the `soig` command: same digest, same pixels, same errors."""
+
+import json
+import math
+import subprocess
+
+import numpy as np
+import pytest
+
+import soig
+from conftest import REPO, cli_sets, small_campaign, soig_command
+from fitsread import read
+
+
+def test_run_has_the_cli_digest(cli_run, tmp_path):
+    """soig.run of the campaign built with .set writes what `soig run --set` writes."""
+    summary = soig.run(small_campaign(), out=tmp_path / "py")
+    cli = soig.verify(cli_run)
+    assert cli["ok"], cli["problems"]
+    assert summary["images"] == 20
+    assert summary["digest"] == cli["digest"]
+    assert soig.verify(tmp_path / "py") == {**cli, "digest": summary["digest"]}
+
+
+@pytest.mark.parametrize("index", range(20))
+def test_image_is_the_run_files(cli_run, index):
+    """campaign.image(i) is, bit for bit, image i of the CLI's run: both FITS, the label, the
+    truth record; and its header the FITS's keywords."""
+    im = small_campaign().image(index)
+    stem = f"img_{index:06d}"
+    header, noisy = read(cli_run / "fits" / f"{stem}.fits")
+    _, clean = read(cli_run / "fits" / f"{stem}_clean.fits")
+    assert im.noisy.dtype == np.float32 and im.clean.dtype == np.int32
+    # Bit equality (views as integers: NaN == NaN, -0.0 != 0.0).
+    assert np.array_equal(im.noisy.view(np.int32), noisy.view(np.int32))
+    assert np.array_equal(im.clean, clean)
+    truth = json.loads((cli_run / "truth" / f"{stem}.json").read_text())
+    assert im.truth == truth
+    labels = list(cli_run.glob(f"labels/*/{stem}.txt"))
+    assert len(labels) == 1
+    assert im.label == labels[0].read_text()
+    assert im.png is not None and im.png.shape == (header["GEONAX2"], header["GEONAX1"])
+    for key, value in im.header.items():
+        if isinstance(value, float):
+            # cfitsio writes a real keyword with 15 significant digits (%.15G).
+            assert math.isclose(header[key], value, rel_tol=1e-14, abs_tol=1e-300), key
+        else:
+            assert header[key] == value, key
+    assert header["BUNIT"] == "adu" and "BUNIT" not in im.header
+
+
+def test_images_are_deterministic_in_any_order():
+    c = small_campaign()
+    a = [c.image(i).noisy for i in (3, 1)]
+    b = [c.image(i).noisy for i in (1, 3)]
+    assert np.array_equal(a[0], b[1]) and np.array_equal(a[1], b[0])
+    assert not np.array_equal(a[0], a[1])
+
+
+def test_dict_and_text_make_the_file_campaign():
+    """A campaign from a dict or TOML text hashes as the same file's."""
+    text = (REPO / "campaigns" / "quickstart.toml").read_text()
+    path = REPO / "campaigns" / "quickstart.toml"
+    from_file = soig.Campaign(path)
+    assert soig.Campaign.from_toml(text, path=path).hash == from_file.hash
+    d = {
+        "name": "demo",
+        "images": 3,
+        "observer": {"norad": 1, "elements": {"period_min": 100.0, "inclination_deg": 98.0,
+                                              "apogee_km": 800.0, "perigee_km": 790.0}},
+        "debris": [{"norad": 40649, "elements": {"period_min": 375.48, "inclination_deg": 52.78,
+                                                 "apogee_km": 20490.0, "perigee_km": 1235.0}}],
+        "sensor": {"width_px": 256, "height_px": 256},
+    }
+    toml_text = """name = "demo"
+images = 3
+[observer]
+norad = 1
+elements = { period_min = 100.0, inclination_deg = 98.0, apogee_km = 800.0, perigee_km = 790.0 }
+[[debris]]
+norad = 40649
+elements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }
+[sensor]
+width_px = 256
+height_px = 256
+"""
+    assert soig.Campaign(d).hash == soig.Campaign.from_toml(toml_text).hash
+    assert soig.Campaign(d).resolved()["sensor"]["width_px"] == 256
+
+
+def cli_error(*args) -> str:
+    """The message `soig run` prints for a refused campaign (exit 2)."""
+    p = subprocess.run([str(soig_command()), "run", *map(str, args)], capture_output=True,
+                       text=True)
+    assert p.returncode == 2, p
+    return p.stderr.strip().removeprefix("error: ")
+
+
+def test_set_errors_are_the_cli_errors():
+    path = REPO / "campaigns" / "quickstart.toml"
+    c = soig.Campaign(path)
+    before = c.hash
+    with pytest.raises(soig.CampaignError) as e:
+        c.set("sensor.width_px", -3)
+    assert e.value.field == "sensor.width_px" and e.value.line is None
+    assert str(e.value) == cli_error(path, "--set", "sensor.width_px=-3")
+    assert c.hash == before  # a refused value leaves the campaign as it was
+    with pytest.raises(soig.CampaignError) as e:
+        c.set("sensor.gain_e_per_adu", "fast")
+    assert e.value.field == "sensor.gain_e_per_adu"
+
+
+def test_file_errors_name_file_line_field(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('name = "bad"\nseed = 1\nimages = "many"\n')
+    with pytest.raises(soig.CampaignError) as e:
+        soig.Campaign(bad)
+    assert (e.value.file, e.value.line, e.value.field) == (str(bad), 3, "images")
+    assert str(e.value) == cli_error(bad)
+    with pytest.raises(soig.CampaignError) as e:
+        soig.Campaign(tmp_path / "missing.toml")
+    assert e.value.file == str(tmp_path / "missing.toml")
+    with pytest.raises(soig.CampaignError) as e:
+        soig.Campaign.from_toml("name = \n", path="inline.toml")
+    assert e.value.file == "inline.toml" and e.value.line == 1
+
+
+def test_bad_values_and_indices():
+    c = soig.Campaign(REPO / "campaigns" / "quickstart.toml")
+    with pytest.raises(ValueError):
+        c.set("images", None)
+    with pytest.raises(IndexError):
+        c.image(c.images)
+    with pytest.raises(TypeError):
+        soig.Campaign(42)
+
+
+def test_verify_finds_a_changed_file(cli_run, tmp_path):
+    import shutil
+
+    copy = tmp_path / "copy"
+    shutil.copytree(cli_run, copy)
+    (copy / "truth" / "img_000000.json").write_text("{}\n")
+    v = soig.verify(copy)
+    assert not v["ok"] and any("img_000000.json" in p for p in v["problems"])
+    with pytest.raises(soig.SoigError):
+        soig.verify(tmp_path / "nothing-here")
+
+
+def test_eval_of_the_labels_as_predictions(cli_run, tmp_path):
+    """Predictions equal to the labels (confidence 0.9) score 1 everywhere; one dropped
+    image's prediction costs its recall."""
+    labels = cli_run / "labels" / "train"
+    preds = tmp_path / "preds"
+    preds.mkdir()
+    files = sorted(labels.glob("*.txt"))
+    for f in files[1:]:
+        lines = [l + " 0.9" for l in f.read_text().splitlines() if l.strip()]
+        (preds / f.name).write_text("\n".join(lines) + "\n")
+    (preds / files[0].name).write_text("")
+    m = soig.eval(labels, preds)
+    n = sum(1 for f in files if f.read_text().strip())
+    assert m["mode"] == "ultralytics" and m["images"] == len(files) and m["objects"] == n
+    assert m["precision"] == 1.0
+    assert m["at_threshold"]["tp"] == n - 1 and m["at_threshold"]["fn"] == 1
+    assert soig.eval(labels, preds, mode="coco")["mode"] == "coco"
+    with pytest.raises(ValueError):
+        soig.eval(labels, preds, mode="voc")
+
+
+def test_detect_an_array_as_its_fits(cli_run):
+    """The streak detector on an image's array finds what it finds on the run's FITS."""
+    im = small_campaign().image(0)
+    from_array = soig.detect(im.noisy)
+    from_file = soig.detect(cli_run / "fits" / "img_000000.fits")
+    assert from_array[0]["file"] == "<array 0>"
+    strip = lambda f: [{k: v for k, v in d.items() if k != "centre_radec" and k != "ends_radec"}
+                       for d in f["detections"]]
+    assert strip(from_array[0]) == strip(from_file[0])
+    assert len(from_file[0]["detections"]) >= 1  # image 0's streak is above the gate
+    with pytest.raises(ValueError):
+        soig.detect(np.zeros((2, 2, 2), dtype=np.float32))
