@@ -155,7 +155,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-survey-original-semisynthetic.toml",
-        "0e06b721b684f9eef7c3824c4e34e78a9d01bd5717f8f4e59b9bd0f8d7bd202e",
+        "ad75f2464a269f229782e04c0b299159db0e5d7145cc325f9c9725cc39b113ee",
     ),
     (
         "results/campaigns/results-survey-original-synthetic.toml",
