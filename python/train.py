@@ -206,6 +206,7 @@ def main():
         "torch": torch.__version__,
         "args": vars(a),
         "plots": plots,
+        "amp": bool(trainer.amp),  # whether mixed precision ran (--amp asks; CUDA only)
         "finished": finished,
         "chunks": chunks,
         "epochs_completed": epochs_completed,

@@ -68,8 +68,10 @@ m2 = json.loads((w / "models/training/tiny/stage2/manifest-summary.json").read_t
 assert m2["training"]["start_weights"]["sha256"] == s1["weights_sha256"], m2["training"]
 assert m2["training"]["finished"] is True and "files" not in m2, m2.keys()
 for n in (1, 2):
-    args = json.loads((w / f"models/training/tiny/stage{n}/summary.json").read_text())["args"]
+    summary = json.loads((w / f"models/training/tiny/stage{n}/summary.json").read_text())
+    args = summary["args"]
     assert args["amp"] is True and args["no_val"] is True and args["epochs"] == 2, args
+    assert summary["amp"] is False, "AMP asked for, but it must stay off on CPU"
     d = w / f"models/training/tiny/stage{n}"
     assert sorted(p.name for p in d.iterdir()) == sorted(
         ["stage.json", "summary.json", "results.csv", "soig-train.txt", "manifest-summary.json"]), n
