@@ -27,7 +27,12 @@ fn a_run_too_big_for_its_disk_is_refused_with_both_figures_before_writing() {
     let o = Command::new(env!("CARGO_BIN_EXE_soig"))
         .arg("run")
         .arg(root.join("campaigns/quickstart.toml"))
-        .args(["--quiet", "--set", "images=10000000", "--out"])
+        .args(["--quiet", "--set", "images=10000000"])
+        .args([
+            "--set",
+            "stages=[\"render\", \"enhance\", \"dataset\"]",
+            "--out",
+        ])
         .arg(&out)
         .output()
         .unwrap();
