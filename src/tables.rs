@@ -490,7 +490,7 @@ pub fn write(
         })?;
     }
     if let Some(readme) = readme {
-        let text = std::fs::read_to_string(readme)
+        let text = crate::hash::read_regular_to_string(readme)
             .with_context(|| format!("reading {}", readme.display()))?;
         let new = replace_block(&text, md.trim_end())
             .with_context(|| format!("{}: no `{BEGIN}` ... `{END}` block", readme.display()))?;

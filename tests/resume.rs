@@ -176,12 +176,18 @@ fn a_killed_pid_1_in_its_own_namespace_resumes_on_retry() {
     let out = t.join("out");
     let pod = || {
         let mut cmd = Command::new("unshare");
-        cmd.args(["-p", "-f", "--mount-proc", env!("CARGO_BIN_EXE_soig"), "run"])
-            .arg(&c)
-            .args(["--quiet", "--out"])
-            .arg(&out)
-            .env("RAYON_NUM_THREADS", "1")
-            .env_remove("SOIG_TEST_ABORT_AT");
+        cmd.args([
+            "-p",
+            "-f",
+            "--mount-proc",
+            env!("CARGO_BIN_EXE_soig"),
+            "run",
+        ])
+        .arg(&c)
+        .args(["--quiet", "--out"])
+        .arg(&out)
+        .env("RAYON_NUM_THREADS", "1")
+        .env_remove("SOIG_TEST_ABORT_AT");
         cmd
     };
     let probe = Command::new("unshare")
@@ -191,18 +197,15 @@ fn a_killed_pid_1_in_its_own_namespace_resumes_on_retry() {
         eprintln!("skipped: `unshare -p -f --mount-proc` is not available here (needs root)");
         return;
     }
-    let mut child = pod().stderr(std::process::Stdio::piped()).spawn().unwrap();
+    let child = pod().stderr(std::process::Stdio::piped()).spawn().unwrap();
     let started = Instant::now();
     while journaled(&out, 1) < 3 && started.elapsed() < Duration::from_secs(60) {
         std::thread::sleep(Duration::from_millis(10));
     }
     assert!(journaled(&out, 1) >= 3, "the pod's run never got going");
     // The pod's soig is unshare's only child: SIGKILL it, as a node would.
-    let children = std::fs::read_to_string(format!(
-        "/proc/{0}/task/{0}/children",
-        child.id()
-    ))
-    .unwrap();
+    let children =
+        std::fs::read_to_string(format!("/proc/{0}/task/{0}/children", child.id())).unwrap();
     let soig: i32 = children.split_whitespace().next().unwrap().parse().unwrap();
     let lock = std::fs::read_to_string(t.join(".out.lock")).unwrap();
     assert!(lock.starts_with("pid 1 on host"), "{lock}");
@@ -216,9 +219,13 @@ fn a_killed_pid_1_in_its_own_namespace_resumes_on_retry() {
     assert!(t.join(".out.partial-1").is_dir(), "no staging folder left");
 
     let retry = pod().output().unwrap();
-    let said = String::from_utf8_lossy(&retry.stderr);
-    assert!(retry.status.success(), "{said}");
-    assert!(said.contains("resuming the run killed earlier"), "{said}");
+    assert!(
+        retry.status.success(),
+        "{}",
+        String::from_utf8_lossy(&retry.stderr)
+    );
+    let said = String::from_utf8_lossy(&retry.stdout);
+    assert!(said.contains("resumed)"), "{said}");
     let verify = Command::new(env!("CARGO_BIN_EXE_soig"))
         .arg("verify")
         .arg(&out)

@@ -266,7 +266,7 @@ impl BackgroundModel {
                     path: p.clone(),
                     message: format!(
                         "the background frames up to this one hold {pixels} pixels, more than the {MAX_BACKGROUND_PIXELS} (~{} GB in memory) soig keeps: use fewer frames",
-                        MAX_BACKGROUND_PIXELS * 12 >> 30
+                        (MAX_BACKGROUND_PIXELS * 12) >> 30
                     ),
                 });
             }
