@@ -69,5 +69,6 @@ print(f"{N} images x {ROUNDS} rounds, quickstart 1024 px; {os.uname().nodename}"
 print(os.popen("uptime").read().strip())
 for name, v in rows.items():
     wall = statistics.median(w for w, _ in v) / N * 1e3
-    cpu = statistics.median(c for _, c in v) / N * 1e3
-    print(f"{name:22s} wall {wall:7.1f} ms/image   cpu {cpu:7.1f} ms/image")
+    cpus = sorted(c / N * 1e3 for _, c in v)
+    print(f"{name:22s} wall {wall:6.1f} ms/image   cpu {statistics.median(cpus):5.1f} ms/image"
+          f" (rounds {cpus[0]:.1f}-{cpus[-1]:.1f})")

@@ -256,6 +256,14 @@ impl NativeCampaign {
             })?;
         let exposure = &products.exposure;
         let (w, h) = (exposure.width, exposure.height);
+        // What `soig run` refuses to write, this refuses to return (an extreme gain or frame).
+        let bad = exposure.adu.iter().filter(|v| !v.is_finite()).count();
+        if bad > 0 {
+            return Err(SoigError::new_err(format!(
+                "image {index}: {bad} non-finite pixels in the noisy image (sensor.gain_e_per_adu {})",
+                self.campaign.resolved.sensor.gain_e_per_adu
+            )));
+        }
         let cards = soig::provenance_cards(
             &p.provenance,
             &p.experiment.sensor,

@@ -180,3 +180,17 @@ def test_detect_an_array_as_its_fits(cli_run):
     assert len(from_file[0]["detections"]) >= 1  # image 0's streak is above the gate
     with pytest.raises(ValueError):
         soig.detect(np.zeros((2, 2, 2), dtype=np.float32))
+
+
+def test_no_scene_names_the_debris_entry_as_the_cli(tmp_path):
+    """An image no draw can show is refused at the debris entry the command names."""
+    path = REPO / "campaigns" / "quickstart.toml"
+    c = soig.Campaign(path).set("images", 1).set("visibility.snr_min", 1e12)
+    c.set("visibility.max_attempts", 50)
+    with pytest.raises(soig.CampaignError) as e:
+        c.image(0)
+    assert e.value.field.startswith("debris[") and e.value.line is not None
+    cli = cli_error(path, "--out", tmp_path / "o", "--set", "images=1",
+                    "--set", "visibility.snr_min=1e12",
+                    "--set", "visibility.max_attempts=50")
+    assert cli.startswith(f"{e.value.file}:{e.value.line}: field `{e.value.field}`: ")
