@@ -194,3 +194,38 @@ def test_no_scene_names_the_debris_entry_as_the_cli(tmp_path):
                     "--set", "visibility.snr_min=1e12",
                     "--set", "visibility.max_attempts=50")
     assert cli.startswith(f"{e.value.file}:{e.value.line}: field `{e.value.field}`: ")
+
+
+def test_the_gil_is_released_while_rendering():
+    """Another Python thread runs while images render. With a 1 s switch interval the
+    rendering thread keeps the GIL from `started.set()` until it gives it up itself, so the
+    main thread's loop can only turn while the GIL is released inside `image` (or once a
+    render outlasts 1 s of wall time, which only makes the test weaker, never fail). With
+    `sum(range(3 * 10**6))` in place of `c.image(i)`, which holds the GIL, the loop turned 0
+    times."""
+    import sys
+    import threading
+
+    c = small_campaign()
+    c.image(0)  # inputs built before timing
+    started, done = threading.Event(), threading.Event()
+
+    def render():
+        started.set()
+        for i in range(3):
+            c.image(i)
+        done.set()
+
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1.0)
+    try:
+        t = threading.Thread(target=render)
+        t.start()
+        started.wait()
+        turns = 0
+        while not done.is_set():
+            turns += 1
+        t.join()
+    finally:
+        sys.setswitchinterval(old)
+    assert turns > 0
