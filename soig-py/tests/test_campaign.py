@@ -9,6 +9,7 @@ import pytest
 
 import soig
 from conftest import REPO, cli_sets, small_campaign, soig_command
+import pngread
 from fitsread import read
 
 
@@ -24,8 +25,8 @@ def test_run_has_the_cli_digest(cli_run, tmp_path):
 
 @pytest.mark.parametrize("index", range(20))
 def test_image_is_the_run_files(cli_run, index):
-    """campaign.image(i) is, bit for bit, image i of the CLI's run: both FITS, the label, the
-    truth record; and its header the FITS's keywords."""
+    """campaign.image(i) is, bit for bit, image i of the CLI's run: both FITS, the PNG, the
+    label, the truth record; and its header the FITS's keywords."""
     im = small_campaign().image(index)
     stem = f"img_{index:06d}"
     header, noisy = read(cli_run / "fits" / f"{stem}.fits")
@@ -40,6 +41,8 @@ def test_image_is_the_run_files(cli_run, index):
     assert len(labels) == 1
     assert im.label == labels[0].read_text()
     assert im.png is not None and im.png.shape == (header["GEONAX2"], header["GEONAX1"])
+    pngs = list(cli_run.glob(f"images/*/{stem}.png"))
+    assert len(pngs) == 1 and np.array_equal(im.png, pngread.read(pngs[0]))
     for key, value in im.header.items():
         if isinstance(value, float):
             # cfitsio writes a real keyword with 15 significant digits (%.15G).
