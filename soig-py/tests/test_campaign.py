@@ -9,6 +9,7 @@ import pytest
 
 import soig
 from conftest import REPO, cli_sets, small_campaign, soig_command
+import pngread
 from fitsread import read
 
 
@@ -24,8 +25,8 @@ def test_run_has_the_cli_digest(cli_run, tmp_path):
 
 @pytest.mark.parametrize("index", range(20))
 def test_image_is_the_run_files(cli_run, index):
-    """campaign.image(i) is, bit for bit, image i of the CLI's run: both FITS, the label, the
-    truth record; and its header the FITS's keywords."""
+    """campaign.image(i) is, bit for bit, image i of the CLI's run: both FITS, the PNG, the
+    label, the truth record; and its header the FITS's keywords."""
     im = small_campaign().image(index)
     stem = f"img_{index:06d}"
     header, noisy = read(cli_run / "fits" / f"{stem}.fits")
@@ -40,6 +41,8 @@ def test_image_is_the_run_files(cli_run, index):
     assert len(labels) == 1
     assert im.label == labels[0].read_text()
     assert im.png is not None and im.png.shape == (header["GEONAX2"], header["GEONAX1"])
+    pngs = list(cli_run.glob(f"images/*/{stem}.png"))
+    assert len(pngs) == 1 and np.array_equal(im.png, pngread.read(pngs[0]))
     for key, value in im.header.items():
         if isinstance(value, float):
             # cfitsio writes a real keyword with 15 significant digits (%.15G).
@@ -194,3 +197,38 @@ def test_no_scene_names_the_debris_entry_as_the_cli(tmp_path):
                     "--set", "visibility.snr_min=1e12",
                     "--set", "visibility.max_attempts=50")
     assert cli.startswith(f"{e.value.file}:{e.value.line}: field `{e.value.field}`: ")
+
+
+def test_the_gil_is_released_while_rendering():
+    """Another Python thread runs while images render. With a 1 s switch interval the
+    rendering thread keeps the GIL from `started.set()` until it gives it up itself, so the
+    main thread's loop can only turn while the GIL is released inside `image` (or once a
+    render outlasts 1 s of wall time, which only makes the test weaker, never fail). With
+    `sum(range(3 * 10**6))` in place of `c.image(i)`, which holds the GIL, the loop turned 0
+    times."""
+    import sys
+    import threading
+
+    c = small_campaign()
+    c.image(0)  # inputs built before timing
+    started, done = threading.Event(), threading.Event()
+
+    def render():
+        started.set()
+        for i in range(3):
+            c.image(i)
+        done.set()
+
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1.0)
+    try:
+        t = threading.Thread(target=render)
+        t.start()
+        started.wait()
+        turns = 0
+        while not done.is_set():
+            turns += 1
+        t.join()
+    finally:
+        sys.setswitchinterval(old)
+    assert turns > 0
