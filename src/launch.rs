@@ -627,6 +627,23 @@ mod tests {
     }
 
     #[test]
+    fn k8s_submit_stops_on_a_failed_job() {
+        let files = k8s(&launch(2), "reg/soig:1", "soig-data");
+        let submit = text(&files, "submit.sh");
+        // `kubectl wait --for=condition=complete` never returns for a Failed Job.
+        assert!(!submit.contains("kubectl wait --for"), "{submit}");
+        assert!(
+            submit.contains("*\" Failed \"*) echo \"job $1 failed:\""),
+            "{submit}"
+        );
+        assert!(submit.contains("finished soig-quick-start\n"), "{submit}");
+        assert!(
+            submit.contains("finished soig-quick-start-merge\n"),
+            "{submit}"
+        );
+    }
+
+    #[test]
     fn yaml_is_block_style_with_quoted_strings() {
         let v = json!({"a": 1, "b": ["x y", {"c": "yes", "d": [2]}], "e f": {}, "g": []});
         assert_eq!(

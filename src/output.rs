@@ -563,3 +563,37 @@ impl Drop for Lock {
         let _ = std::fs::remove_file(&self.path);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mount_points_are_read_with_their_escapes() {
+        assert_eq!(
+            unescape_mountinfo("/data/My\\040Project"),
+            "/data/My Project"
+        );
+        assert_eq!(unescape_mountinfo("/a\\134b"), "/a\\b");
+        assert_eq!(unescape_mountinfo("/trailing\\04"), "/trailing\\04");
+    }
+
+    #[test]
+    fn a_soig_output_holding_a_users_file_is_not_replaced() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("out");
+        std::fs::create_dir_all(out.join("truth")).unwrap();
+        std::fs::write(out.join("truth/a.json"), "{}").unwrap();
+        Manifest::build(&out, "h", serde_json::json!({}), &[])
+            .unwrap()
+            .write(&out)
+            .unwrap();
+        check_replaceable(&out, &out).unwrap();
+        std::fs::write(out.join("truth/notes.txt"), "mine").unwrap();
+        let e = check_replaceable(&out, &out).unwrap_err().to_string();
+        assert!(
+            e.contains("truth/notes.txt") && e.contains("does not list"),
+            "{e}"
+        );
+    }
+}
