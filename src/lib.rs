@@ -88,6 +88,7 @@ pub mod shard;
 pub mod sighting;
 pub mod simulate;
 pub mod sky;
+pub mod star_trails;
 pub mod study;
 pub mod summary;
 pub mod sweep;

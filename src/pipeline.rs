@@ -17,7 +17,7 @@ use crate::artifacts::{self, Provenance, WrittenPng};
 use crate::campaign::{Campaign, PointingMode, Stage};
 use crate::dataset::{self, Subset};
 use crate::detect::Detection;
-use crate::detect::streak::{StreakParams, detect_streaks};
+use crate::detect::streak::{StreakParams, detect_streaks_among_stars};
 use crate::detect::yolo::{YoloDetector, YoloParams};
 use crate::experiment::{self, Experiment};
 use crate::geometry::FrameKind;
@@ -550,6 +550,7 @@ pub(crate) fn finish(
         .map(|r| {
             let subset = dataset_stage.then(|| subsets[r.index as usize]);
             Written {
+                index: r.index,
                 subset,
                 png: r.png.as_ref().map(|p| WrittenPng {
                     path: dir.join(artifacts::dataset_paths(r.index, subset).0),
@@ -669,6 +670,7 @@ fn yolo_params(campaign: &Campaign) -> YoloParams {
 
 /// What an image left for the detect stage.
 struct Written {
+    index: u64,
     subset: Option<Subset>,
     png: Option<WrittenPng>,
     /// FITS -> PNG conversion time (frame, enhancement, encoding), seconds; None when a shard
@@ -724,15 +726,38 @@ fn detect_and_report(
     let mut runs = Vec::new();
     if c.detect.classical {
         let params: &StreakParams = &c.detect.streak;
+        // Survey images: the catalogued stars' trails, predicted as the images were drawn.
+        let sky = match c.pointing.mode {
+            PointingMode::Survey => {
+                Some((Experiment::new(campaign), experiment::inputs(campaign)?))
+            }
+            PointingMode::Fixed => None,
+        };
         progress.start("streak", images.len() as u64);
         let results: Vec<(Vec<Detection>, f64)> = images
             .par_iter()
             .zip(chosen.par_iter())
             .map(|(img, w)| -> anyhow::Result<(Vec<Detection>, f64)> {
                 let pixels = load(img)?;
+                // The prediction is part of the detector's time.
                 let t = Instant::now();
-                let found =
-                    detect_streaks(&pixels, img.width, img.height, params, w.trail_angle_deg);
+                let stars = match &sky {
+                    Some((x, inputs)) => Some(crate::star_trails::of_image(
+                        x,
+                        inputs,
+                        w.index,
+                        &dir.join("truth").join(format!("{}.json", img.stem)),
+                    )?),
+                    None => None,
+                };
+                let found = detect_streaks_among_stars(
+                    &pixels,
+                    img.width,
+                    img.height,
+                    params,
+                    w.trail_angle_deg,
+                    stars.as_deref(),
+                );
                 progress.advance();
                 Ok((
                     found.into_iter().map(|c| c.detection).collect(),

@@ -436,7 +436,7 @@ fn efficiency_markdown(s: &mut String, efficiencies: &[Efficiency], conf: f64) {
     let _ = writeln!(s, "\n## Detection efficiency\n");
     let _ = writeln!(
         s,
-        "Recall of each detector at confidence {conf}, IoU 0.5, by the debris' magnitude (`efficiency.csv` also bins by matched-filter SNR and streak length; `efficiency.png` plots all three).\n"
+        "Recall of each detector at confidence {conf}, IoU 0.5, by the debris' magnitude (`efficiency.csv` also bins by matched-filter SNR, streak length and, for survey images, angle to the star trails; `efficiency.png` plots all four).\n"
     );
     for e in efficiencies {
         let _ = writeln!(
@@ -464,6 +464,26 @@ fn efficiency_markdown(s: &mut String, efficiencies: &[Efficiency], conf: f64) {
             let _ = write!(s, " {:.2} |", e.curves[&magnitude][k].recall);
         }
         let _ = writeln!(s);
+    }
+    // Survey images: recall by the angle between the streak and the star trails.
+    let angle = efficiency::Quantity::TrailAngleDeg;
+    if !first.curves[&angle].is_empty() {
+        let _ = write!(s, "\n| angle to the star trails | objects |");
+        for e in efficiencies {
+            let _ = write!(s, " recall {} |", e.detector);
+        }
+        let _ = write!(s, "\n|---|---|");
+        for _ in efficiencies {
+            let _ = write!(s, "---|");
+        }
+        let _ = writeln!(s);
+        for (k, b) in first.curves[&angle].iter().enumerate() {
+            let _ = write!(s, "| {}-{} deg | {} |", b.lo, b.hi, b.objects);
+            for e in efficiencies {
+                let _ = write!(s, " {:.2} |", e.curves[&angle][k].recall);
+            }
+            let _ = writeln!(s);
+        }
     }
     let _ = writeln!(s, "\n![efficiency](efficiency.png)");
 }

@@ -32,6 +32,15 @@ impl Jitter {
         )
     }
 
+    /// No jitter: every source where the pointing puts it (a prediction adds the image's
+    /// recorded mean shift instead, `trails::star_trails`).
+    pub(super) fn still(exposure_s: f64) -> Jitter {
+        Jitter {
+            dt: exposure_s.max(f64::MIN_POSITIVE),
+            shift: vec![(0.0, 0.0); 2],
+        }
+    }
+
     /// Steps of the path.
     pub fn steps(&self) -> usize {
         self.shift.len() - 1

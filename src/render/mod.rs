@@ -20,6 +20,7 @@ mod photons;
 mod sources;
 #[cfg(test)]
 mod tests;
+pub mod trails;
 mod truth;
 
 pub use jitter::Jitter;

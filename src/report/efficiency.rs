@@ -27,6 +27,9 @@ pub struct ObjectFacts {
     pub snr: f64,
     /// Distance between the first and last trajectory samples, pixels.
     pub length_px: f64,
+    /// Angle between the streak and the star trails, degrees in [0, 90] (survey pointing; NaN
+    /// under fixed pointing, where stars make no trails).
+    pub trail_angle_deg: f64,
 }
 
 impl ObjectFacts {
@@ -38,6 +41,11 @@ impl ObjectFacts {
             snr_matched_filter: f64,
             streak_start_px: [f64; 2],
             streak_end_px: [f64; 2],
+            pointing: Pointing,
+        }
+        #[derive(Deserialize)]
+        struct Pointing {
+            trail_angle_deg: Option<f64>,
         }
         let text = std::fs::read_to_string(path)
             .map_err(|e| anyhow::anyhow!("reading {}: {e}", path.display()))?;
@@ -49,6 +57,10 @@ impl ObjectFacts {
             magnitude: s.magnitude,
             snr: s.snr_matched_filter,
             length_px: (x1 - x0).hypot(y1 - y0),
+            trail_angle_deg: s.pointing.trail_angle_deg.map_or(f64::NAN, |t| {
+                let d = ((y1 - y0).atan2(x1 - x0).to_degrees() - t).rem_euclid(180.0);
+                d.min(180.0 - d)
+            }),
         })
     }
 }
@@ -60,13 +72,20 @@ pub enum Quantity {
     Magnitude,
     SnrMatchedFilter,
     StreakLengthPx,
+    /// Angle to the star trails in three bands: 0-2, 2-7 and 7-90 degrees (within 7 degrees
+    /// the angle alone no longer tells debris from stars, issue #30).
+    TrailAngleDeg,
 }
 
+/// Edges of the bands of angle to the star trails, degrees.
+const TRAIL_ANGLE_EDGES: [f64; 4] = [0.0, 2.0, 7.0, 90.0];
+
 impl Quantity {
-    pub const ALL: [Quantity; 3] = [
+    pub const ALL: [Quantity; 4] = [
         Quantity::Magnitude,
         Quantity::SnrMatchedFilter,
         Quantity::StreakLengthPx,
+        Quantity::TrailAngleDeg,
     ];
 
     pub fn label(self) -> &'static str {
@@ -74,6 +93,7 @@ impl Quantity {
             Quantity::Magnitude => "debris magnitude",
             Quantity::SnrMatchedFilter => "matched-filter SNR",
             Quantity::StreakLengthPx => "streak length (px)",
+            Quantity::TrailAngleDeg => "angle to the star trails (deg)",
         }
     }
 
@@ -82,6 +102,7 @@ impl Quantity {
             Quantity::Magnitude => "magnitude",
             Quantity::SnrMatchedFilter => "snr_matched_filter",
             Quantity::StreakLengthPx => "streak_length_px",
+            Quantity::TrailAngleDeg => "trail_angle_deg",
         }
     }
 
@@ -90,6 +111,7 @@ impl Quantity {
             Quantity::Magnitude => f.magnitude,
             Quantity::SnrMatchedFilter => f.snr,
             Quantity::StreakLengthPx => f.length_px,
+            Quantity::TrailAngleDeg => f.trail_angle_deg,
         }
     }
 
@@ -97,6 +119,14 @@ impl Quantity {
     /// on an octave scale).
     fn bin(self, v: f64) -> Option<i64> {
         let k = match self {
+            Quantity::TrailAngleDeg if (0.0..=90.0).contains(&v) => {
+                return TRAIL_ANGLE_EDGES[1..]
+                    .iter()
+                    .position(|&e| v < e)
+                    .or(Some(2))
+                    .map(|k| k as i64);
+            }
+            Quantity::TrailAngleDeg => return None,
             Quantity::Magnitude => (v / 0.5).floor(),
             _ if v > 0.0 => v.log2().floor(),
             _ => return None,
@@ -107,6 +137,10 @@ impl Quantity {
     fn edges(self, k: i64) -> (f64, f64) {
         match self {
             Quantity::Magnitude => (k as f64 * 0.5, (k + 1) as f64 * 0.5),
+            Quantity::TrailAngleDeg => (
+                TRAIL_ANGLE_EDGES[k as usize],
+                TRAIL_ANGLE_EDGES[k as usize + 1],
+            ),
             _ => (2f64.powi(k as i32), 2f64.powi(k as i32 + 1)),
         }
     }
@@ -114,7 +148,7 @@ impl Quantity {
     /// The bin's centre: arithmetic for magnitude, geometric for octaves.
     fn centre(self, lo: f64, hi: f64) -> f64 {
         match self {
-            Quantity::Magnitude => (lo + hi) / 2.0,
+            Quantity::Magnitude | Quantity::TrailAngleDeg => (lo + hi) / 2.0,
             _ => (lo * hi).sqrt(),
         }
     }
@@ -319,8 +353,8 @@ pub fn plot(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
         RGBColor(30, 90, 200),
         RGBColor(30, 150, 60),
     ];
-    crate::plot::png(path, (1500, 460), |root| {
-        let panels = root.split_evenly((1, 3));
+    crate::plot::png(path, (2000, 460), |root| {
+        let panels = root.split_evenly((1, Quantity::ALL.len()));
         for (panel, q) in panels.iter().zip(Quantity::ALL) {
             let bins = all.iter().flat_map(|e| &e.curves[&q]);
             let (lo, hi) = bins.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), b| {
@@ -389,7 +423,9 @@ pub fn plot(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
                 }};
             }
             match q {
-                Quantity::Magnitude => draw!(builder.build_cartesian_2d(lo..hi, 0.0..1.05)?),
+                Quantity::Magnitude | Quantity::TrailAngleDeg => {
+                    draw!(builder.build_cartesian_2d(lo..hi, 0.0..1.05)?)
+                }
                 _ => draw!(builder.build_cartesian_2d((lo..hi).log_scale(), 0.0..1.05)?),
             }
         }
@@ -446,6 +482,7 @@ mod tests {
             magnitude,
             snr,
             length_px,
+            trail_angle_deg: f64::NAN,
         }
     }
 
@@ -549,5 +586,31 @@ mod tests {
         );
         let m = &e.curves[&Quantity::Magnitude];
         assert_eq!((m.len(), m[0].objects), (1, 1));
+    }
+
+    #[test]
+    fn recall_by_angle_to_the_trails_in_three_bands() {
+        let mut f = vec![facts(10.0, 20.0, 100.0); 4];
+        for (x, a) in f.iter_mut().zip([0.5, 1.99, 5.0, 45.0]) {
+            x.trail_angle_deg = a;
+        }
+        let evals = [
+            image(true, 0),
+            image(false, 0),
+            image(true, 0),
+            image(true, 0),
+        ];
+        let e = efficiency("d", &evals, &f, 0.5);
+        let bins: Vec<(f64, f64, usize, usize)> = e.curves[&Quantity::TrailAngleDeg]
+            .iter()
+            .map(|b| (b.lo, b.hi, b.objects, b.found))
+            .collect();
+        assert_eq!(
+            bins,
+            vec![(0.0, 2.0, 2, 1), (2.0, 7.0, 1, 1), (7.0, 90.0, 1, 1)]
+        );
+        // Fixed pointing: no trails, no angle bins.
+        let e = efficiency("d", &evals, &[facts(10.0, 20.0, 100.0); 4], 0.5);
+        assert!(e.curves[&Quantity::TrailAngleDeg].is_empty());
     }
 }

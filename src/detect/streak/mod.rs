@@ -84,11 +84,14 @@ mod merge;
 mod noise;
 mod output;
 mod refine;
+mod sky;
 mod smooth;
 mod stars;
 mod stats;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_sky;
 mod trails;
 
 use super::Detection;
@@ -99,6 +102,7 @@ use merge::angle_diff_deg;
 use noise::LineNoise;
 use output::confidence;
 use refine::{Ctx, Point, Seed, Seg};
+pub use sky::StarTrail;
 use smooth::{equalise_edge_noise, gaussian_kernel, smooth};
 use stars::mask_stars;
 use stats::map_stats;
@@ -402,6 +406,70 @@ pub fn detect_streaks(
     params: &StreakParams,
     star_trail_angle_deg: Option<f64>,
 ) -> Vec<Candidate> {
+    detect(pixels, width, height, params, star_trail_angle_deg, None)
+}
+
+/// [`detect_streaks`] knowing the catalogued stars' predicted trails in the image (`stars`,
+/// see [`StarTrail`]). [`detect_streaks`] subtracts everything along `star_trail_angle_deg`
+/// and drops every candidate within `star_trail_tolerance_deg` of it, which loses debris
+/// moving nearly with the stars. A second pass keeps the trails (no subtraction), masks the
+/// predicted ones where they show (subtracts each one's median cross-section) and drops a candidate only where they explain it (module
+/// `sky`); of it, the candidates the first pass could not have given (aligned with the trails)
+/// and not already found join the first pass's. The first pass stays, because a trail that
+/// is not subtracted splits a bright streak crossing it into fragments that do not always
+/// join again. `None`, or no trail direction: as [`detect_streaks`].
+pub fn detect_streaks_among_stars(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    params: &StreakParams,
+    star_trail_angle_deg: Option<f64>,
+    stars: Option<&[StarTrail]>,
+) -> Vec<Candidate> {
+    let trail = star_trail_angle_deg.filter(|a| a.is_finite());
+    let mut found = detect(pixels, width, height, params, star_trail_angle_deg, None);
+    let (Some(stars), Some(trail)) = (stars, trail) else {
+        return found;
+    };
+    let p = Sanitized::new(params);
+    let near_trail = |c: &Candidate| {
+        let slack = (4.0 * p.psf_sigma / c.length_px.max(1.0))
+            .atan()
+            .to_degrees();
+        angle_diff_deg(c.orientation_deg, trail) <= p.trail_tol + slack
+    };
+    let first: Vec<(Point, Point)> = found
+        .iter()
+        .map(|c| ((c.ends[0][0], c.ends[0][1]), (c.ends[1][0], c.ends[1][1])))
+        .collect();
+    let new_one = |c: &Candidate| {
+        let mid = (
+            0.5 * (c.ends[0][0] + c.ends[1][0]),
+            0.5 * (c.ends[0][1] + c.ends[1][1]),
+        );
+        first
+            .iter()
+            .all(|&(a, b)| refine::point_segment_distance(mid, a, b) > p.dup_dist)
+    };
+    found.extend(
+        detect(pixels, width, height, params, Some(trail), Some(stars))
+            .into_iter()
+            .filter(|c| near_trail(c) && new_one(c)),
+    );
+    found.sort_by(|a, b| b.detection.score.total_cmp(&a.detection.score));
+    found.truncate(p.max_candidates);
+    found
+}
+
+/// The detector's pipeline; with `stars`, the star-aware variant of its second pass.
+fn detect(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    params: &StreakParams,
+    star_trail_angle_deg: Option<f64>,
+    stars: Option<&[StarTrail]>,
+) -> Vec<Candidate> {
     assert_eq!(
         pixels.len(),
         width * height,
@@ -430,7 +498,11 @@ pub fn detect_streaks(
     let kappa = map_stats(&z, w, h).1.max(0.5 * kappa_white);
     let inv_kappa = (1.0 / kappa) as f32;
     z.iter_mut().for_each(|v| *v *= inv_kappa);
-    if let Some(a) = star_trail_angle_deg.filter(|a| a.is_finite()) {
+    // The map before any trail is subtracted: what the star-aware test compares levels on.
+    let sky = stars.map(|t| (sky::Sky::new(t, &z, w, h, &p), z.clone()));
+    if let Some((sky, _)) = &sky {
+        sky.subtract(&mut z, w, h);
+    } else if let Some(a) = star_trail_angle_deg.filter(|a| a.is_finite()) {
         remove_trails(&mut z, w, h, a.to_radians(), &p);
     }
     mask_stars(&mut z, w, h, &p);
@@ -469,12 +541,13 @@ pub fn detect_streaks(
     let trail = star_trail_angle_deg.filter(|a| a.is_finite());
     // A short segment's orientation is uncertain by about its width over its length, so the
     // tolerance grows by atan(4 psf_sigma / length).
-    let aligned = |s: &Seg| match trail {
-        Some(a) => {
+    let aligned = |s: &Seg| match (&sky, trail) {
+        (Some((sky, z_sky)), _) => sky.explains(s, z_sky, w, h, p.trail_tol),
+        (None, Some(a)) => {
             let slack = (4.0 * p.psf_sigma / s.length.max(1.0)).atan().to_degrees();
             angle_diff_deg(s.theta.to_degrees(), a) <= p.trail_tol + slack
         }
-        None => false,
+        (None, None) => false,
     };
     let kmax = p.half_lengths.iter().copied().max().unwrap_or(10) as f64 * 2.0 + 1.0;
     let mut frags: Vec<Seg> = Vec::new();

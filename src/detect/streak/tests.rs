@@ -10,7 +10,7 @@ use std::f64::consts::PI;
 mod confidence;
 
 const BG: f64 = 100.0;
-const NOISE: f64 = 8.0;
+pub(super) const NOISE: f64 = 8.0;
 const PSF: f64 = 1.5;
 
 /// Abramowitz & Stegun 7.1.26 (|error| < 1.5e-7).
@@ -42,7 +42,16 @@ fn add_star(img: &mut [f64], w: usize, h: usize, x: f64, y: f64, amp: f64) {
 
 /// A trail from (x0, y0) to (x1, y1): Gaussian cross-section of peak `amp`, erf ends.
 #[allow(clippy::too_many_arguments)]
-fn add_segment(img: &mut [f64], w: usize, h: usize, x0: f64, y0: f64, x1: f64, y1: f64, amp: f64) {
+pub(super) fn add_segment(
+    img: &mut [f64],
+    w: usize,
+    h: usize,
+    x0: f64,
+    y0: f64,
+    x1: f64,
+    y1: f64,
+    amp: f64,
+) {
     let len = (x1 - x0).hypot(y1 - y0);
     let (ux, uy) = ((x1 - x0) / len, (y1 - y0) / len);
     let r = 6.0 * PSF;
@@ -66,7 +75,7 @@ fn add_segment(img: &mut [f64], w: usize, h: usize, x0: f64, y0: f64, x1: f64, y
 
 /// The label box of the generator: all but 0.25 % of the flux on each side of each axis,
 /// whole pixels, in pixel-edge coordinates.
-fn truth_box(streak: &[f64], w: usize, h: usize) -> [f64; 4] {
+pub(super) fn truth_box(streak: &[f64], w: usize, h: usize) -> [f64; 4] {
     let mut mx = vec![0.0; w];
     let mut my = vec![0.0; h];
     for y in 0..h {
@@ -103,7 +112,7 @@ fn truth_box(streak: &[f64], w: usize, h: usize) -> [f64; 4] {
     [x1, y1, x2, y2]
 }
 
-fn iou(a: &[f64; 4], d: &Detection) -> f64 {
+pub(super) fn iou(a: &[f64; 4], d: &Detection) -> f64 {
     let ix = (a[2].min(d.x2) - a[0].max(d.x1)).max(0.0);
     let iy = (a[3].min(d.y2) - a[1].max(d.y1)).max(0.0);
     let inter = ix * iy;
@@ -111,7 +120,7 @@ fn iou(a: &[f64; 4], d: &Detection) -> f64 {
     if ua > 0.0 { inter / ua } else { 0.0 }
 }
 
-fn quantise(img: &[f64], rng: &mut ChaCha8Rng) -> Vec<u8> {
+pub(super) fn quantise(img: &[f64], rng: &mut ChaCha8Rng) -> Vec<u8> {
     let n = Normal::new(0.0, NOISE).unwrap();
     img.iter()
         .map(|&v| (v + BG + n.sample(rng)).round().clamp(0.0, 255.0) as u8)

@@ -1,0 +1,267 @@
+//! Star-aware detection: the catalogued stars' predicted trails in the image (from the frame's
+//! WCS, its pointing over the exposure, the exposure timing and the star catalogue; see
+//! `render::trails` for how a run predicts them) are subtracted from the smoothed map where they
+//! show (the median along each trail at each lateral offset), and a candidate is a star's when predicted trails cover it and it is no brighter than
+//! those trails are elsewhere. A debris streak beside, along or across a trail therefore
+//! survives where the angle alone (`star_trail_tolerance_deg`) would drop it.
+
+use super::Sanitized;
+use super::merge::angle_diff_deg;
+use super::refine::{Seg, point_segment_distance};
+use super::stats::median_of;
+use crate::imaging::bilinear;
+
+/// A catalogued star's predicted path in the detector's image: pixel centres at integers,
+/// linear between nodes (one node: a star that does not move).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StarTrail {
+    pub nodes: Vec<(f64, f64)>,
+    /// Expected photo-electrons of the star while its trail is in the image.
+    pub electrons: f64,
+}
+
+/// Unit-noise level, in the smoothed map, below which a trail or its wings are noise: a trail
+/// is subtracted only if three quarters of it are at least this bright.
+const SHOWS_SIGMA: f64 = 1.0;
+/// A trail's light is subtracted out to where a Gaussian of its level falls below this.
+const FADE_SIGMA: f64 = 1.0;
+/// A candidate is a star's if predicted trails lie within their reach of this share of its
+/// axis samples (the rest: its ends' uncertainty) ...
+const COVERED_SHARE: f64 = 0.8;
+/// ... and its level is at most this many times the level of those trails elsewhere, plus
+/// `LEVEL_SLACK_SIGMA` (a star trail measured twice agrees far better; debris lying on a faint
+/// trail is several times brighter than it).
+const LEVEL_RATIO: f64 = 2.0;
+const LEVEL_SLACK_SIGMA: f64 = 3.0;
+
+/// A predicted trail prepared for one image: its samples inside the image, the map's level
+/// along it and how far its light reaches.
+struct Prepared {
+    nodes: Vec<(f64, f64)>,
+    /// Points along the trail 1 px apart, inside the image, with the map's value there.
+    samples: Vec<(f64, f64, f64)>,
+    /// Distance from the path within which the trail's light stands above `FADE_SIGMA`.
+    reach: f64,
+    /// Bounding box of the nodes, grown by `reach`.
+    bbox: [f64; 4],
+}
+
+/// The predicted trails of one image, measured on its smoothed unit-noise map `z` before
+/// subtraction.
+pub(super) struct Sky {
+    trails: Vec<Prepared>,
+    /// Smoothed PSF sigma (the PSF convolved with the matched filter's Gaussian), pixels.
+    se: f64,
+}
+
+impl Sky {
+    pub(super) fn new(trails: &[StarTrail], z: &[f32], w: usize, h: usize, p: &Sanitized) -> Sky {
+        let se = std::f64::consts::SQRT_2 * p.psf_sigma;
+        let inside =
+            |x: f64, y: f64| x >= 0.0 && y >= 0.0 && x <= (w - 1) as f64 && y <= (h - 1) as f64;
+        let trails = trails
+            .iter()
+            .filter(|t| {
+                !t.nodes.is_empty() && t.nodes.iter().all(|n| n.0.is_finite() && n.1.is_finite())
+            })
+            .filter_map(|t| {
+                let mut samples = Vec::new();
+                let mut add = |x: f64, y: f64| {
+                    if inside(x, y) {
+                        samples.push((x, y, bilinear(z, w, h, x, y) as f64));
+                    }
+                };
+                if t.nodes.len() == 1 {
+                    add(t.nodes[0].0, t.nodes[0].1);
+                }
+                for pair in t.nodes.windows(2) {
+                    let (a, b) = (pair[0], pair[1]);
+                    let n = ((b.0 - a.0).hypot(b.1 - a.1)).ceil().max(1.0) as usize;
+                    for k in 0..n {
+                        let f = k as f64 / n as f64;
+                        add(a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1));
+                    }
+                }
+                if samples.is_empty() {
+                    return None;
+                }
+                let mut vals: Vec<f64> = samples.iter().map(|s| s.2).collect();
+                let level = median_of(&mut vals);
+                // Where a Gaussian of the smoothed PSF's width and this peak falls to the fade
+                // level, plus a pixel for the pointing jitter's blur.
+                let reach = se * (2.0 * (level / FADE_SIGMA).max(1.0).ln()).sqrt() + se + 1.0;
+                let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+                for &(x, y) in &t.nodes {
+                    (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
+                }
+                Some(Prepared {
+                    nodes: t.nodes.clone(),
+                    samples,
+                    reach,
+                    bbox: [x0 - reach, y0 - reach, x1 + reach, y1 + reach],
+                })
+            })
+            .collect();
+        Sky { trails, se }
+    }
+
+    /// Subtract every moving trail that shows (three quarters of its samples at least
+    /// `SHOWS_SIGMA`) from the map: at each lateral offset out to its reach, the median of the
+    /// map along the whole trail at that offset. A debris streak crossing the trail, or running
+    /// beside or along part of it, covers too little of it to move a median and keeps its
+    /// light. Returns how many trails were subtracted.
+    pub(super) fn subtract(&self, z: &mut [f32], w: usize, h: usize) -> usize {
+        let source = z.to_vec();
+        let mut stamp = vec![usize::MAX; w * h];
+        let mut done = 0;
+        for (id, t) in self.trails.iter().enumerate() {
+            if t.nodes.len() < 2 || t.samples.len() < 8 {
+                continue;
+            }
+            let mut vals: Vec<f64> = t.samples.iter().map(|s| s.2).collect();
+            vals.sort_by(f64::total_cmp);
+            if vals[vals.len() / 4] < SHOWS_SIGMA {
+                continue;
+            }
+            done += 1;
+            let (a, b) = (t.nodes[0], t.nodes[t.nodes.len() - 1]);
+            let len = (b.0 - a.0).hypot(b.1 - a.1).max(1e-9);
+            let (ux, uy) = ((b.0 - a.0) / len, (b.1 - a.1) / len);
+            let r = t.reach.ceil() as i64;
+            let profile: Vec<f64> = (-r..=r)
+                .map(|d| {
+                    let mut v: Vec<f64> = t
+                        .samples
+                        .iter()
+                        .map(|q| {
+                            let (x, y) = (q.0 - d as f64 * uy, q.1 + d as f64 * ux);
+                            bilinear(&source, w, h, x, y) as f64
+                        })
+                        .collect();
+                    median_of(&mut v)
+                })
+                .collect();
+            // Each pixel within the reach of the trail's samples, once, by its lateral offset.
+            for q in &t.samples {
+                for d in -(r + 1)..=(r + 1) {
+                    let (x, y) = ((q.0 - d as f64 * uy).round(), (q.1 + d as f64 * ux).round());
+                    if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
+                        continue;
+                    }
+                    let i = y as usize * w + x as usize;
+                    if stamp[i] == id {
+                        continue;
+                    }
+                    stamp[i] = id;
+                    let off = (x - q.0) * -uy + (y - q.1) * ux;
+                    let k = off + r as f64;
+                    if k < 0.0 || k > (2 * r) as f64 {
+                        continue;
+                    }
+                    let (k0, f) = (k.floor() as usize, k - k.floor());
+                    let k1 = (k0 + 1).min(profile.len() - 1);
+                    z[i] -= (profile[k0] * (1.0 - f) + profile[k1] * f) as f32;
+                }
+            }
+        }
+        done
+    }
+
+    /// Whether catalogued stars explain the segment `s`: predicted trails along its
+    /// direction (within `tolerance_deg` plus the orientation uncertainty of a short segment)
+    /// lie within their reach of `COVERED_SHARE` of its axis samples, and its level on the map
+    /// `z` is no more than `LEVEL_RATIO` times theirs elsewhere plus `LEVEL_SLACK_SIGMA`.
+    pub(super) fn explains(
+        &self,
+        s: &Seg,
+        z: &[f32],
+        w: usize,
+        h: usize,
+        tolerance_deg: f64,
+    ) -> bool {
+        let (e0, e1) = s.ends();
+        let slack = (4.0 * self.se / std::f64::consts::SQRT_2 / s.length.max(1.0))
+            .atan()
+            .to_degrees();
+        let seg_deg = s.theta.to_degrees();
+        let bbox = [
+            e0.0.min(e1.0),
+            e0.1.min(e1.1),
+            e0.0.max(e1.0),
+            e0.1.max(e1.1),
+        ];
+        // Trails near the segment, moving along it.
+        let near: Vec<&Prepared> = self
+            .trails
+            .iter()
+            .filter(|t| {
+                t.nodes.len() >= 2
+                    && t.bbox[0] <= bbox[2]
+                    && t.bbox[2] >= bbox[0]
+                    && t.bbox[1] <= bbox[3]
+                    && t.bbox[3] >= bbox[1]
+            })
+            .filter(|t| {
+                let (a, b) = (t.nodes[0], t.nodes[t.nodes.len() - 1]);
+                let deg = (b.1 - a.1).atan2(b.0 - a.0).to_degrees();
+                angle_diff_deg(deg, seg_deg) <= tolerance_deg + slack
+            })
+            .collect();
+        if near.is_empty() {
+            return false;
+        }
+        let n = (s.length / 2.0).ceil().max(1.0) as usize;
+        let mut covered = 0;
+        let mut used = vec![false; near.len()];
+        let mut level = Vec::with_capacity(n + 1);
+        for k in 0..=n {
+            let f = k as f64 / n as f64;
+            let q = (e0.0 + f * (e1.0 - e0.0), e0.1 + f * (e1.1 - e0.1));
+            if q.0 >= 0.0 && q.1 >= 0.0 && q.0 <= (w - 1) as f64 && q.1 <= (h - 1) as f64 {
+                level.push(bilinear(z, w, h, q.0, q.1) as f64);
+            }
+            let mut hit = false;
+            for (t, u) in near.iter().zip(used.iter_mut()) {
+                if distance_to_path(q, &t.nodes) <= t.reach {
+                    *u = true;
+                    hit = true;
+                }
+            }
+            covered += hit as usize;
+        }
+        if (covered as f64) < COVERED_SHARE * (n + 1) as f64 {
+            return false;
+        }
+        // The covering trails' level away from the segment: a star measured twice agrees.
+        let mut elsewhere: Vec<f64> = near
+            .iter()
+            .zip(&used)
+            .filter(|(_, u)| **u)
+            .flat_map(|(t, _)| {
+                t.samples
+                    .iter()
+                    .filter(|q| {
+                        point_segment_distance((q.0, q.1), e0, e1) > t.reach + 2.0 * self.se
+                    })
+                    .map(|q| q.2)
+            })
+            .collect();
+        if elsewhere.len() < 8 || level.is_empty() {
+            // The trails lie wholly under the segment: nothing to compare, and they cover it.
+            return true;
+        }
+        let theirs = median_of(&mut elsewhere).max(0.0);
+        median_of(&mut level) <= LEVEL_RATIO * theirs + LEVEL_SLACK_SIGMA
+    }
+}
+
+/// Distance from `q` to the polyline through `nodes`.
+fn distance_to_path(q: (f64, f64), nodes: &[(f64, f64)]) -> f64 {
+    if nodes.len() == 1 {
+        return (q.0 - nodes[0].0).hypot(q.1 - nodes[0].1);
+    }
+    nodes
+        .windows(2)
+        .map(|p| point_segment_distance(q, p[0], p[1]))
+        .fold(f64::INFINITY, f64::min)
+}

@@ -1,0 +1,104 @@
+//! Star-aware rejection (`sky`) on synthetic survey frames: horizontal star trails of 2.5 to 7.5
+//! noise sigmas whose paths are given exactly (as a run predicts them from the scene), and
+//! debris of 3 sigmas at 0, 1 and 3 degrees to them, or crossing them. The angle-only
+//! detector must drop debris within `star_trail_tolerance_deg` (5 degrees) of the trails; the
+//! star-aware one keeps it and still finds no star.
+
+use super::tests::{NOISE, add_segment, iou, quantise, truth_box};
+use super::*;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+const W: usize = 512;
+const H: usize = 512;
+
+/// Six horizontal trails from x = 50 to 450, 80 px apart, of 2.5 to 7.5 sigma: the image and
+/// their predicted paths.
+fn star_field() -> (Vec<f64>, Vec<StarTrail>) {
+    let mut img = vec![0.0; W * H];
+    let mut trails = Vec::new();
+    for (k, y) in [60.0, 140.0, 220.0, 300.0, 380.0, 460.0]
+        .into_iter()
+        .enumerate()
+    {
+        let amp = NOISE * (2.5 + k as f64);
+        add_segment(&mut img, W, H, 50.0, y, 450.0, y, amp);
+        trails.push(StarTrail {
+            nodes: vec![(50.0, y), (450.0, y)],
+            electrons: amp * 400.0,
+        });
+    }
+    (img, trails)
+}
+
+/// Candidates of confidence 0.5 and more, from the star-aware and the angle-only detector, on
+/// the star field with a 3-sigma debris streak from `a` to `b` (none if `None`), and the
+/// debris' label box.
+#[allow(clippy::type_complexity)]
+fn run(
+    debris: Option<((f64, f64), (f64, f64))>,
+    seed: u64,
+) -> (Vec<Candidate>, Vec<Candidate>, Option<[f64; 4]>) {
+    let (mut img, trails) = star_field();
+    let label = debris.map(|(a, b)| {
+        let mut alone = vec![0.0; W * H];
+        add_segment(&mut alone, W, H, a.0, a.1, b.0, b.1, 3.0 * NOISE);
+        img.iter_mut().zip(&alone).for_each(|(v, d)| *v += d);
+        truth_box(&alone, W, H)
+    });
+    let pixels = quantise(&img, &mut ChaCha8Rng::seed_from_u64(seed));
+    let p = StreakParams::default();
+    let confident = |c: &Candidate| c.detection.score >= 0.5;
+    let aware = detect_streaks_among_stars(&pixels, W, H, &p, Some(0.0), Some(&trails));
+    let angle_only = detect_streaks(&pixels, W, H, &p, Some(0.0));
+    (
+        aware.into_iter().filter(confident).collect(),
+        angle_only.into_iter().filter(confident).collect(),
+        label,
+    )
+}
+
+/// The debris is the one confident candidate, at IoU 0.5 with its label.
+fn found_alone(found: &[Candidate], label: &[f64; 4], what: &str) {
+    assert_eq!(found.len(), 1, "{what}: {found:#?}");
+    let overlap = iou(label, &found[0].detection);
+    assert!(
+        overlap >= 0.5,
+        "{what}: IoU {overlap:.2} with {label:?}: {found:#?}"
+    );
+}
+
+#[test]
+fn debris_parallel_to_the_trails_beside_one_is_found() {
+    // 12 px beside the 5.5-sigma trail at y = 300: beyond its light, within the angle rule.
+    let (aware, angle_only, label) = run(Some(((100.0, 312.0), (400.0, 312.0))), 1);
+    found_alone(&aware, &label.unwrap(), "0 deg");
+    assert!(
+        angle_only.is_empty(),
+        "the angle rule drops it: {angle_only:#?}"
+    );
+}
+
+#[test]
+fn debris_at_one_and_three_degrees_to_the_trails_is_found() {
+    for (deg, seed) in [(1.0f64, 2), (3.0, 3)] {
+        let rise = 300.0 * deg.to_radians().tan();
+        let (aware, _, label) = run(Some(((100.0, 250.0), (400.0, 250.0 + rise))), seed);
+        found_alone(&aware, &label.unwrap(), &format!("{deg} deg"));
+    }
+}
+
+#[test]
+fn debris_crossing_star_trails_is_found() {
+    // At 30 degrees across the trails at y = 140 and 220.
+    let (aware, _, label) = run(Some(((150.0, 100.0), (400.0, 244.3))), 4);
+    found_alone(&aware, &label.unwrap(), "crossing");
+}
+
+#[test]
+fn a_field_of_star_trails_alone_gives_nothing() {
+    for seed in 5..8 {
+        let (aware, _, _) = run(None, seed);
+        assert!(aware.is_empty(), "seed {seed}: {aware:#?}");
+    }
+}
