@@ -27,6 +27,9 @@
 //!    white-noise value and the one measured on the image (`noise`: real sensors' noise is
 //!    correlated and skewed). Per
 //!    pixel the maximum over filters and its orientation are kept.
+//!    3b. **Long lines** (`radon`): the same filter on the clipped map binned by 2, 4 and 8, so
+//!    that a sum covers 100-400 pixels and a streak too faint per pixel for step 3 but long
+//!    enough (integrated SNR grows as the square root of its length) still gives a component.
 //! 4. **Components.** Pixels with response >= `threshold_sigma` are joined by 8-connectivity,
 //!    but only between pixels whose best orientations differ by at most `angle_link_bins`
 //!    steps, so that a streak crossing a star trail splits instead of merging with it.
@@ -73,7 +76,7 @@
 //! Everything is single-threaded and deterministic: the same input gives the same output.
 //!
 //! One submodule per step: `background` (1), `smooth`, `trails` and `stars` (2), `lines` (3),
-//! `components` (4), `refine` and `merge` (5-6), `output` (7); `stats` holds the robust
+//! `radon` (3b), `components` (4), `refine` and `merge` (5-6), `output` (7); `stats` holds the robust
 //! statistics they share (bilinear sampling is [`crate::imaging::bilinear`]). This file holds
 //! the parameters and the pipeline.
 
@@ -83,6 +86,7 @@ mod lines;
 mod merge;
 mod noise;
 mod output;
+mod radon;
 mod refine;
 mod smooth;
 mod stars;
@@ -98,6 +102,7 @@ use lines::line_filter;
 use merge::angle_diff_deg;
 use noise::LineNoise;
 use output::confidence;
+use radon::long_line_components;
 use refine::{Ctx, Point, Seed, Seg};
 use smooth::{equalise_edge_noise, gaussian_kernel, smooth};
 use stars::mask_stars;
@@ -453,8 +458,13 @@ pub fn detect_streaks(
     };
     let (best, arg) = line_filter(&zc, w, h, &p, &noise);
 
-    // 4. Components.
-    let comps = components(&best, &arg, w, h, &p);
+    // 4. Components, of the local filters and of the long-line stage (3b).
+    let kmax = p.half_lengths.iter().copied().max().unwrap_or(10) as f64 * 2.0 + 1.0;
+    let local: Vec<(components::Component, f64)> = components(&best, &arg, w, h, &p)
+        .into_iter()
+        .map(|c| (c, kmax))
+        .collect();
+    let long = long_line_components(&zc, w, h, &p);
 
     // 5-6. Refinement, rejection, merging.
     let ctx = Ctx {
@@ -476,26 +486,33 @@ pub fn detect_streaks(
         }
         None => false,
     };
-    let kmax = p.half_lengths.iter().copied().max().unwrap_or(10) as f64 * 2.0 + 1.0;
-    let mut frags: Vec<Seg> = Vec::new();
-    for c in &comps {
-        let shrink = (kmax / 2.0).min(c.half_len / 2.0);
-        let seed = Seed {
-            cx: c.cx,
-            cy: c.cy,
-            theta: c.theta,
-            half: c.half_len,
-            shrink,
-            ext: kmax,
-        };
-        if let Some(s) = ctx.refine(&seed)
-            && s.length >= p.min_fragment
-            && !aligned(&s)
-        {
-            frags.push(s);
+    let fragments = |comps: &[(components::Component, f64)]| -> Vec<Seg> {
+        let mut frags = Vec::new();
+        for &(ref c, kmax) in comps {
+            let shrink = (kmax / 2.0).min(c.half_len / 2.0);
+            let seed = Seed {
+                cx: c.cx,
+                cy: c.cy,
+                theta: c.theta,
+                half: c.half_len,
+                shrink,
+                ext: kmax,
+            };
+            if let Some(s) = ctx.refine(&seed)
+                && s.length >= p.min_fragment
+                && !aligned(&s)
+            {
+                frags.push(s);
+            }
         }
-    }
-    let merged = ctx.merge(frags, &aligned);
+        frags
+    };
+    // The two stages' fragments are merged apart: a long-line fragment overlapping a local
+    // one (the same streak, its ends less sharp) would otherwise re-refine it into a segment
+    // that can fail where the local one passed. Where both find a streak, explaining away
+    // (below) keeps the better scoring one.
+    let mut merged = ctx.merge(fragments(&local), &aligned);
+    merged.extend(ctx.merge(fragments(&long), &aligned));
 
     // 7. Acceptance, scoring, duplicates.
     let mut cands: Vec<(Seg, f64)> = merged
@@ -536,6 +553,7 @@ pub fn detect_streaks(
 }
 
 /// Parameters checked and converted once.
+#[derive(Clone)]
 struct Sanitized {
     mesh: usize,
     mesh_clip: f64,
