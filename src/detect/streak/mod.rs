@@ -37,8 +37,9 @@
 //!    centroid and second moments give an axis and extent.
 //! 5. **Refinement.** Around each component axis the orientation and lateral offset are refined
 //!    by a coarse-to-fine grid search (+-2 filter steps, then finer) maximising `z` clipped at
-//!    4 `clip_sigma` summed along the axis. Then the profile `p(t)` along the axis (mean of `z`
-//!    at lateral offsets -1, 0, 1 px) is read, the streak level is the median of `p` in the
+//!    4 `clip_sigma` summed along the axis. Then the profile `p(t)` along the axis (the contrast:
+//!    mean of `z` at lateral offsets -1, 0, 1 px less that of side bands beyond the
+//!    cross-section, zero on background however skewed its noise) is read, the streak level is the median of `p` in the
 //!    component's inner part, and each end is the change point maximising the cumulative sum
 //!    of `min(p, 1.5 level) - level / 2` outwards (the half-level crossing, robust to noise
 //!    dips). Measured on the refined segment: length between the ends; SNR = median over the

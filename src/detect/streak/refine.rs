@@ -81,11 +81,6 @@ impl Ctx<'_> {
         bilinear(self.z, self.w, self.h, x, y) as f64
     }
 
-    /// Profile sample: the mean of z at lateral offsets -1, 0, 1 along the normal (nx, ny).
-    pub(super) fn cross_mean(&self, x: f64, y: f64, nx: f64, ny: f64) -> f64 {
-        (self.z_at(x - nx, y - ny) + self.z_at(x, y) + self.z_at(x + nx, y + ny)) / 3.0
-    }
-
     /// Lateral taps (offset along the normal, weight) of a contrast sample: the profile sample
     /// (offsets -1, 0, 1) less the mean of side bands beyond the streak's smoothed
     /// cross-section (z falls below 1 % of its peak by 3 sqrt(2) psf_sigma), six pixels on
@@ -181,9 +176,13 @@ impl Ctx<'_> {
         if ta > 0 || tb < 0 {
             return None;
         }
-        // Profile along the axis: mean of z at lateral offsets -1, 0, 1.
+        // Profile along the axis: the contrast (mean of z at lateral offsets -1, 0, 1 less
+        // the side bands). Beyond a faint streak's ends the mean of z alone can sit above zero
+        // (a real frame's skewed noise after the enhancement), enough against a level of a few
+        // tenths of sigma to carry the ends to the image border; the contrast's is zero.
+        let taps = self.contrast_taps();
         let prof: Vec<f64> = (ta..=tb)
-            .map(|t| self.cross_mean(cx + t as f64 * ux, cy + t as f64 * uy, nx, ny))
+            .map(|t| self.contrast(&taps, cx + t as f64 * ux, cy + t as f64 * uy, nx, ny))
             .collect();
         let at = |t: i64| prof[(t - ta) as usize];
         let inner = (half - seed.shrink).max(1.0);
@@ -218,10 +217,7 @@ impl Ctx<'_> {
         }
         // Robust SNR: the median contrast over the segment times its sample count, so that a
         // bright star on the axis does not make a streak, nor a raised patch of background.
-        let taps = self.contrast_taps();
-        let mut seg_vals: Vec<f64> = (s..=e)
-            .map(|t| self.contrast(&taps, cx + t as f64 * ux, cy + t as f64 * uy, nx, ny))
-            .collect();
+        let mut seg_vals: Vec<f64> = (s..=e).map(at).collect();
         let n = seg_vals.len();
         let snr = median_of(&mut seg_vals) * n as f64 / self.contrast_sum_sd(&taps, th, n);
         let (t0, t1) = (s as f64 - 0.5, e as f64 + 0.5);
