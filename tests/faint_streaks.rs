@@ -122,7 +122,7 @@ fn debris_free_backgrounds_of_the_three_frames_give_no_box() {
 }
 
 /// Measured 2026-11-26 (IoU of the best box at confidence 0.5): every streak of L >= 300 px off
-/// the rows is found on all three frames (IoU 0.91-1.00), and all six on the raw science frame.
+/// the rows is found on all three frames (IoU 0.88-1.00), and all six on the raw science frame.
 /// Missed: on the dark frame (the semisynthetic test sets' noise) the 240 px at 20 deg (MF SNR
 /// 25), the 200 px at 60 deg (23) and the row-aligned 400 px (32.5: its row-correlated noise
 /// makes sums along rows several times noisier than white noise), and on the calibrated frame

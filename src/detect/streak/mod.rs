@@ -37,9 +37,9 @@
 //!    centroid and second moments give an axis and extent.
 //! 5. **Refinement.** Around each component axis the orientation and lateral offset are refined
 //!    by a coarse-to-fine grid search (+-2 filter steps, then finer) maximising `z` clipped at
-//!    4 `clip_sigma` summed along the axis. Then the profile `p(t)` along the axis (the contrast:
-//!    mean of `z` at lateral offsets -1, 0, 1 px less that of side bands beyond the
-//!    cross-section, zero on background however skewed its noise) is read, the streak level is the median of `p` in the
+//!    4 `clip_sigma` summed along the axis. Then the profile `p(t)` along the axis (mean of `z`
+//!    at lateral offsets -1, 0, 1 px; for seeds of step 3b that less the mean of side bands
+//!    beyond the cross-section, zero on background however skewed its noise) is read, the streak level is the median of `p` in the
 //!    component's inner part, and each end is the change point maximising the cumulative sum
 //!    of `min(p, 1.5 level) - level / 2` outwards (the half-level crossing, robust to noise
 //!    dips). Measured on the refined segment: length between the ends; SNR = median over the
@@ -487,7 +487,7 @@ pub fn detect_streaks(
         }
         None => false,
     };
-    let fragments = |comps: &[(components::Component, f64)]| -> Vec<Seg> {
+    let fragments = |comps: &[(components::Component, f64)], contrast: bool| -> Vec<Seg> {
         let mut frags = Vec::new();
         for &(ref c, kmax) in comps {
             let shrink = (kmax / 2.0).min(c.half_len / 2.0);
@@ -498,6 +498,7 @@ pub fn detect_streaks(
                 half: c.half_len,
                 shrink,
                 ext: kmax,
+                contrast,
             };
             if let Some(s) = ctx.refine(&seed)
                 && s.length >= p.min_fragment
@@ -512,8 +513,8 @@ pub fn detect_streaks(
     // one (the same streak, its ends less sharp) would otherwise re-refine it into a segment
     // that can fail where the local one passed. Where both find a streak, explaining away
     // (below) keeps the better scoring one.
-    let mut merged = ctx.merge(fragments(&local), &aligned);
-    merged.extend(ctx.merge(fragments(&long), &aligned));
+    let mut merged = ctx.merge(fragments(&local, false), &aligned);
+    merged.extend(ctx.merge(fragments(&long, true), &aligned));
 
     // 7. Acceptance, scoring, duplicates.
     let mut cands: Vec<(Seg, f64)> = merged

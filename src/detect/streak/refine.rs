@@ -19,6 +19,9 @@ pub(super) struct Seed {
     pub(super) half: f64,
     pub(super) shrink: f64,
     pub(super) ext: f64,
+    /// Read the profile as the contrast instead of the mean of z (long-line seeds: see
+    /// [`Ctx::refine`]).
+    pub(super) contrast: bool,
 }
 
 /// A point (x, y) in pixel-centre coordinates.
@@ -34,6 +37,8 @@ pub(super) struct Seg {
     pub(super) snr: f64,
     pub(super) flux: f64,
     pub(super) elongation: f64,
+    /// Its profile was read as the contrast (kept when it is merged).
+    pub(super) contrast: bool,
 }
 
 impl Seg {
@@ -79,6 +84,11 @@ impl Ctx<'_> {
     /// z at (x, y), bilinear between pixel centres.
     fn z_at(&self, x: f64, y: f64) -> f64 {
         bilinear(self.z, self.w, self.h, x, y) as f64
+    }
+
+    /// Profile sample: the mean of z at lateral offsets -1, 0, 1 along the normal (nx, ny).
+    pub(super) fn cross_mean(&self, x: f64, y: f64, nx: f64, ny: f64) -> f64 {
+        (self.z_at(x - nx, y - ny) + self.z_at(x, y) + self.z_at(x + nx, y + ny)) / 3.0
     }
 
     /// Lateral taps (offset along the normal, weight) of a contrast sample: the profile sample
@@ -176,13 +186,22 @@ impl Ctx<'_> {
         if ta > 0 || tb < 0 {
             return None;
         }
-        // Profile along the axis: the contrast (mean of z at lateral offsets -1, 0, 1 less
-        // the side bands). Beyond a faint streak's ends the mean of z alone can sit above zero
-        // (a real frame's skewed noise after the enhancement), enough against a level of a few
-        // tenths of sigma to carry the ends to the image border; the contrast's is zero.
+        // Profile along the axis: the mean of z at lateral offsets -1, 0, 1, or for long-line
+        // seeds that less the side bands (the contrast). Beyond a faint streak's ends the mean
+        // of z alone can sit above zero (a real frame's skewed noise after the enhancement),
+        // enough against a level of a few tenths of sigma to carry the ends to the image
+        // border; the contrast's is zero. (For every seed it made a star trail's neighbour a
+        // false survey candidate, so the local filters' seeds keep the mean.)
         let taps = self.contrast_taps();
         let prof: Vec<f64> = (ta..=tb)
-            .map(|t| self.contrast(&taps, cx + t as f64 * ux, cy + t as f64 * uy, nx, ny))
+            .map(|t| {
+                let (x, y) = (cx + t as f64 * ux, cy + t as f64 * uy);
+                if seed.contrast {
+                    self.contrast(&taps, x, y, nx, ny)
+                } else {
+                    self.cross_mean(x, y, nx, ny)
+                }
+            })
             .collect();
         let at = |t: i64| prof[(t - ta) as usize];
         let inner = (half - seed.shrink).max(1.0);
@@ -217,7 +236,9 @@ impl Ctx<'_> {
         }
         // Robust SNR: the median contrast over the segment times its sample count, so that a
         // bright star on the axis does not make a streak, nor a raised patch of background.
-        let mut seg_vals: Vec<f64> = (s..=e).map(at).collect();
+        let mut seg_vals: Vec<f64> = (s..=e)
+            .map(|t| self.contrast(&taps, cx + t as f64 * ux, cy + t as f64 * uy, nx, ny))
+            .collect();
         let n = seg_vals.len();
         let snr = median_of(&mut seg_vals) * n as f64 / self.contrast_sum_sd(&taps, th, n);
         let (t0, t1) = (s as f64 - 0.5, e as f64 + 0.5);
@@ -230,6 +251,7 @@ impl Ctx<'_> {
             snr,
             flux: 0.0,
             elongation: 1.0,
+            contrast: seed.contrast,
         };
         let (flux, elong) = self.flux_and_elongation(&seg);
         seg.flux = flux;
