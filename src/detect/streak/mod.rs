@@ -38,8 +38,9 @@
 //! 5. **Refinement.** Around each component axis the orientation and lateral offset are refined
 //!    by a coarse-to-fine grid search (+-2 filter steps, then finer) maximising `z` clipped at
 //!    4 `clip_sigma` summed along the axis. Then the profile `p(t)` along the axis (mean of `z`
-//!    at lateral offsets -1, 0, 1 px; for seeds of step 3b that less the mean of side bands
-//!    beyond the cross-section, zero on background however skewed its noise) is read, the streak level is the median of `p` in the
+//!    at lateral offsets -1, 0, 1 px less that of side bands beyond the cross-section, zero on
+//!    background however skewed its noise; survey images' step-3 seeds: without the side
+//!    bands, which parallel star trails would fill) is read, the streak level is the median of `p` in the
 //!    component's inner part, and each end is the change point maximising the cumulative sum
 //!    of `min(p, 1.5 level) - level / 2` outwards (the half-level crossing, robust to noise
 //!    dips). Measured on the refined segment: length between the ends; SNR = median over the
@@ -513,7 +514,10 @@ pub fn detect_streaks(
     // one (the same streak, its ends less sharp) would otherwise re-refine it into a segment
     // that can fail where the local one passed. Where both find a streak, explaining away
     // (below) keeps the better scoring one.
-    let mut merged = ctx.merge(fragments(&local, false), &aligned);
+    // Profiles by contrast (see `refine`), except for the local seeds of survey images, where
+    // parallel star trails fall in the side bands (a false candidate at confidence 0.66 in
+    // `survey_trails_rejected_and_debris_found`).
+    let mut merged = ctx.merge(fragments(&local, trail.is_none()), &aligned);
     merged.extend(ctx.merge(fragments(&long, true), &aligned));
 
     // 7. Acceptance, scoring, duplicates.

@@ -19,8 +19,7 @@ pub(super) struct Seed {
     pub(super) half: f64,
     pub(super) shrink: f64,
     pub(super) ext: f64,
-    /// Read the profile as the contrast instead of the mean of z (long-line seeds: see
-    /// [`Ctx::refine`]).
+    /// Read the profile as the contrast instead of the mean of z (see [`Ctx::refine`]).
     pub(super) contrast: bool,
 }
 
@@ -186,12 +185,11 @@ impl Ctx<'_> {
         if ta > 0 || tb < 0 {
             return None;
         }
-        // Profile along the axis: the mean of z at lateral offsets -1, 0, 1, or for long-line
-        // seeds that less the side bands (the contrast). Beyond a faint streak's ends the mean
-        // of z alone can sit above zero (a real frame's skewed noise after the enhancement),
-        // enough against a level of a few tenths of sigma to carry the ends to the image
-        // border; the contrast's is zero. (For every seed it made a star trail's neighbour a
-        // false survey candidate, so the local filters' seeds keep the mean.)
+        // Profile along the axis: the mean of z at lateral offsets -1, 0, 1, less the side
+        // bands (the contrast) where the seed asks. Beyond a faint streak's ends the mean of z
+        // alone can sit above zero (a real frame's skewed noise after the enhancement), enough
+        // against a level of a few tenths of sigma to carry the ends to the image border; the
+        // contrast's is zero.
         let taps = self.contrast_taps();
         let prof: Vec<f64> = (ta..=tb)
             .map(|t| {
