@@ -428,7 +428,7 @@ fn efficiency_markdown(s: &mut String, efficiencies: &[Efficiency], conf: f64) {
     let _ = writeln!(s, "\n## Detection efficiency\n");
     let _ = writeln!(
         s,
-        "Recall of each detector at confidence {conf}, IoU 0.5, by the debris' magnitude (`efficiency.csv` also bins by matched-filter SNR and streak length; `efficiency.png` plots all three).\n"
+        "Recall of each detector at confidence {conf}, IoU 0.5, by the debris' magnitude (`efficiency.csv` also bins by matched-filter SNR, streak length and per-pixel SNR; `efficiency.png` plots all four).\n"
     );
     for e in efficiencies {
         let _ = writeln!(

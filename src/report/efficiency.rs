@@ -27,6 +27,11 @@ pub struct ObjectFacts {
     pub snr: f64,
     /// Distance between the first and last trajectory samples, pixels.
     pub length_px: f64,
+    /// Per-pixel SNR: the expected debris ADU per footprint pixel over the background's
+    /// standard deviation (`Scene::snr_noise_sigma`; NaN, left out of the bins, for a sidecar
+    /// older than it). A long streak can have a high matched-filter SNR and a per-pixel one
+    /// well below 1: binning by both shows which a detector needs (issue #36).
+    pub pixel_snr: f64,
 }
 
 impl ObjectFacts {
@@ -36,6 +41,8 @@ impl ObjectFacts {
         struct Sidecar {
             magnitude: f64,
             snr_matched_filter: f64,
+            #[serde(default)]
+            snr_noise_sigma: Option<f64>,
             streak_start_px: [f64; 2],
             streak_end_px: [f64; 2],
         }
@@ -49,6 +56,7 @@ impl ObjectFacts {
             magnitude: s.magnitude,
             snr: s.snr_matched_filter,
             length_px: (x1 - x0).hypot(y1 - y0),
+            pixel_snr: s.snr_noise_sigma.unwrap_or(f64::NAN),
         })
     }
 }
@@ -60,13 +68,15 @@ pub enum Quantity {
     Magnitude,
     SnrMatchedFilter,
     StreakLengthPx,
+    SnrPerPixel,
 }
 
 impl Quantity {
-    pub const ALL: [Quantity; 3] = [
+    pub const ALL: [Quantity; 4] = [
         Quantity::Magnitude,
         Quantity::SnrMatchedFilter,
         Quantity::StreakLengthPx,
+        Quantity::SnrPerPixel,
     ];
 
     pub fn label(self) -> &'static str {
@@ -74,6 +84,7 @@ impl Quantity {
             Quantity::Magnitude => "debris magnitude",
             Quantity::SnrMatchedFilter => "matched-filter SNR",
             Quantity::StreakLengthPx => "streak length (px)",
+            Quantity::SnrPerPixel => "per-pixel SNR",
         }
     }
 
@@ -82,6 +93,7 @@ impl Quantity {
             Quantity::Magnitude => "magnitude",
             Quantity::SnrMatchedFilter => "snr_matched_filter",
             Quantity::StreakLengthPx => "streak_length_px",
+            Quantity::SnrPerPixel => "snr_per_pixel",
         }
     }
 
@@ -90,6 +102,7 @@ impl Quantity {
             Quantity::Magnitude => f.magnitude,
             Quantity::SnrMatchedFilter => f.snr,
             Quantity::StreakLengthPx => f.length_px,
+            Quantity::SnrPerPixel => f.pixel_snr,
         }
     }
 
@@ -319,8 +332,8 @@ pub fn plot(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
         RGBColor(30, 90, 200),
         RGBColor(30, 150, 60),
     ];
-    crate::plot::png(path, (1500, 460), |root| {
-        let panels = root.split_evenly((1, 3));
+    crate::plot::png(path, (2000, 460), |root| {
+        let panels = root.split_evenly((1, 4));
         for (panel, q) in panels.iter().zip(Quantity::ALL) {
             let bins = all.iter().flat_map(|e| &e.curves[&q]);
             let (lo, hi) = bins.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), b| {
@@ -446,6 +459,8 @@ mod tests {
             magnitude,
             snr,
             length_px,
+            // An object of 100 footprint pixels: per-pixel SNR a tenth of the integrated one.
+            pixel_snr: snr / 10.0,
         }
     }
 
@@ -488,6 +503,20 @@ mod tests {
             .map(|b| (b.lo, b.hi, b.objects))
             .collect();
         assert_eq!(s, [(1.0, 2.0, 1), (8.0, 16.0, 1), (16.0, 32.0, 2)]);
+        // Per-pixel SNR 3, 1.7, 0.9 and 0.15: octaves below 1 too (0.15 in 0.125-0.25).
+        let p: Vec<_> = e.curves[&Quantity::SnrPerPixel]
+            .iter()
+            .map(|b| (b.lo, b.hi, b.objects))
+            .collect();
+        assert_eq!(
+            p,
+            [
+                (0.125, 0.25, 1),
+                (0.5, 1.0, 1),
+                (1.0, 2.0, 1),
+                (2.0, 4.0, 1)
+            ]
+        );
         let l: Vec<_> = e.curves[&Quantity::StreakLengthPx]
             .iter()
             .map(|b| (b.lo, b.objects))
