@@ -49,7 +49,8 @@ pub(super) fn long_line_components(
         let mut map = bin(zc, w, b, bw, bh);
         // Unit robust noise, so the white-noise model of the line sums is the right floor.
         let sd = map_stats(&map, bw, bh).1;
-        if !(sd > 0.0) {
+        // A constant map (sd 0) or a NaN has no noise to scale to.
+        if sd.is_nan() || sd <= 0.0 {
             continue;
         }
         let inv = (1.0 / sd) as f32;
