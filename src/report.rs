@@ -436,7 +436,7 @@ fn efficiency_markdown(s: &mut String, efficiencies: &[Efficiency], conf: f64) {
     let _ = writeln!(s, "\n## Detection efficiency\n");
     let _ = writeln!(
         s,
-        "Recall of each detector at confidence {conf}, IoU 0.5, by the debris' magnitude (`efficiency.csv` also bins by matched-filter SNR, streak length and, for survey images, angle to the star trails; `efficiency.png` plots all four).\n"
+        "Recall of each detector at confidence {conf}, IoU 0.5, by the debris' magnitude (`efficiency.csv` also bins by matched-filter SNR, streak length, per-pixel SNR and, for survey images, angle to the star trails; `efficiency.png` plots all five).\n"
     );
     for e in efficiencies {
         let _ = writeln!(

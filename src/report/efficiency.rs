@@ -30,6 +30,11 @@ pub struct ObjectFacts {
     /// Angle between the streak and the star trails, degrees in [0, 90] (survey pointing; NaN
     /// under fixed pointing, where stars make no trails).
     pub trail_angle_deg: f64,
+    /// Per-pixel SNR: the expected debris ADU per footprint pixel over the background's
+    /// standard deviation (`Scene::snr_noise_sigma`; NaN, left out of the bins, for a sidecar
+    /// older than it). A long streak can have a high matched-filter SNR and a per-pixel one
+    /// well below 1: binning by both shows which a detector needs (issue #36).
+    pub pixel_snr: f64,
 }
 
 impl ObjectFacts {
@@ -39,6 +44,8 @@ impl ObjectFacts {
         struct Sidecar {
             magnitude: f64,
             snr_matched_filter: f64,
+            #[serde(default)]
+            snr_noise_sigma: Option<f64>,
             streak_start_px: [f64; 2],
             streak_end_px: [f64; 2],
             pointing: Pointing,
@@ -61,6 +68,7 @@ impl ObjectFacts {
                 let d = ((y1 - y0).atan2(x1 - x0).to_degrees() - t).rem_euclid(180.0);
                 d.min(180.0 - d)
             }),
+            pixel_snr: s.snr_noise_sigma.unwrap_or(f64::NAN),
         })
     }
 }
@@ -75,17 +83,19 @@ pub enum Quantity {
     /// Angle to the star trails in three bands: 0-2, 2-7 and 7-90 degrees (within 7 degrees
     /// the angle alone no longer tells debris from stars, issue #30).
     TrailAngleDeg,
+    SnrPerPixel,
 }
 
 /// Edges of the bands of angle to the star trails, degrees.
 const TRAIL_ANGLE_EDGES: [f64; 4] = [0.0, 2.0, 7.0, 90.0];
 
 impl Quantity {
-    pub const ALL: [Quantity; 4] = [
+    pub const ALL: [Quantity; 5] = [
         Quantity::Magnitude,
         Quantity::SnrMatchedFilter,
         Quantity::StreakLengthPx,
         Quantity::TrailAngleDeg,
+        Quantity::SnrPerPixel,
     ];
 
     pub fn label(self) -> &'static str {
@@ -94,6 +104,7 @@ impl Quantity {
             Quantity::SnrMatchedFilter => "matched-filter SNR",
             Quantity::StreakLengthPx => "streak length (px)",
             Quantity::TrailAngleDeg => "angle to the star trails (deg)",
+            Quantity::SnrPerPixel => "per-pixel SNR",
         }
     }
 
@@ -103,6 +114,7 @@ impl Quantity {
             Quantity::SnrMatchedFilter => "snr_matched_filter",
             Quantity::StreakLengthPx => "streak_length_px",
             Quantity::TrailAngleDeg => "trail_angle_deg",
+            Quantity::SnrPerPixel => "snr_per_pixel",
         }
     }
 
@@ -112,6 +124,7 @@ impl Quantity {
             Quantity::SnrMatchedFilter => f.snr,
             Quantity::StreakLengthPx => f.length_px,
             Quantity::TrailAngleDeg => f.trail_angle_deg,
+            Quantity::SnrPerPixel => f.pixel_snr,
         }
     }
 
@@ -353,7 +366,7 @@ pub fn plot(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
         RGBColor(30, 90, 200),
         RGBColor(30, 150, 60),
     ];
-    crate::plot::png(path, (2000, 460), |root| {
+    crate::plot::png(path, (2500, 460), |root| {
         let panels = root.split_evenly((1, Quantity::ALL.len()));
         for (panel, q) in panels.iter().zip(Quantity::ALL) {
             let bins = all.iter().flat_map(|e| &e.curves[&q]);
@@ -483,6 +496,8 @@ mod tests {
             snr,
             length_px,
             trail_angle_deg: f64::NAN,
+            // An object of 100 footprint pixels: per-pixel SNR a tenth of the integrated one.
+            pixel_snr: snr / 10.0,
         }
     }
 
@@ -525,6 +540,20 @@ mod tests {
             .map(|b| (b.lo, b.hi, b.objects))
             .collect();
         assert_eq!(s, [(1.0, 2.0, 1), (8.0, 16.0, 1), (16.0, 32.0, 2)]);
+        // Per-pixel SNR 3, 1.7, 0.9 and 0.15: octaves below 1 too (0.15 in 0.125-0.25).
+        let p: Vec<_> = e.curves[&Quantity::SnrPerPixel]
+            .iter()
+            .map(|b| (b.lo, b.hi, b.objects))
+            .collect();
+        assert_eq!(
+            p,
+            [
+                (0.125, 0.25, 1),
+                (0.5, 1.0, 1),
+                (1.0, 2.0, 1),
+                (2.0, 4.0, 1)
+            ]
+        );
         let l: Vec<_> = e.curves[&Quantity::StreakLengthPx]
             .iter()
             .map(|b| (b.lo, b.objects))

@@ -92,6 +92,7 @@ impl Ctx<'_> {
             half: 0.5 * bd,
             shrink: 0.0,
             ext: 4.0 * self.p.psf_sigma + 4.0,
+            contrast: a.contrast || b.contrast,
         })
     }
 

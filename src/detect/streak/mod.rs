@@ -27,6 +27,9 @@
 //!    white-noise value and the one measured on the image (`noise`: real sensors' noise is
 //!    correlated and skewed). Per
 //!    pixel the maximum over filters and its orientation are kept.
+//!    3b. **Long lines** (`radon`): the same filter on the clipped map binned by 2, 4 and 8, so
+//!    that a sum covers 100-400 pixels and a streak too faint per pixel for step 3 but long
+//!    enough (integrated SNR grows as the square root of its length) still gives a component.
 //! 4. **Components.** Pixels with response >= `threshold_sigma` are joined by 8-connectivity,
 //!    but only between pixels whose best orientations differ by at most `angle_link_bins`
 //!    steps, so that a streak crossing a star trail splits instead of merging with it.
@@ -35,7 +38,9 @@
 //! 5. **Refinement.** Around each component axis the orientation and lateral offset are refined
 //!    by a coarse-to-fine grid search (+-2 filter steps, then finer) maximising `z` clipped at
 //!    4 `clip_sigma` summed along the axis. Then the profile `p(t)` along the axis (mean of `z`
-//!    at lateral offsets -1, 0, 1 px) is read, the streak level is the median of `p` in the
+//!    at lateral offsets -1, 0, 1 px less that of side bands beyond the cross-section, zero on
+//!    background however skewed its noise; survey images' step-3 seeds: without the side
+//!    bands, which parallel star trails would fill) is read, the streak level is the median of `p` in the
 //!    component's inner part, and each end is the change point maximising the cumulative sum
 //!    of `min(p, 1.5 level) - level / 2` outwards (the half-level crossing, robust to noise
 //!    dips). Measured on the refined segment: length between the ends; SNR = median over the
@@ -73,7 +78,7 @@
 //! Everything is single-threaded and deterministic: the same input gives the same output.
 //!
 //! One submodule per step: `background` (1), `smooth`, `trails` and `stars` (2), `lines` (3),
-//! `components` (4), `refine` and `merge` (5-6), `output` (7); `stats` holds the robust
+//! `radon` (3b), `components` (4), `refine` and `merge` (5-6), `output` (7); `stats` holds the robust
 //! statistics they share (bilinear sampling is [`crate::imaging::bilinear`]). This file holds
 //! the parameters and the pipeline.
 
@@ -83,6 +88,7 @@ mod lines;
 mod merge;
 mod noise;
 mod output;
+mod radon;
 mod refine;
 mod sky;
 mod smooth;
@@ -101,6 +107,7 @@ use lines::line_filter;
 use merge::angle_diff_deg;
 use noise::LineNoise;
 use output::confidence;
+use radon::long_line_components;
 use refine::{Ctx, Point, Seed, Seg};
 pub use sky::StarTrail;
 use smooth::{equalise_edge_noise, gaussian_kernel, smooth};
@@ -525,8 +532,13 @@ fn detect(
     };
     let (best, arg) = line_filter(&zc, w, h, &p, &noise);
 
-    // 4. Components.
-    let comps = components(&best, &arg, w, h, &p);
+    // 4. Components, of the local filters and of the long-line stage (3b).
+    let kmax = p.half_lengths.iter().copied().max().unwrap_or(10) as f64 * 2.0 + 1.0;
+    let local: Vec<(components::Component, f64)> = components(&best, &arg, w, h, &p)
+        .into_iter()
+        .map(|c| (c, kmax))
+        .collect();
+    let long = long_line_components(&zc, w, h, &p);
 
     // 5-6. Refinement, rejection, merging.
     let ctx = Ctx {
@@ -549,26 +561,37 @@ fn detect(
         }
         (None, None) => false,
     };
-    let kmax = p.half_lengths.iter().copied().max().unwrap_or(10) as f64 * 2.0 + 1.0;
-    let mut frags: Vec<Seg> = Vec::new();
-    for c in &comps {
-        let shrink = (kmax / 2.0).min(c.half_len / 2.0);
-        let seed = Seed {
-            cx: c.cx,
-            cy: c.cy,
-            theta: c.theta,
-            half: c.half_len,
-            shrink,
-            ext: kmax,
-        };
-        if let Some(s) = ctx.refine(&seed)
-            && s.length >= p.min_fragment
-            && !aligned(&s)
-        {
-            frags.push(s);
+    let fragments = |comps: &[(components::Component, f64)], contrast: bool| -> Vec<Seg> {
+        let mut frags = Vec::new();
+        for &(ref c, kmax) in comps {
+            let shrink = (kmax / 2.0).min(c.half_len / 2.0);
+            let seed = Seed {
+                cx: c.cx,
+                cy: c.cy,
+                theta: c.theta,
+                half: c.half_len,
+                shrink,
+                ext: kmax,
+                contrast,
+            };
+            if let Some(s) = ctx.refine(&seed)
+                && s.length >= p.min_fragment
+                && !aligned(&s)
+            {
+                frags.push(s);
+            }
         }
-    }
-    let merged = ctx.merge(frags, &aligned);
+        frags
+    };
+    // The two stages' fragments are merged apart: a long-line fragment overlapping a local
+    // one (the same streak, its ends less sharp) would otherwise re-refine it into a segment
+    // that can fail where the local one passed. Where both find a streak, explaining away
+    // (below) keeps the better scoring one.
+    // Profiles by contrast (see `refine`), except for the local seeds of survey images, where
+    // parallel star trails fall in the side bands (a false candidate at confidence 0.66 in
+    // `survey_trails_rejected_and_debris_found`).
+    let mut merged = ctx.merge(fragments(&local, trail.is_none()), &aligned);
+    merged.extend(ctx.merge(fragments(&long, true), &aligned));
 
     // 7. Acceptance, scoring, duplicates.
     let mut cands: Vec<(Seg, f64)> = merged
@@ -609,6 +632,7 @@ fn detect(
 }
 
 /// Parameters checked and converted once.
+#[derive(Clone)]
 struct Sanitized {
     mesh: usize,
     mesh_clip: f64,

@@ -31,6 +31,17 @@ impl LineNoise {
     /// Measure the sums of the clipped map `zc` along every filter (orientation j of
     /// `p.n_angles`, each length) against their white-noise sd ([`model_sd`]).
     pub(super) fn measure(zc: &[f32], w: usize, h: usize, p: &Sanitized) -> Self {
+        Self::measure_at(zc, w, h, p, SAMPLES)
+    }
+
+    /// [`LineNoise::measure`] from about `samples` sums per filter.
+    pub(super) fn measure_at(
+        zc: &[f32],
+        w: usize,
+        h: usize,
+        p: &Sanitized,
+        samples: usize,
+    ) -> Self {
         let lengths: Vec<usize> = p.half_lengths.iter().map(|&h| 2 * h + 1).collect();
         let hmax = *p.half_lengths.last().expect("at least one length") as isize;
         // Sample centres on a regular grid, away from the edges where sums are cut short.
@@ -43,7 +54,7 @@ impl LineNoise {
             (h as isize - hmax).max(h as isize / 2 + 1),
         );
         let area = ((x1 - x0) * (y1 - y0)).max(1) as f64;
-        let step = ((area / SAMPLES as f64).sqrt().floor() as isize).max(1);
+        let step = ((area / samples.max(1) as f64).sqrt().floor() as isize).max(1);
         let centres: Vec<(isize, isize)> = (y0..y1)
             .step_by(step as usize)
             .flat_map(|y| (x0..x1).step_by(step as usize).map(move |x| (x, y)))

@@ -19,6 +19,8 @@ pub(super) struct Seed {
     pub(super) half: f64,
     pub(super) shrink: f64,
     pub(super) ext: f64,
+    /// Read the profile as the contrast instead of the mean of z (see [`Ctx::refine`]).
+    pub(super) contrast: bool,
 }
 
 /// A point (x, y) in pixel-centre coordinates.
@@ -34,6 +36,8 @@ pub(super) struct Seg {
     pub(super) snr: f64,
     pub(super) flux: f64,
     pub(super) elongation: f64,
+    /// Its profile was read as the contrast (kept when it is merged).
+    pub(super) contrast: bool,
 }
 
 impl Seg {
@@ -181,9 +185,21 @@ impl Ctx<'_> {
         if ta > 0 || tb < 0 {
             return None;
         }
-        // Profile along the axis: mean of z at lateral offsets -1, 0, 1.
+        // Profile along the axis: the mean of z at lateral offsets -1, 0, 1, less the side
+        // bands (the contrast) where the seed asks. Beyond a faint streak's ends the mean of z
+        // alone can sit above zero (a real frame's skewed noise after the enhancement), enough
+        // against a level of a few tenths of sigma to carry the ends to the image border; the
+        // contrast's is zero.
+        let taps = self.contrast_taps();
         let prof: Vec<f64> = (ta..=tb)
-            .map(|t| self.cross_mean(cx + t as f64 * ux, cy + t as f64 * uy, nx, ny))
+            .map(|t| {
+                let (x, y) = (cx + t as f64 * ux, cy + t as f64 * uy);
+                if seed.contrast {
+                    self.contrast(&taps, x, y, nx, ny)
+                } else {
+                    self.cross_mean(x, y, nx, ny)
+                }
+            })
             .collect();
         let at = |t: i64| prof[(t - ta) as usize];
         let inner = (half - seed.shrink).max(1.0);
@@ -218,7 +234,6 @@ impl Ctx<'_> {
         }
         // Robust SNR: the median contrast over the segment times its sample count, so that a
         // bright star on the axis does not make a streak, nor a raised patch of background.
-        let taps = self.contrast_taps();
         let mut seg_vals: Vec<f64> = (s..=e)
             .map(|t| self.contrast(&taps, cx + t as f64 * ux, cy + t as f64 * uy, nx, ny))
             .collect();
@@ -234,6 +249,7 @@ impl Ctx<'_> {
             snr,
             flux: 0.0,
             elongation: 1.0,
+            contrast: seed.contrast,
         };
         let (flux, elong) = self.flux_and_elongation(&seg);
         seg.flux = flux;

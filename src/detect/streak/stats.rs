@@ -60,14 +60,18 @@ impl Hist {
     }
 }
 
-/// Median of a small set (sorts it), the mean of the two middle values for an even count.
+/// Median of a small set (reorders it), the mean of the two middle values for an even count.
+/// By selection, not a full sort: the same values, in linear time (the line filter's noise
+/// measurement takes hundreds of medians of 4096 sums per image).
 pub(super) fn median_of(v: &mut [f64]) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
     let n = v.len();
+    let (lower, mid, _) = v.select_nth_unstable_by(n / 2, |a, b| a.total_cmp(b));
+    let mid = *mid;
     if n % 2 == 1 {
-        v[n / 2]
+        mid
     } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
+        let below = lower.iter().copied().max_by(|a, b| a.total_cmp(b));
+        0.5 * (below.expect("an even, non-empty set has a value below the middle") + mid)
     }
 }
 
