@@ -59,6 +59,7 @@ pub mod detect_frames;
 pub mod enhance;
 pub mod error;
 pub mod experiment;
+pub mod export;
 pub mod fits;
 pub mod frames;
 pub mod geometry;

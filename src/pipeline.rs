@@ -471,6 +471,15 @@ pub(crate) fn finish(
             progress,
         )?;
     }
+    // The exports read the labels and the predictions back, so they come after the report.
+    let a = &c.artifacts;
+    if a.coco || a.ds9_regions {
+        let formats = crate::export::Formats {
+            coco: a.coco,
+            ds9: a.ds9_regions,
+        };
+        crate::export::write(dir, &dir.join(crate::export::EXPORT_DIR), formats)?;
+    }
     let mut volatile: Vec<String> = report::VOLATILE
         .iter()
         .filter(|v| dir.join(v).is_file())

@@ -134,6 +134,10 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "e1240fa7c096a9809228d0e1866e00d39ba22496da028f54cc2a38d257e5c7e9",
     ),
     (
+        "campaigns/quickstart-exports.toml",
+        "357d07d647aa8c66672acc1bbd88959d87b2ef5dca3ad3383944123ff9bd93ab",
+    ),
+    (
         "campaigns/survey-quickstart.toml",
         "51b4e0046a486878a8c4af90c3ce8dd4fb195a9ac6babff8b3a66d3c0d38af82",
     ),

@@ -414,6 +414,17 @@ pub struct Artifacts {
     /// for astrometric checks.
     #[serde(default)]
     pub star_list: bool,
+    /// The dataset as COCO JSON, `export/coco/<split>.json`, and the detect stage's
+    /// predictions in COCO's results format, `export/coco/detections_<detector>.json`
+    /// (src/export/coco.rs); needs the `enhance` stage. Omitted from the resolved campaign when
+    /// off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub coco: bool,
+    /// DS9 region files over the FITS images: the truth, `export/ds9/truth/<image>.reg`, and
+    /// each detector's boxes, `export/ds9/<detector>/<image>.reg` (src/export/ds9.rs). Omitted
+    /// from the resolved campaign when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub ds9_regions: bool,
 }
 
 /// Training through Ultralytics (`soig train`); the paper's hyperparameters by default.

@@ -384,6 +384,11 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "detect.model",
         "a campaign with a `train` stage detects with the model it trains: remove `detect.model`",
     )?;
+    check(
+        !c.artifacts.coco || c.stages.contains(&Stage::Enhance),
+        "artifacts.coco",
+        "the COCO export is of the dataset's PNGs and labels: it needs the `enhance` stage",
+    )?;
     let sp = &c.split;
     for (f, x) in [
         ("split.train", sp.train),
