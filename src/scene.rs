@@ -11,7 +11,6 @@ use std::collections::BTreeMap;
 use hifitime::{Duration, Epoch};
 use rand::RngExt;
 use rand_chacha::ChaCha12Rng;
-use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
 use crate::background::{BackgroundModel, FrameChoice, RealFrame};
@@ -136,9 +135,8 @@ pub struct Spec {
     pub debris_weights: Vec<f64>,
     /// The debris at mid-exposure is placed uniformly within this fraction of the half-field.
     pub placement_fraction: f64,
-    /// Debris area |N(mean, std)| m^2 and albedo (Eq. 6-7).
-    pub area_mean_m2: f64,
-    pub area_std_m2: f64,
+    /// Debris area and albedo (Eq. 6-7): the paper's |N(mean, std)| m^2, or a preset's.
+    pub area: crate::sky::debris_sizes::AreaModel,
     pub albedo: f64,
     pub tumble: Option<TumbleRange>,
     pub gate: Gate,
@@ -467,10 +465,7 @@ fn try_draw(
     };
     let start = spec.window_start + Duration::from_seconds(rng.random_range(0.0..span_s));
     let mid = start + Duration::from_seconds(exposure_s / 2.0);
-    let area_m2 = Normal::new(spec.area_mean_m2, spec.area_std_m2)
-        .expect("validated std")
-        .sample(rng)
-        .abs();
+    let area_m2 = spec.area.draw(rng);
     let placement = (
         rng.random_range(-1.0..1.0) * spec.placement_fraction,
         rng.random_range(-1.0..1.0) * spec.placement_fraction,

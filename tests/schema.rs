@@ -138,6 +138,10 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "357d07d647aa8c66672acc1bbd88959d87b2ef5dca3ad3383944123ff9bd93ab",
     ),
     (
+        "campaigns/quickstart-nasa-fragments.toml",
+        "032d4ebbfc399a7da711dd167b279593cec6c2149912b69911569f3511221727",
+    ),
+    (
         "campaigns/survey-quickstart.toml",
         "51b4e0046a486878a8c4af90c3ce8dd4fb195a9ac6babff8b3a66d3c0d38af82",
     ),
