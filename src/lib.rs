@@ -68,6 +68,7 @@ pub mod imaging;
 pub mod input_file;
 pub mod journal;
 pub mod launch;
+pub mod light_curve;
 pub mod manifest;
 pub mod merge;
 pub mod metrics;

@@ -135,7 +135,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/quickstart-exports.toml",
-        "357d07d647aa8c66672acc1bbd88959d87b2ef5dca3ad3383944123ff9bd93ab",
+        "392d68d9abd59faded48d9ab0191328265cd74c0dba3a44f1ac321a956ee751e",
     ),
     (
         "campaigns/quickstart-nasa-fragments.toml",

@@ -452,6 +452,12 @@ pub struct Artifacts {
     /// from the resolved campaign when off, so hashes stay.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub ds9_regions: bool,
+    /// The debris' brightness over the exposure as rendered, one row per trajectory sample
+    /// (time, magnitude with the tumbling modulation, expected photo-electrons, pixel), as
+    /// `truth/<image>_light_curve.csv` (columns in src/light_curve.rs). Omitted from the
+    /// resolved campaign when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub light_curve: bool,
 }
 
 /// Training through Ultralytics (`soig train`); the paper's hyperparameters by default.
