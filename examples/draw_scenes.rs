@@ -45,7 +45,7 @@ fn main() -> Result<(), soig::Error> {
     let mut fingerprint = DefaultHasher::new();
     let (mut attempts, mut failed) = (0u64, 0u64);
     // Why draws were rejected, over accepted and failed images alike.
-    let mut reasons = std::collections::BTreeMap::<&str, u64>::new();
+    let mut reasons = std::collections::BTreeMap::<soig::scene::Rejection, u64>::new();
     // The draws alone are timed: fingerprinting a scene (its Debug text, stars and all) costs
     // a fifth as much again.
     let mut drawing = std::time::Duration::ZERO;
@@ -57,7 +57,7 @@ fn main() -> Result<(), soig::Error> {
             Ok(s) => {
                 attempts += u64::from(s.attempts);
                 for (k, v) in &s.rejections {
-                    *reasons.entry(k).or_default() += u64::from(*v);
+                    *reasons.entry(*k).or_default() += u64::from(*v);
                 }
                 // The Debug text holds every field, floats to the last bit.
                 format!("{s:?}").hash(&mut fingerprint);
@@ -66,7 +66,7 @@ fn main() -> Result<(), soig::Error> {
                 failed += 1;
                 attempts += u64::from(e.attempts);
                 for (k, v) in &e.rejections {
-                    *reasons.entry(k).or_default() += u64::from(*v);
+                    *reasons.entry(*k).or_default() += u64::from(*v);
                 }
                 format!("{:?}", e.rejections).hash(&mut fingerprint);
             }

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# The test command: set-up (idempotent), then every test. ONNX Runtime is required here, so
-# the detector tests can never pass by skipping.
+# The test command: set-up (idempotent), then every test. ONNX Runtime and the export readers
+# are required here, so the detector and export tests can never pass by skipping.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 # --release: the tests reuse the dependencies the quickstart's release build compiled (the test
 # profile would build every one of them again).
-SOIG_REQUIRE_ONNXRUNTIME=1 cargo test --release --locked "$@"
+SOIG_REQUIRE_ONNXRUNTIME=1 SOIG_REQUIRE_EXPORT_READERS=1 cargo test --release --locked "$@"

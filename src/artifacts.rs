@@ -103,6 +103,11 @@ pub fn write_image(
         }
         w.flush()?;
     }
+    if artifacts.light_curve {
+        files.push(format!("truth/{stem}_light_curve.csv"));
+        let path = dir.join("truth").join(format!("{stem}_light_curve.csv"));
+        crate::light_curve::write(&path, &products.scene)?;
+    }
     let truth_path = dir.join("truth").join(format!("{stem}.json"));
     std::fs::write(
         &truth_path,

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::background::BackgroundModel;
-use crate::campaign::{self, Background, Campaign, LightCurve, Stars};
+use crate::campaign::{self, Background, Campaign, LightCurve, PhotometryPreset, Stars};
 use crate::enhance;
 use crate::error::Error;
 use crate::geometry::Frame;
@@ -18,6 +18,7 @@ use crate::render;
 use crate::scene::{self, Gate, Inputs, PointingMode, StarField, TumbleRange};
 use crate::sensor::{AduRange, Sensor};
 pub use crate::simulate::{Experiment, Product};
+use crate::sky::debris_sizes;
 use crate::sky::stars::{ProceduralSky, StarCatalog};
 
 /// Values resolved late from several campaign fields (or from none): recorded in the manifest
@@ -79,9 +80,11 @@ impl Experiment {
             pointing: c.pointing.mode,
             debris_weights: c.debris.iter().map(|d| d.weight.unwrap_or(1.0)).collect(),
             placement_fraction: c.pointing.placement_fraction,
-            area_mean_m2: c.photometry.rcs_mean_m2,
-            area_std_m2: c.photometry.rcs_std_m2,
-            albedo: c.photometry.albedo,
+            area: photometry_area(&c.photometry),
+            albedo: match c.photometry.preset {
+                PhotometryPreset::Paper => c.photometry.albedo,
+                PhotometryPreset::NasaFragments => debris_sizes::ODPO_ALBEDO,
+            },
             tumble: match c.photometry.light_curve {
                 LightCurve::None => None,
                 LightCurve::Tumbling {
@@ -262,5 +265,20 @@ pub fn enhance_settings(campaign: Option<&Campaign>) -> enhance::Settings {
         clahe_clip_limit: e.clahe_clip_limit,
         clahe_tiles: e.clahe_tiles,
         gamma: e.gamma,
+    }
+}
+
+/// The area model of a campaign's photometry (its preset's, else the paper's normal).
+fn photometry_area(p: &crate::campaign::Photometry) -> debris_sizes::AreaModel {
+    match p.preset {
+        PhotometryPreset::Paper => debris_sizes::AreaModel::Normal {
+            mean_m2: p.rcs_mean_m2,
+            std_m2: p.rcs_std_m2,
+        },
+        PhotometryPreset::NasaFragments => debris_sizes::AreaModel::Breakup {
+            lc_min_m: 0.1,
+            lc_max_m: 1.0,
+            exponent: debris_sizes::SBM_COLLISION_EXPONENT,
+        },
     }
 }

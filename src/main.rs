@@ -297,6 +297,22 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Export a finished output for other tools: the dataset and the detect stage's predictions
+    /// as COCO JSON (OUT/coco/) and the truth and detections as DS9 region files over the FITS
+    /// (OUT/ds9/); see src/export/. Both unless one is chosen.
+    Export {
+        /// An output directory of `soig run` (it must verify).
+        output: PathBuf,
+        /// Where the exports go, outside the output (default: `<output>-export`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Only COCO JSON.
+        #[arg(long)]
+        coco: bool,
+        /// Only DS9 regions.
+        #[arg(long)]
+        ds9: bool,
+    },
     /// Score YOLO-format predictions (`cls xc yc w h score`) against YOLO labels, exactly as
     /// Ultralytics and pycocotools compute their metrics.
     Eval {
@@ -570,6 +586,27 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Command::Export {
+            output,
+            out,
+            coco,
+            ds9,
+        } => user_errors(|| {
+            let dest = out.unwrap_or_else(|| {
+                // `components` drops a trailing '/', which would put the folder inside.
+                let mut name = output.components().as_path().as_os_str().to_owned();
+                name.push("-export");
+                PathBuf::from(name)
+            });
+            let both = !coco && !ds9;
+            let formats = soig::export::Formats {
+                coco: coco || both,
+                ds9: ds9 || both,
+            };
+            let files = soig::export::export_output(&output, &dest, formats)?;
+            println!("{} files -> {}", files.len(), dest.display());
+            Ok(())
+        }),
         Command::Eval {
             labels,
             predictions,

@@ -26,7 +26,7 @@ use crate::manifest::{self, MANIFEST, Manifest};
 use crate::output::{Resume, write_resumable};
 use crate::progress::Progress;
 use crate::report::{self, DetectorRun, ObjectFacts, TestImage};
-use crate::scene::Pointing;
+use crate::scene::{Pointing, Rejection};
 use crate::shard::Shard;
 use crate::simulate;
 pub use crate::train::{Chunk, parse_budget};
@@ -609,6 +609,15 @@ pub(crate) fn finish(
         )?;
         lap("detect");
     }
+    // The exports read the labels and the predictions back, so they come after the report.
+    let a = &c.artifacts;
+    if a.coco || a.ds9_regions {
+        let formats = crate::export::Formats {
+            coco: a.coco,
+            ds9: a.ds9_regions,
+        };
+        crate::export::write(dir, &dir.join(crate::export::EXPORT_DIR), formats)?;
+    }
     let mut volatile: Vec<String> = report::VOLATILE
         .iter()
         .filter(|v| dir.join(v).is_file())
@@ -632,28 +641,21 @@ pub(crate) fn finish(
     Ok((manifest.digest, mix, steps))
 }
 
-/// The campaign fields that decide a scene-draw rejection reason (`scene::try_draw`).
-fn rejection_fields(reason: &str) -> &'static str {
+/// The campaign fields that decide a scene-draw rejection (`scene::try_draw`).
+fn rejection_fields(reason: Rejection) -> &'static str {
     match reason {
-        "earth angle" => "`visibility.earth_min_deg` (and the observer's attitude)",
-        "sun angle" => "`visibility.sun_min_deg`",
-        "moon angle" => "`visibility.moon_min_deg`",
-        "line of sight through the earth" => {
+        Rejection::EarthAngle => "`visibility.earth_min_deg` (and the observer's attitude)",
+        Rejection::SunAngle => "`visibility.sun_min_deg`",
+        Rejection::MoonAngle => "`visibility.moon_min_deg`",
+        Rejection::ThroughEarth => {
             "`visibility.earth_clearance_km` and the observer's and debris' orbits"
         }
-        "debris in earth shadow" => "the `window` and the debris' orbits (rarely sunlit)",
-        "fainter than the magnitude limit" => {
-            "`sensor.mag_limit`, `photometry` and the debris' ranges"
-        }
-        "star brighter than the limit in the field" => "`visibility.brightest_star_mag`",
-        "signal to noise below the gate" => {
-            "`visibility.snr_min`, `visibility.snr_definition` and `exposure`"
-        }
-        "propagation failed" => "the `window` and the orbits' epochs",
-        "streak too fast to sample (over 1e6 trajectory samples)" => {
-            "`exposure.max_s` and `render.trajectory_samples`"
-        }
-        _ => "the campaign's `exposure`, `pointing` and `visibility`",
+        Rejection::EarthShadow => "the `window` and the debris' orbits (rarely sunlit)",
+        Rejection::TooFaint => "`sensor.mag_limit`, `photometry` and the debris' ranges",
+        Rejection::BrightStar => "`visibility.brightest_star_mag`",
+        Rejection::LowSnr => "`visibility.snr_min`, `visibility.snr_definition` and `exposure`",
+        Rejection::PropagationFailed => "the `window` and the orbits' epochs",
+        Rejection::TooFast => "`exposure.max_s` and `render.trajectory_samples`",
     }
 }
 

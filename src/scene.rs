@@ -11,7 +11,6 @@ use std::collections::BTreeMap;
 use hifitime::{Duration, Epoch};
 use rand::RngExt;
 use rand_chacha::ChaCha12Rng;
-use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
 use crate::background::{BackgroundModel, FrameChoice, RealFrame};
@@ -136,9 +135,8 @@ pub struct Spec {
     pub debris_weights: Vec<f64>,
     /// The debris at mid-exposure is placed uniformly within this fraction of the half-field.
     pub placement_fraction: f64,
-    /// Debris area |N(mean, std)| m^2 and albedo (Eq. 6-7).
-    pub area_mean_m2: f64,
-    pub area_std_m2: f64,
+    /// Debris area and albedo (Eq. 6-7): the paper's |N(mean, std)| m^2, or a preset's.
+    pub area: crate::sky::debris_sizes::AreaModel,
     pub albedo: f64,
     pub tumble: Option<TumbleRange>,
     pub gate: Gate,
@@ -277,7 +275,7 @@ pub struct Scene {
     pub snr_noise_sigma: f64,
     /// Draws tried, and why the rejected ones were rejected.
     pub attempts: u32,
-    pub rejections: BTreeMap<&'static str, u32>,
+    pub rejections: BTreeMap<Rejection, u32>,
 }
 
 impl Scene {
@@ -365,6 +363,70 @@ impl Scene {
     }
 }
 
+/// Why one scene draw was rejected (`try_draw`). Its words (`as_str`, also its `Display`,
+/// `Debug` and serialised form) are the ones truth files and messages have always held, and
+/// it orders by them, so a map of rejections keeps its order and bytes.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Rejection {
+    EarthAngle,
+    SunAngle,
+    MoonAngle,
+    ThroughEarth,
+    EarthShadow,
+    TooFaint,
+    BrightStar,
+    LowSnr,
+    PropagationFailed,
+    TooFast,
+}
+
+impl Rejection {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Rejection::EarthAngle => "earth angle",
+            Rejection::SunAngle => "sun angle",
+            Rejection::MoonAngle => "moon angle",
+            Rejection::ThroughEarth => "line of sight through the earth",
+            Rejection::EarthShadow => "debris in earth shadow",
+            Rejection::TooFaint => "fainter than the magnitude limit",
+            Rejection::BrightStar => "star brighter than the limit in the field",
+            Rejection::LowSnr => "signal to noise below the gate",
+            Rejection::PropagationFailed => "propagation failed",
+            Rejection::TooFast => "streak too fast to sample (over 1e6 trajectory samples)",
+        }
+    }
+}
+
+impl std::fmt::Display for Rejection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::fmt::Debug for Rejection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::Debug::fmt(self.as_str(), f)
+    }
+}
+
+impl Ord for Rejection {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.as_str().cmp(other.as_str())
+    }
+}
+
+impl PartialOrd for Rejection {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Serialize for Rejection {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
 /// Why no scene could be drawn: the image's debris object was never visible.
 #[derive(Debug, thiserror::Error)]
 #[error(
@@ -379,14 +441,13 @@ pub struct NoScene {
     pub attempts: u32,
     pub reasons: String,
     /// Draws rejected for each reason.
-    pub rejections: BTreeMap<&'static str, u32>,
+    pub rejections: BTreeMap<Rejection, u32>,
 }
 
 impl NoScene {
     /// The reasons draws were rejected for, the most frequent first.
-    pub fn reasons_by_count(&self) -> Vec<&'static str> {
-        let mut r: Vec<(&'static str, u32)> =
-            self.rejections.iter().map(|(k, v)| (*k, *v)).collect();
+    pub fn reasons_by_count(&self) -> Vec<Rejection> {
+        let mut r: Vec<(Rejection, u32)> = self.rejections.iter().map(|(k, v)| (*k, *v)).collect();
         r.sort_by_key(|&(_, n)| std::cmp::Reverse(n));
         r.into_iter().map(|(k, _)| k).collect()
     }
@@ -422,7 +483,7 @@ pub fn draw(
     let on_frame = spec.frame_share >= 1.0
         || stream(seed, image, Purpose::BackgroundKind).random::<f64>() < spec.frame_share;
     let rng = &mut stream(seed, image, Purpose::Scene);
-    let mut rejections: BTreeMap<&'static str, u32> = BTreeMap::new();
+    let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
     let max = spec.gate.max_attempts;
     for attempt in 1..=max {
         match try_draw(spec, sensor, inputs, image, debris_index, on_frame, rng) {
@@ -458,7 +519,7 @@ fn try_draw(
     debris_index: usize,
     on_frame: bool,
     rng: &mut ChaCha12Rng,
-) -> Result<Scene, &'static str> {
+) -> Result<Scene, Rejection> {
     let span_s = (spec.window_end - spec.window_start).to_seconds();
     let exposure_s = if spec.exposure_max_s > spec.exposure_min_s {
         rng.random_range(spec.exposure_min_s..=spec.exposure_max_s)
@@ -467,10 +528,7 @@ fn try_draw(
     };
     let start = spec.window_start + Duration::from_seconds(rng.random_range(0.0..span_s));
     let mid = start + Duration::from_seconds(exposure_s / 2.0);
-    let area_m2 = Normal::new(spec.area_mean_m2, spec.area_std_m2)
-        .expect("validated std")
-        .sample(rng)
-        .abs();
+    let area_m2 = spec.area.draw(rng);
     let placement = (
         rng.random_range(-1.0..1.0) * spec.placement_fraction,
         rng.random_range(-1.0..1.0) * spec.placement_fraction,
@@ -503,7 +561,7 @@ fn try_draw(
         mid,
         spec.apparent_positions,
     );
-    let sight = sighting.at(mid).ok_or("propagation failed")?;
+    let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
     let (obs, deb) = (sight.observer_km, sight.debris_km);
     let los = sub(deb, obs);
     let sun = sun_position_km(mid);
@@ -511,27 +569,27 @@ fn try_draw(
     let v = &spec.gate;
     let earth_angle_deg = angle_deg(los, sub([0.0; 3], obs));
     if earth_angle_deg <= v.earth_min_deg {
-        return Err("earth angle");
+        return Err(Rejection::EarthAngle);
     }
     let sun_angle_deg = angle_deg(los, sub(sun, obs));
     if sun_angle_deg <= v.sun_min_deg {
-        return Err("sun angle");
+        return Err(Rejection::SunAngle);
     }
     let moon_angle_deg = angle_deg(los, sub(moon, obs));
     if moon_angle_deg <= v.moon_min_deg {
-        return Err("moon angle");
+        return Err(Rejection::MoonAngle);
     }
     if segment_hits_sphere(obs, deb, EARTH_RADIUS_KM + v.earth_clearance_km) {
-        return Err("line of sight through the earth");
+        return Err(Rejection::ThroughEarth);
     }
     if segment_hits_sphere(deb, sun, EARTH_RADIUS_KM) {
-        return Err("debris in earth shadow");
+        return Err(Rejection::EarthShadow);
     }
     let phase_angle_deg = angle_deg(sub(sun, deb), sub(obs, deb));
     let range_km = norm(los);
     let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km);
     if magnitude.is_nan() || magnitude > sensor.mag_limit {
-        return Err("fainter than the magnitude limit");
+        return Err(Rejection::TooFaint);
     }
 
     // Pointing: the debris at mid-exposure lands at a random place in the field.
@@ -554,7 +612,7 @@ fn try_draw(
         ),
         PointingMode::Survey => {
             let track = survey_track(sensor, &sighting, mid, exposure_s, (ra_p, dec_p))
-                .ok_or("propagation failed")?;
+                .ok_or(Rejection::PropagationFailed)?;
             // The star cone covers the field along the whole drift and nothing more.
             let half_diag_deg =
                 scale * (sensor.width_px as f64).hypot(sensor.height_px as f64) / 2.0;
@@ -570,15 +628,15 @@ fn try_draw(
         .stars
         .stars_in_cone(ra_p, dec_p, cone, sensor.mag_limit, mid);
     if field.iter().any(|s| s.mag < v.brightest_star_mag) {
-        return Err("star brighter than the limit in the field");
+        return Err(Rejection::BrightStar);
     }
 
     // The trajectory, cut in samples at the centres of equal time slices.
     let mid_tan = sensor.projection(ra_p, dec_p);
     let track = sighting
         .track(start, exposure_s)
-        .ok_or("propagation failed")?;
-    let sample = |n: usize| -> Result<Vec<TrajectorySample>, &'static str> {
+        .ok_or(Rejection::PropagationFailed)?;
+    let sample = |n: usize| -> Result<Vec<TrajectorySample>, Rejection> {
         let dt = exposure_s / n as f64;
         let mut trajectory = Vec::with_capacity(n);
         for k in 0..n {
@@ -631,7 +689,7 @@ fn try_draw(
         let factor = (spacing / (MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px)).ceil() as usize;
         let finer = n.saturating_mul(factor);
         if finer > MAX_TRAJECTORY_SAMPLES {
-            return Err("streak too fast to sample (over 1e6 trajectory samples)");
+            return Err(Rejection::TooFast);
         }
         trajectory = sample(finer)?;
     }
@@ -652,7 +710,7 @@ fn try_draw(
         SnrDefinition::NoiseSigma => snr_noise_sigma,
     };
     if snr < v.snr_min {
-        return Err("signal to noise below the gate");
+        return Err(Rejection::LowSnr);
     }
 
     let ephemeris = sighting.ephemeris(start, exposure_s);
@@ -780,4 +838,35 @@ fn survey_track(
     let (x1, y1) = tan.standard(ra1, dec1)?;
     track.trail_angle_deg = (y1 - y0).atan2(x1 - x0).to_degrees();
     Some(track)
+}
+
+#[cfg(test)]
+mod rejection_tests {
+    use super::Rejection;
+    use std::collections::BTreeMap;
+
+    /// Truth files hold rejections as a map from these words, in their alphabetical order.
+    #[test]
+    fn rejections_keep_their_words_and_order() {
+        let mut m = BTreeMap::new();
+        for r in [
+            Rejection::SunAngle,
+            Rejection::EarthAngle,
+            Rejection::LowSnr,
+        ] {
+            m.insert(r, 1u32);
+        }
+        assert_eq!(
+            serde_json::to_string(&m).unwrap(),
+            r#"{"earth angle":1,"signal to noise below the gate":1,"sun angle":1}"#
+        );
+        assert_eq!(
+            format!("{:?}", m),
+            r#"{"earth angle": 1, "signal to noise below the gate": 1, "sun angle": 1}"#
+        );
+        assert_eq!(
+            Rejection::TooFaint.to_string(),
+            "fainter than the magnitude limit"
+        );
+    }
 }

@@ -134,6 +134,14 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "e1240fa7c096a9809228d0e1866e00d39ba22496da028f54cc2a38d257e5c7e9",
     ),
     (
+        "campaigns/quickstart-exports.toml",
+        "392d68d9abd59faded48d9ab0191328265cd74c0dba3a44f1ac321a956ee751e",
+    ),
+    (
+        "campaigns/quickstart-nasa-fragments.toml",
+        "032d4ebbfc399a7da711dd167b279593cec6c2149912b69911569f3511221727",
+    ),
+    (
         "campaigns/survey-quickstart.toml",
         "51b4e0046a486878a8c4af90c3ce8dd4fb195a9ac6babff8b3a66d3c0d38af82",
     ),

@@ -265,6 +265,13 @@ pub enum Background {
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Photometry {
+    /// Named photometry from published sources, replacing the area and albedo below:
+    /// `nasa-fragments` draws fragments of 0.1-1 m from the NASA Standard Breakup Model's size
+    /// distribution and area (Johnson et al. 2001) with NASA ODPO's albedo 0.175 (Mulrooney
+    /// et al. 2008); see src/sky/debris_sizes.rs. Default `paper`: the fields below. Omitted
+    /// from the resolved campaign when `paper`, so hashes stay.
+    #[serde(default, skip_serializing_if = "PhotometryPreset::is_paper")]
+    pub preset: PhotometryPreset,
     /// Effective area A = |N(mean, std)| m^2, drawn per image.
     #[serde(default = "defaults::rcs_mean")]
     pub rcs_mean_m2: f64,
@@ -275,6 +282,26 @@ pub struct Photometry {
     pub albedo: f64,
     #[serde(default)]
     pub light_curve: LightCurve,
+}
+
+/// Named debris photometry (`photometry.preset`).
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum PhotometryPreset {
+    /// The paper's: `rcs_mean_m2`, `rcs_std_m2` and `albedo` (by default albedo 1 and a mean
+    /// area of ~1 m^2: GEO debris of magnitude ~12, far brighter than observed).
+    #[default]
+    Paper,
+    /// Fragments of characteristic length 0.1-1 m (10 cm: the catalogue's usual threshold),
+    /// N(> Lc) ~ Lc^-1.71 and A = 0.556945 Lc^2.0047077 m^2 (NASA Standard Breakup Model,
+    /// collisions), albedo 0.175 (NASA ODPO).
+    NasaFragments,
+}
+
+impl PhotometryPreset {
+    pub fn is_paper(&self) -> bool {
+        *self == PhotometryPreset::Paper
+    }
 }
 
 /// Brightness modulation over the exposure.
@@ -414,6 +441,23 @@ pub struct Artifacts {
     /// for astrometric checks.
     #[serde(default)]
     pub star_list: bool,
+    /// The dataset as COCO JSON, `export/coco/<split>.json`, and the detect stage's
+    /// predictions in COCO's results format, `export/coco/detections_<detector>.json`
+    /// (src/export/coco.rs); needs the `enhance` stage. Omitted from the resolved campaign when
+    /// off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub coco: bool,
+    /// DS9 region files over the FITS images: the truth, `export/ds9/truth/<image>.reg`, and
+    /// each detector's boxes, `export/ds9/<detector>/<image>.reg` (src/export/ds9.rs). Omitted
+    /// from the resolved campaign when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub ds9_regions: bool,
+    /// The debris' brightness over the exposure as rendered, one row per trajectory sample
+    /// (time, magnitude with the tumbling modulation, expected photo-electrons, pixel), as
+    /// `truth/<image>_light_curve.csv` (columns in src/light_curve.rs). Omitted from the
+    /// resolved campaign when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub light_curve: bool,
 }
 
 /// Training through Ultralytics (`soig train`); the paper's hyperparameters by default.

@@ -301,6 +301,28 @@ mod tests {
     }
 
     #[test]
+    fn a_photometry_preset_refuses_the_fields_it_sets_and_keeps_paper_hashes() {
+        let e = load(&minimal(
+            "[photometry]\npreset = \"nasa-fragments\"\nalbedo = 0.5\n",
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("photometry.albedo") && e.contains("preset"),
+            "{e}"
+        );
+        let preset = load(&minimal("[photometry]\npreset = \"nasa-fragments\"\n")).unwrap();
+        assert_eq!(
+            preset.resolved.photometry.preset,
+            PhotometryPreset::NasaFragments
+        );
+        // `paper`, written or not, is the same campaign as before presets existed.
+        let paper = load(&minimal("[photometry]\npreset = \"paper\"\n")).unwrap();
+        assert_eq!(paper.hash, load(&minimal("")).unwrap().hash);
+        assert_ne!(preset.hash, paper.hash);
+    }
+
+    #[test]
     fn defaults_are_the_papers() {
         let c = load(&minimal("")).unwrap();
         let r = &c.resolved;

@@ -1,7 +1,7 @@
 //! Field-level checks of a parsed campaign that need no files: ranges, units, consistency
 //! between sections, the order of stages. Each failure names the field path it is about.
 
-use super::{CampaignFile, FrameKind, LightCurve, PointingMode, Stage, Stars};
+use super::{CampaignFile, FrameKind, LightCurve, PointingMode, Stage, Stars, defaults};
 
 /// Most model stars a scene's star cone may hold.
 const MAX_STARS_PER_CONE: f64 = 2e6;
@@ -201,6 +201,23 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         )?;
     }
     let p = &c.photometry;
+    if !p.preset.is_paper() {
+        for (field, set, default) in [
+            (
+                "photometry.rcs_mean_m2",
+                p.rcs_mean_m2,
+                defaults::rcs_mean(),
+            ),
+            ("photometry.rcs_std_m2", p.rcs_std_m2, defaults::rcs_std()),
+            ("photometry.albedo", p.albedo, defaults::albedo()),
+        ] {
+            check(
+                set == default,
+                field,
+                "the photometry preset sets the area and albedo: remove this field or the preset",
+            )?;
+        }
+    }
     // The largest object in orbit, the ISS, presents a few thousand m^2.
     check(
         p.rcs_mean_m2.is_finite() && p.rcs_mean_m2.abs() <= MAX_AREA_M2,
@@ -391,6 +408,11 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         !(training && d.model.is_some()),
         "detect.model",
         "a campaign with a `train` stage detects with the model it trains: remove `detect.model`",
+    )?;
+    check(
+        !c.artifacts.coco || c.stages.contains(&Stage::Enhance),
+        "artifacts.coco",
+        "the COCO export is of the dataset's PNGs and labels: it needs the `enhance` stage",
     )?;
     let sp = &c.split;
     for (f, x) in [

@@ -46,7 +46,7 @@ mod cases;
 pub use coco_eval::{CocoMetrics, coco};
 pub use matching::{AtThreshold, ImageMatch, at_threshold, iou, match_image};
 pub use ultralytics_map::{UltralyticsMetrics, UltralyticsVersion, ultralytics, ultralytics_with};
-pub use yolo_files::{MetricsError, read_yolo_dirs};
+pub use yolo_files::{MetricsError, read_yolo_dirs, read_yolo_file};
 
 use crate::detect::Detection;
 use serde::{Deserialize, Serialize};

@@ -102,6 +102,16 @@ fn parse_yolo(
     Ok(out)
 }
 
+/// One YOLO-format file: `(class, [x1, y1, x2, y2] normalised, score)` per line, the score 1 for a
+/// label file (`with_score` false).
+pub fn read_yolo_file(
+    path: &Path,
+    with_score: bool,
+) -> Result<Vec<(u32, [f64; 4], f64)>, MetricsError> {
+    let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+    parse_yolo(path, &text, with_score)
+}
+
 /// Reads YOLO-format text files: labels `cls xc yc w h` (normalised), predictions `cls xc yc w h score`,
 /// paired by file stem (`labels/a.txt` with `predictions/a.txt`). A label file with no prediction file
 /// means no detections; a prediction file with no label file is an error, as are malformed lines (the

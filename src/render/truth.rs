@@ -66,7 +66,7 @@ pub struct Truth {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub background_frame_sha256: Option<String>,
     pub attempts: u32,
-    pub rejections: std::collections::BTreeMap<&'static str, u32>,
+    pub rejections: std::collections::BTreeMap<crate::scene::Rejection, u32>,
     /// The debris' RA/Dec at start, middle and end, and the GCRS states at mid-exposure.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ephemeris: Option<crate::sighting::Ephemeris>,

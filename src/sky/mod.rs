@@ -2,6 +2,7 @@
 //! Geometry is in f64, positions in km, angles in degrees unless a name says otherwise.
 
 pub mod apparent;
+pub mod debris_sizes;
 pub mod ephemeris;
 pub mod frames;
 pub mod orbit;

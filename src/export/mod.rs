@@ -1,0 +1,139 @@
+//! Exports of a run's output for other tools: the dataset and the detect stage's predictions as
+//! COCO JSON (`coco`: Detectron2, MMDetection, torchvision, pycocotools), and the truth and the
+//! detections as DS9 region files over the FITS images (`ds9`). Both are read back from the
+//! output's own files (labels, predictions, PNG sizes, truth sidecars), so `soig run` (the
+//! `artifacts.coco` and `artifacts.ds9_regions` switches) and `soig export` of a finished output
+//! write the same bytes.
+
+pub mod coco;
+pub mod ds9;
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+
+/// Which exports to write.
+#[derive(Clone, Copy, Debug)]
+pub struct Formats {
+    pub coco: bool,
+    pub ds9: bool,
+}
+
+/// The folder, inside a run's output, that its own exports go to.
+pub const EXPORT_DIR: &str = "export";
+
+/// A split of the dataset as the output holds it: `train`, `val`, `test`, or `all` when the
+/// campaign has no dataset stage (images and labels straight under `images/` and `labels/`).
+pub struct Split {
+    pub name: &'static str,
+    /// Folder of the PNGs and of the label files, relative to the output.
+    pub images: String,
+    pub labels: String,
+}
+
+/// The splits an output holds, in the order train, val, test (or the one `all`).
+pub fn splits(output: &Path) -> Vec<Split> {
+    let split = |name: &'static str, sub: &str| Split {
+        name,
+        images: format!("images{sub}"),
+        labels: format!("labels{sub}"),
+    };
+    if output.join("labels/train").is_dir() {
+        ["train", "val", "test"]
+            .into_iter()
+            .map(|s| split(s, &format!("/{s}")))
+            .collect()
+    } else if output.join("labels").is_dir() {
+        vec![split("all", "")]
+    } else {
+        Vec::new()
+    }
+}
+
+/// The split the detect stage ran on: test, or every image when there is no split.
+pub fn detected_split(splits: &[Split]) -> Option<&Split> {
+    splits.iter().find(|s| s.name == "test" || s.name == "all")
+}
+
+/// The detectors whose predictions the output holds (`report/predictions/<name>/`), sorted.
+pub fn detectors(output: &Path) -> anyhow::Result<Vec<String>> {
+    let dir = output.join("report/predictions");
+    if !dir.is_dir() {
+        return Ok(Vec::new());
+    }
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(&dir).with_context(|| format!("reading {}", dir.display()))? {
+        let entry = entry?;
+        if entry.path().is_dir() {
+            names.push(entry.file_name().to_string_lossy().into_owned());
+        }
+    }
+    names.sort();
+    Ok(names)
+}
+
+/// Stems of the `*.<ext>` files of `dir`, sorted.
+pub fn stems(dir: &Path, ext: &str) -> anyhow::Result<Vec<String>> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
+        let path = entry?.path();
+        if path.is_file()
+            && path.extension().and_then(|e| e.to_str()) == Some(ext)
+            && let Some(stem) = path.file_stem().and_then(|s| s.to_str())
+        {
+            out.push(stem.to_string());
+        }
+    }
+    out.sort();
+    Ok(out)
+}
+
+/// The campaign image index of a soig file stem `img_NNNNNN`.
+pub fn image_index(stem: &str, path: &Path) -> anyhow::Result<u64> {
+    stem.strip_prefix("img_")
+        .and_then(|n| n.parse().ok())
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "{}: not a soig image (its name is not img_<index>)",
+                path.display()
+            )
+        })
+}
+
+/// Write the chosen exports of the output `output` into `dest` (created); returns the files
+/// written, relative to `dest`.
+pub fn write(output: &Path, dest: &Path, formats: Formats) -> anyhow::Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    if formats.coco {
+        files.extend(coco::write(output, &dest.join("coco"))?);
+    }
+    if formats.ds9 {
+        files.extend(ds9::write(output, &dest.join("ds9"))?);
+    }
+    Ok(files
+        .into_iter()
+        .map(|f| f.strip_prefix(dest).map(Path::to_path_buf).unwrap_or(f))
+        .collect())
+}
+
+/// `soig export`: check that `output` is a soig output whose files match its manifest, then
+/// write its exports into `dest`, which must lie outside it (a file added to an output would
+/// make it fail `soig verify`).
+pub fn export_output(output: &Path, dest: &Path, formats: Formats) -> anyhow::Result<Vec<PathBuf>> {
+    let (_, problems) = crate::manifest::verify(output)?;
+    if let Some(first) = problems.first() {
+        anyhow::bail!(
+            "{} does not verify ({} problem(s), the first: {first}); export a finished output",
+            output.display(),
+            problems.len()
+        );
+    }
+    if std::path::absolute(dest)?.starts_with(std::path::absolute(output)?) {
+        anyhow::bail!(
+            "--out {} lies inside the output {}: choose a folder outside it (the output would no longer verify), or set `artifacts.coco` / `artifacts.ds9_regions` in the campaign",
+            dest.display(),
+            output.display()
+        );
+    }
+    write(output, dest, formats)
+}

@@ -1,0 +1,63 @@
+//! The light-curve table (`artifacts.light_curve`): the debris' brightness over the exposure as
+//! rendered, one row per trajectory sample, written as `truth/<image>_light_curve.csv`.
+//!
+//! Columns: `image` (campaign image index), `object` and `norad` (which debris: a frame with
+//! several objects has rows for each), `sample` (0-based), `t_s` (seconds from the start of the
+//! exposure to the sample, the centre of its equal time slice), `utc` (that instant, ISO 8601),
+//! `magnitude` (Eq. 6 at the sample's geometry with the tumbling modulation of the truth's
+//! `tumble`; `inf` when no light is reflected), `electrons_per_s` (Eq. 3's rate, before the
+//! Poisson draw), `electrons` (the sample's expected photo-electrons: the rate over its slice;
+//! the rendered streak holds a Poisson draw of their sum), `x_px`, `y_px` (0-based pixel
+//! position in the original image with the pointing of the sample's time, before jitter and
+//! PSF). The renderer's samples, so a fast streak sampled finer than
+//! `render.trajectory_samples` has as many rows as it was sampled with.
+
+use std::path::Path;
+
+use anyhow::Context;
+use hifitime::Duration;
+use serde::Serialize;
+
+use crate::render::iso_utc;
+use crate::scene::Scene;
+
+#[derive(Serialize)]
+struct Row<'a> {
+    image: u64,
+    object: &'a str,
+    norad: u64,
+    sample: usize,
+    t_s: f64,
+    utc: String,
+    magnitude: f64,
+    electrons_per_s: f64,
+    electrons: f64,
+    x_px: f64,
+    y_px: f64,
+}
+
+/// Write the light curve of `scene` to `path`.
+pub fn write(path: &Path, scene: &Scene) -> anyhow::Result<()> {
+    let mut w =
+        csv::Writer::from_path(path).with_context(|| format!("writing {}", path.display()))?;
+    let slice_s = scene.exposure_s / scene.trajectory.len() as f64;
+    for (k, s) in scene.trajectory.iter().enumerate() {
+        w.serialize(Row {
+            image: scene.image_index,
+            object: &scene.debris_name,
+            norad: scene.norad,
+            sample: k,
+            t_s: s.t_s,
+            utc: iso_utc(scene.start + Duration::from_seconds(s.t_s)),
+            magnitude: s.mag,
+            electrons_per_s: s.expected_electrons / slice_s,
+            electrons: s.expected_electrons,
+            x_px: s.x_px,
+            y_px: s.y_px,
+        })
+        .with_context(|| format!("writing {}", path.display()))?;
+    }
+    w.flush()
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}

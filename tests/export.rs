@@ -1,0 +1,340 @@
+//! The COCO and DS9 exports (src/export/) read back by their own libraries: pycocotools scores
+//! the COCO files exactly as `soig eval --mode coco` scores the YOLO text files, and
+//! astropy-regions reads the region files back onto the truth sidecars and the COCO boxes.
+//! `soig export` of the finished output writes the same bytes as the run's artifact.
+//!
+//! The Python readers (tests/reference/export_readers.py) need pycocotools and regions in the
+//! project's .venv (`bash scripts/setup.sh`); without them the tests print why and pass, unless
+//! SOIG_REQUIRE_EXPORT_READERS is set (scripts/test.sh sets it), then they fail.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::{CampaignToml, ELEMENTS_40649, digest, soig, tle_object};
+use serde_json::Value;
+
+fn python() -> Option<PathBuf> {
+    let py = Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python3");
+    let ok = std::process::Command::new(&py)
+        .args(["-c", "import pycocotools.cocoeval, regions"])
+        .status()
+        .is_ok_and(|s| s.success());
+    match (
+        ok,
+        std::env::var_os("SOIG_REQUIRE_EXPORT_READERS").is_some(),
+    ) {
+        (true, _) => Some(py),
+        (false, true) => panic!(
+            "{} lacks pycocotools or regions: run scripts/setup.sh",
+            py.display()
+        ),
+        (false, false) => {
+            eprintln!(
+                "skipping: {} lacks pycocotools or regions (scripts/setup.sh)",
+                py.display()
+            );
+            None
+        }
+    }
+}
+
+fn readers(py: &Path, args: &[&str]) -> Value {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/reference/export_readers.py");
+    let out = std::process::Command::new(py)
+        .arg(script)
+        .args(args)
+        .output()
+        .expect("python runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn json(path: &Path) -> Value {
+    serde_json::from_slice(
+        &std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+    )
+    .unwrap()
+}
+
+/// A run of 16 fixed-pointing images in the padded frame (so the DS9 boxes are mapped back
+/// from the PNG), split 50/25/25, detected by the streak detector, with both exports.
+fn run(dir: &Path) -> PathBuf {
+    let campaign = CampaignToml::new("exports", 7, 16)
+        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
+        .debris(&tle_object(37476))
+        .debris(ELEMENTS_40649)
+        .tables(
+            "[enhance]\ngeometry = \"padded\"\n\
+             [split]\ntrain = 0.5\nval = 0.25\ntest = 0.25\n\
+             [artifacts]\ncoco = true\nds9_regions = true\n",
+        )
+        .write(&dir.join("exports.toml"));
+    let out = dir.join("out");
+    let o = soig(&[
+        "run",
+        campaign.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    digest(&o);
+    out
+}
+
+/// Bytes of every file under `dir`, by relative path.
+fn tree(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push((
+                    p.strip_prefix(dir).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                ));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn exports_agree_with_labels_truth_and_soig_eval() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = run(tmp.path());
+    let export = out.join("export");
+
+    // `soig export` of the finished output: the same files, byte for byte, and it verifies.
+    let again = tmp.path().join("again");
+    let o = soig(&[
+        "export",
+        out.to_str().unwrap(),
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(tree(&export), tree(&again));
+    let o = soig(&["verify", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    // Labels, truth and COCO agree: every image of every split, each label line one
+    // annotation whose box is the truth's label box in the PNG frame. The label file rounds
+    // the normalised box to 6 decimals: at most 0.5e-6 x 1088 px = 5.4e-4 px per edge, so
+    // 1.1e-3 px on a width.
+    let mut images = 0;
+    for split in ["train", "val", "test"] {
+        let coco = json(&export.join(format!("coco/{split}.json")));
+        let anns = coco["annotations"].as_array().unwrap();
+        for im in coco["images"].as_array().unwrap() {
+            images += 1;
+            let file = im["file_name"].as_str().unwrap();
+            assert!(file.starts_with(&format!("images/{split}/")), "{file}");
+            let (w, h) = image::image_dimensions(out.join(file)).unwrap();
+            assert_eq!(
+                (im["width"].as_u64(), im["height"].as_u64()),
+                (Some(w.into()), Some(h.into()))
+            );
+            let id = im["id"].as_u64().unwrap();
+            let stem = format!("img_{id:06}");
+            let labels =
+                std::fs::read_to_string(out.join(format!("labels/{split}/{stem}.txt"))).unwrap();
+            let mine: Vec<&Value> = anns.iter().filter(|a| a["image_id"] == id).collect();
+            assert_eq!(mine.len(), labels.lines().count(), "{stem}");
+            let truth = json(&out.join(format!("truth/{stem}.json")));
+            let b = &truth["label_box_final_px"];
+            let edge = |k: &str| b[k].as_f64().unwrap() + 0.5;
+            let want = [
+                edge("x_min"),
+                edge("y_min"),
+                edge("x_max") - edge("x_min"),
+                edge("y_max") - edge("y_min"),
+            ];
+            let got: Vec<f64> = mine[0]["bbox"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            for k in 0..4 {
+                assert!(
+                    (got[k] - want[k]).abs() < 1.1e-3,
+                    "{stem}: bbox {got:?}, truth {want:?}"
+                );
+            }
+            // serde_json's default float parser may miss the written value by an ulp.
+            let area = mine[0]["area"].as_f64().unwrap();
+            assert!(
+                (area - got[2] * got[3]).abs() <= 1e-12 * area,
+                "{stem}: area {area}"
+            );
+        }
+    }
+    assert_eq!(images, 16);
+
+    let Some(py) = python() else { return };
+    // pycocotools on the COCO files, soig eval on the text files: the same figures. soig's
+    // COCO metric repeats pycocotools' (and numpy's) arithmetic step for step (src/metrics/),
+    // and the boxes are the same floats, so the figures are equal to the last bit.
+    let coco = readers(
+        &py,
+        &[
+            "coco",
+            export.join("coco/test.json").to_str().unwrap(),
+            export.join("coco/detections_streak.json").to_str().unwrap(),
+        ],
+    );
+    let o = soig(&[
+        "eval",
+        "--mode",
+        "coco",
+        "--json",
+        "--labels",
+        out.join("labels/test").to_str().unwrap(),
+        "--predictions",
+        out.join("report/predictions/streak").to_str().unwrap(),
+        "--images",
+        out.join("images/test").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let soig_eval: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(coco["categories"], serde_json::json!(["debris"]));
+    assert!(
+        coco["ap50"].as_f64().unwrap() > 0.0,
+        "a test set the detector finds nothing in tests nothing: {coco}"
+    );
+    for k in ["ap", "ap50", "ap75", "ar100"] {
+        assert_eq!(
+            coco[k].as_f64(),
+            soig_eval[k].as_f64(),
+            "{k}: pycocotools {coco}, soig {soig_eval}"
+        );
+    }
+
+    // astropy-regions reads the truth back (0-based pixels, as soig's), and each detection's
+    // polygon is its COCO box moved from the PNG's padded frame to the FITS pixels. The files
+    // hold a thousandth of a pixel: 5e-4 px, and float noise beside it.
+    let tol = 5.0e-4 + 1e-9;
+    let stems: Vec<String> = json(&export.join("coco/test.json"))["images"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|im| format!("img_{:06}", im["id"].as_u64().unwrap()))
+        .collect();
+    let files: Vec<String> = stems
+        .iter()
+        .flat_map(|s| {
+            [
+                export.join(format!("ds9/truth/{s}.reg")),
+                export.join(format!("ds9/streak/{s}.reg")),
+            ]
+        })
+        .map(|p| p.to_str().unwrap().to_string())
+        .collect();
+    let mut args = vec!["regions"];
+    args.extend(files.iter().map(String::as_str));
+    let read = readers(&py, &args);
+    let dets = json(&export.join("coco/detections_streak.json"));
+    let close = |a: &[f64], b: &[f64]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < tol)
+    };
+    let xy = |r: &Value| -> Vec<f64> {
+        r["xy"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    for (s, pair) in stems.iter().zip(files.chunks(2)) {
+        let truth = json(&out.join(format!("truth/{s}.json")));
+        let t = read[&pair[0]].as_array().unwrap();
+        assert_eq!(t.len(), 2, "{s}: {t:?}");
+        assert_eq!(t[0]["kind"], "LinePixelRegion");
+        assert_eq!(t[0]["text"], truth["object"]);
+        let p = |k: &str, i: usize| truth[k][i].as_f64().unwrap();
+        let line = [
+            p("streak_start_px", 0),
+            p("streak_start_px", 1),
+            p("streak_end_px", 0),
+            p("streak_end_px", 1),
+        ];
+        assert!(close(&xy(&t[0]), &line), "{s}: {t:?} vs {line:?}");
+        let b = &truth["label_box_px"];
+        let f = |k: &str| b[k].as_f64().unwrap();
+        let rect = [
+            (f("x_min") + f("x_max")) / 2.0,
+            (f("y_min") + f("y_max")) / 2.0,
+            f("x_max") - f("x_min"),
+            f("y_max") - f("y_min"),
+            0.0,
+        ];
+        assert_eq!(t[1]["kind"], "RectanglePixelRegion");
+        assert!(close(&xy(&t[1]), &rect), "{s}: {t:?} vs {rect:?}");
+
+        let pad = truth["frame"]["matrix"][0][2].as_f64().unwrap();
+        assert!(pad > 0.0);
+        let id = s[4..].parse::<u64>().unwrap();
+        let boxes: Vec<&Value> = dets
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|d| d["image_id"] == id)
+            .collect();
+        let polys = read[&pair[1]].as_array().unwrap();
+        assert_eq!(polys.len(), boxes.len(), "{s}");
+        for (poly, d) in polys.iter().zip(boxes) {
+            let bb: Vec<f64> = d["bbox"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            // PNG edges to 0-based pixel centres (- 0.5), then the border off.
+            let (x1, y1) = (bb[0] - 0.5 - pad, bb[1] - 0.5 - pad);
+            let (x2, y2) = (x1 + bb[2], y1 + bb[3]);
+            assert_eq!(poly["kind"], "PolygonPixelRegion");
+            assert!(
+                close(&xy(poly), &[x1, y1, x2, y1, x2, y2, x1, y2]),
+                "{s}: {poly} vs {bb:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn export_refuses_an_output_that_does_not_verify_and_a_folder_inside_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = run(tmp.path());
+    let o = soig(&[
+        "export",
+        out.to_str().unwrap(),
+        "--out",
+        out.join("x").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("lies inside the output"));
+    assert!(!out.join("x").exists());
+    std::fs::write(out.join("labels/test/extra.txt"), "0 0.5 0.5 0.1 0.1\n").unwrap();
+    let o = soig(&[
+        "export",
+        out.to_str().unwrap(),
+        "--out",
+        tmp.path().join("e").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("does not verify"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!tmp.path().join("e").exists());
+}
