@@ -96,7 +96,10 @@ def cli_error(*args) -> str:
     p = subprocess.run([str(soig_command()), "run", *map(str, args)], capture_output=True,
                        text=True)
     assert p.returncode == 2, p
-    return p.stderr.strip().removeprefix("error: ")
+    # A run that got as far as planning its output says so first (`planned: ...`, issue #33);
+    # the error is what follows.
+    lines = [l for l in p.stderr.strip().splitlines() if not l.startswith("planned: ")]
+    return "\n".join(lines).removeprefix("error: ")
 
 
 def test_set_errors_are_the_cli_errors():
