@@ -448,7 +448,30 @@ fn efficiency_markdown(s: &mut String, efficiencies: &[Efficiency], conf: f64) {
     let Some(first) = efficiencies.first() else {
         return;
     };
-    let _ = write!(s, "\n| magnitude | objects |");
+    let magnitude = efficiency::Quantity::Magnitude;
+    recall_table(s, efficiencies, magnitude, "magnitude", |b| {
+        format!("{:.1}-{:.1}", b.lo, b.hi)
+    });
+    // Survey images: recall by the angle between the streak and the star trails.
+    let angle = efficiency::Quantity::TrailAngleDeg;
+    if !first.curves[&angle].is_empty() {
+        recall_table(s, efficiencies, angle, "angle to the star trails", |b| {
+            format!("{}-{} deg", b.lo, b.hi)
+        });
+    }
+    let _ = writeln!(s, "\n![efficiency](efficiency.png)");
+}
+
+/// One Markdown table of recall by `quantity`: a row per bin (`label` names it), its object
+/// count and each detector's recall.
+fn recall_table(
+    s: &mut String,
+    efficiencies: &[efficiency::Efficiency],
+    quantity: efficiency::Quantity,
+    heading: &str,
+    label: impl Fn(&efficiency::Bin) -> String,
+) {
+    let _ = write!(s, "\n| {heading} | objects |");
     for e in efficiencies {
         let _ = write!(s, " recall {} |", e.detector);
     }
@@ -457,35 +480,13 @@ fn efficiency_markdown(s: &mut String, efficiencies: &[Efficiency], conf: f64) {
         let _ = write!(s, "---|");
     }
     let _ = writeln!(s);
-    let magnitude = efficiency::Quantity::Magnitude;
-    for (k, b) in first.curves[&magnitude].iter().enumerate() {
-        let _ = write!(s, "| {:.1}-{:.1} | {} |", b.lo, b.hi, b.objects);
+    for (k, b) in efficiencies[0].curves[&quantity].iter().enumerate() {
+        let _ = write!(s, "| {} | {} |", label(b), b.objects);
         for e in efficiencies {
-            let _ = write!(s, " {:.2} |", e.curves[&magnitude][k].recall);
+            let _ = write!(s, " {:.2} |", e.curves[&quantity][k].recall);
         }
         let _ = writeln!(s);
     }
-    // Survey images: recall by the angle between the streak and the star trails.
-    let angle = efficiency::Quantity::TrailAngleDeg;
-    if !first.curves[&angle].is_empty() {
-        let _ = write!(s, "\n| angle to the star trails | objects |");
-        for e in efficiencies {
-            let _ = write!(s, " recall {} |", e.detector);
-        }
-        let _ = write!(s, "\n|---|---|");
-        for _ in efficiencies {
-            let _ = write!(s, "---|");
-        }
-        let _ = writeln!(s);
-        for (k, b) in first.curves[&angle].iter().enumerate() {
-            let _ = write!(s, "| {}-{} deg | {} |", b.lo, b.hi, b.objects);
-            for e in efficiencies {
-                let _ = write!(s, " {:.2} |", e.curves[&angle][k].recall);
-            }
-            let _ = writeln!(s);
-        }
-    }
-    let _ = writeln!(s, "\n![efficiency](efficiency.png)");
 }
 
 #[cfg(test)]
