@@ -491,6 +491,29 @@ mod tests {
         (mean, sigma, std(&diffs).1 / sigma)
     }
 
+    /// The two regions of a rotated frame the fill tests compare, as tests of output pixel
+    /// (i, j): inside, at least 1 px from the original's edge (where bilinear clamps); fill, at
+    /// least 2 px outside it (so no bilinear pair straddles the boundary).
+    fn rotated_regions(
+        f: &Frame,
+        w: usize,
+        h: usize,
+    ) -> (
+        impl Fn(usize, usize) -> bool + '_,
+        impl Fn(usize, usize) -> bool + '_,
+    ) {
+        let (w, h) = (w as f64, h as f64);
+        let inside = move |i: usize, j: usize| {
+            let (x, y) = f.unmap(i as f64, j as f64);
+            x > 1.0 && y > 1.0 && x < w - 2.0 && y < h - 2.0
+        };
+        let fill = move |i: usize, j: usize| {
+            let (x, y) = f.unmap(i as f64, j as f64);
+            x < -2.5 || y < -2.5 || x > w + 1.5 || y > h + 1.5
+        };
+        (inside, fill)
+    }
+
     #[test]
     fn rotated_fill_has_the_correlation_of_the_resampled_sky() {
         // The paper's noise: background uniform in [190, 210] ADU plus bias in [2, 3].
@@ -503,17 +526,7 @@ mod tests {
             let mut rng = pixel_stream(1, 0, PixelPurpose::Enhance);
             let f = Frame::rotated(w, h, angle);
             let out = warp(&img, w, h, &f, Fill::SkyNoise(&mut rng));
-            // Inside: at least 1 px from the original's edge (where bilinear clamps); fill: at
-            // least 2 px outside it (so no bilinear pair straddles the boundary).
-            let at = |i: usize, j: usize| f.unmap(i as f64, j as f64);
-            let inside = |i, j| {
-                let (x, y) = at(i, j);
-                x > 1.0 && y > 1.0 && x < w as f64 - 2.0 && y < h as f64 - 2.0
-            };
-            let fill = |i, j| {
-                let (x, y) = at(i, j);
-                x < -2.5 || y < -2.5 || x > w as f64 + 1.5 || y > h as f64 + 1.5
-            };
+            let (inside, fill) = rotated_regions(&f, w, h);
             let (mi, si, ci) = contrast(&out, f.width, inside);
             let (mf, sf, cf) = contrast(&out, f.width, fill);
             // Tens of thousands of pixels in each region: the standard error of a standard
@@ -568,15 +581,7 @@ mod tests {
             let mut rng = pixel_stream(2, 0, PixelPurpose::Enhance);
             let f = Frame::rotated(w, h, angle);
             let out = warp(&img, w, h, &f, Fill::SkyNoise(&mut rng));
-            let at = |i: usize, j: usize| f.unmap(i as f64, j as f64);
-            let inside = |i, j| {
-                let (x, y) = at(i, j);
-                x > 1.0 && y > 1.0 && x < w as f64 - 2.0 && y < h as f64 - 2.0
-            };
-            let fill = |i, j| {
-                let (x, y) = at(i, j);
-                x < -2.5 || y < -2.5 || x > w as f64 + 1.5 || y > h as f64 + 1.5
-            };
+            let (inside, fill) = rotated_regions(&f, w, h);
             let (_, si, _) = contrast(&out, f.width, inside);
             let (_, sf, _) = contrast(&out, f.width, fill);
             // The tail makes the pixel values' kurtosis large (0.01 * 100^4 / 125^2 = 64 before
