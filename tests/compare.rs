@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, soig, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, ort_available, soig, tle_object};
 
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
@@ -62,17 +62,6 @@ fn copy_dir(from: &Path, to: &Path) {
             copy_dir(&entry.path(), &target);
         } else {
             std::fs::copy(entry.path(), target).unwrap();
-        }
-    }
-}
-
-fn ort_available() -> bool {
-    match soig::detect::yolo::find_onnxruntime() {
-        Ok(_) => true,
-        Err(e) if std::env::var_os("SOIG_REQUIRE_ONNXRUNTIME").is_some() => panic!("{e}"),
-        Err(e) => {
-            eprintln!("skipping: {e}");
-            false
         }
     }
 }

@@ -4,6 +4,9 @@
 //! whose header names a detector ("streak", "yolo") and whose cell is a whole number is a count
 //! of that detector's boxes on the row's frame (named by its file stem anywhere in the row).
 
+mod common;
+use common::ort_available;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -45,19 +48,6 @@ fn section<'a>(text: &'a str, heading: &str) -> &'a str {
         })
         .unwrap_or(rest.len() - 1);
     &rest[..end + 1]
-}
-
-/// Whether ONNX Runtime is there for the YOLO detector: else the test says why and passes,
-/// unless SOIG_REQUIRE_ONNXRUNTIME is set (the test command sets it), as tests/yolo.rs.
-fn ort_available() -> bool {
-    match soig::detect::yolo::find_onnxruntime() {
-        Ok(_) => true,
-        Err(e) if std::env::var_os("SOIG_REQUIRE_ONNXRUNTIME").is_some() => panic!("{e}"),
-        Err(e) => {
-            eprintln!("skipping: {e}");
-            false
-        }
-    }
 }
 
 #[test]

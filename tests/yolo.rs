@@ -6,12 +6,13 @@
 //! Tests that run the model need the ONNX Runtime library (`pip install onnxruntime`); without it
 //! they print why and pass, unless SOIG_REQUIRE_ONNXRUNTIME is set (then they fail).
 
+mod common;
+use common::ort_available;
+
 use std::path::{Path, PathBuf};
 
 use soig::detect::Detection;
-use soig::detect::yolo::{
-    YoloDetector, YoloError, YoloParams, find_onnxruntime, letterbox_gray, resize_linear_u8,
-};
+use soig::detect::yolo::{YoloDetector, YoloError, YoloParams, letterbox_gray, resize_linear_u8};
 
 mod expected {
     include!("fixtures/yolo/expected.rs");
@@ -30,17 +31,6 @@ fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fixtures/yolo")
         .join(name)
-}
-
-fn ort_available() -> bool {
-    match find_onnxruntime() {
-        Ok(_) => true,
-        Err(e) if std::env::var_os("SOIG_REQUIRE_ONNXRUNTIME").is_some() => panic!("{e}"),
-        Err(e) => {
-            eprintln!("skipping: {e}");
-            false
-        }
-    }
 }
 
 fn load_gray(name: &str) -> (Vec<u8>, usize, usize) {
