@@ -8,7 +8,7 @@ use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, digest, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, differing_files, digest, tle_object};
 
 /// `images` small images (fixed pointing, the detect stage with the streak detector), written
 /// as `dir/NAME.toml`.
@@ -84,7 +84,12 @@ fn killed_at_any_phase_a_run_resumes_to_the_same_digest() {
     assert_eq!(stopped.status.code(), None, "{stopped:?}");
     let resumed = command(&long, &out).output().unwrap();
     let reference = digest(&command(&long, &t.join("reference")).output().unwrap());
-    assert_eq!(digest(&resumed), reference);
+    assert_eq!(
+        digest(&resumed),
+        reference,
+        "files that differ: {:?}",
+        differing_files(&out, &t.join("reference"))
+    );
     let said = String::from_utf8_lossy(&resumed.stdout);
     assert!(
         said.contains("resumed)") && !said.starts_with("150 images"),
@@ -160,7 +165,12 @@ fn sigterm_keeps_the_work_and_the_same_command_resumes_it() {
     let resumed = command(&c, &out).output().unwrap();
     assert!(String::from_utf8_lossy(&resumed.stdout).contains("resumed)"));
     let reference = digest(&command(&c, &t.join("reference")).output().unwrap());
-    assert_eq!(digest(&resumed), reference);
+    assert_eq!(
+        digest(&resumed),
+        reference,
+        "files that differ: {:?}",
+        differing_files(&out, &t.join("reference"))
+    );
     assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
 }
 

@@ -152,3 +152,27 @@ pub fn ort_available() -> bool {
         }
     }
 }
+
+/// The files whose sha256 differs between the manifests of outputs `a` and `b` (or that only
+/// one lists): what a digest mismatch is made of, for the failure message.
+#[allow(dead_code)]
+pub fn differing_files(a: &Path, b: &Path) -> Vec<String> {
+    let files = |dir: &Path| -> std::collections::BTreeMap<String, String> {
+        let text = std::fs::read_to_string(dir.join("manifest.json")).unwrap_or_default();
+        let m: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+        m["files"]
+            .as_object()
+            .map(|f| {
+                f.iter()
+                    .map(|(k, v)| (k.clone(), v["sha256"].as_str().unwrap_or("").to_string()))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let (fa, fb) = (files(a), files(b));
+    let mut names: Vec<String> = fa.keys().chain(fb.keys()).cloned().collect();
+    names.sort();
+    names.dedup();
+    names.retain(|n| fa.get(n) != fb.get(n));
+    names
+}
