@@ -246,6 +246,10 @@ enum Command {
         /// YOLO confidence threshold (default: the campaign's, else 0.5).
         #[arg(long)]
         conf: Option<f64>,
+        /// Say why the streak detector dropped each segment it refined (stage and test), on
+        /// stdout and as each frame's `dropped` in detections.json.
+        #[arg(long)]
+        explain: bool,
     },
     /// The paper's FITS -> PNG conversion (square root for fixed pointing, log stretch, CLAHE,
     /// gamma, 8-bit PNG) of any FITS, soig's or a real frame's sky region: OUT/<stem>.png per
@@ -746,6 +750,7 @@ fn main() -> ExitCode {
             pixel_scale_arcsec,
             star_trail_angle_deg,
             conf,
+            explain,
         } => user_errors(|| {
             use soig::detect_frames::{Optics, Options, Which};
             let campaign = campaign.map(|c| Campaign::load(&c)).transpose()?;
@@ -761,6 +766,7 @@ fn main() -> ExitCode {
                 pixel_scale_arcsec,
             };
             opts.star_trail_angle_deg = star_trail_angle_deg;
+            opts.explain = explain;
             if let Some(path) = streak {
                 opts.streak = soig::detect_frames::streak_params_file(&path)?;
             }
@@ -770,6 +776,9 @@ fn main() -> ExitCode {
             let s = soig::detect_frames::run(&inputs, &out, &opts)?;
             for f in &s.frames {
                 println!("{}: {} detection(s)", f.file, f.detections.len());
+                for d in &f.dropped {
+                    println!("  dropped {d}");
+                }
             }
             println!("-> {}\ndigest {}", s.output.display(), s.digest);
             Ok(())

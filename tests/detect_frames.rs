@@ -204,9 +204,10 @@ fn finds_a_rendered_streak_on_the_pixel_grid_and_the_sky() {
 }
 
 /// The raw NEOSSat frame of 2026-01-25 (uint16 with BZERO, prescan and overscan cut by TRIMSEC,
-/// a CD-matrix WCS): with docs/detect/neossat-streak.toml the streak detector finds its bright
-/// streak, from about (706, 0) to (733, 206) in the file's pixels as a person reads it off the
-/// frame (README, "Detecting on real frames"), within 5 px at each end.
+/// a CD-matrix WCS): with no options at all the streak detector finds its bright streak, from
+/// about (706, 0) to (733, 206) in the file's pixels as a person reads it off the frame (README,
+/// "Detecting on real frames"), within 5 px at each end, at confidence 0.5 or more, with at
+/// most one other box that confident among the frame's faint star trails and warm pixels.
 #[test]
 fn finds_the_bright_streak_of_the_raw_neossat_frame() {
     let frame = repo("tests/fixtures/neossat/NEOSSAT_240__30_2026025124741.fits");
@@ -215,12 +216,21 @@ fn finds_the_bright_streak_of_the_raw_neossat_frame() {
     ok(soig(&[
         "detect",
         frame.to_str().unwrap(),
-        "--streak",
-        repo("docs/detect/neossat-streak.toml").to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
     ]));
     let found = json(&out.join("detections.json"));
+    let confident = found["frames"][0]["detections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|d| d["confidence"].as_f64().unwrap() >= 0.5)
+        .count();
+    assert!(
+        (1..=2).contains(&confident),
+        "{confident} boxes at confidence 0.5: {}",
+        found["frames"][0]["detections"]
+    );
     let f = &found["frames"][0];
     assert_eq!(f["region_keyword"], "TRIMSEC");
     assert_eq!(f["region"]["x0"], 40);
@@ -232,6 +242,7 @@ fn finds_the_bright_streak_of_the_raw_neossat_frame() {
         (near(a, top) && near(b, bottom)) || (near(b, top) && near(a, bottom))
     });
     let streak = streak.unwrap_or_else(|| panic!("not found: {}", f["detections"]));
+    assert!(streak["confidence"].as_f64().unwrap() >= 0.5, "{streak}");
     // Its centre on the sky, through the frame's WCS: astropy's `WCS(header).all_pix2world`
     // of 0-based pixel (719, 103), the streak's middle read off the frame, is (240.636521,
     // -29.796171). 10 arcsec is 3.3 px: the box centre's distance from that reading.
@@ -240,6 +251,84 @@ fn finds_the_bright_streak_of_the_raw_neossat_frame() {
         separation_deg(c, [240.636521, -29.796171]) < 10.0 / 3600.0,
         "{c:?}"
     );
+}
+
+/// The raw 28 s dark frame (hot pixels, column structure, the level rising by 300 ADU down the
+/// frame) holds nothing to find: with no options, no streak box at confidence 0.5. With
+/// `--explain`, every segment the detector refined and dropped is on stdout and in
+/// detections.json with its stage and test.
+#[test]
+fn the_raw_dark_frame_gives_no_confident_box_and_explains_what_it_dropped() {
+    let frame = repo("tests/fixtures/neossat/NEOSSAT_240__30_2020214095318.fits");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("det");
+    let o = ok(soig(&[
+        "detect",
+        frame.to_str().unwrap(),
+        "--explain",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let found = json(&out.join("detections.json"));
+    let f = &found["frames"][0];
+    let confident: Vec<_> = f["detections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|d| d["confidence"].as_f64().unwrap() >= 0.5)
+        .collect();
+    assert!(confident.is_empty(), "{confident:?}");
+    let dropped = f["dropped"].as_array().expect("--explain writes `dropped`");
+    assert!(
+        !dropped.is_empty(),
+        "the dark frame's warm pixels seed segments"
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let lines: Vec<&str> = stdout.lines().filter(|l| l.contains("dropped (")).collect();
+    assert_eq!(lines.len(), dropped.len(), "{stdout}");
+    for d in dropped {
+        let test = d["reason"]["test"].as_str().unwrap();
+        assert!(
+            [
+                "no-level",
+                "short-fragment",
+                "star-trail",
+                "too-short",
+                "not-elongated",
+                "low-snr",
+                "gap",
+                "duplicate",
+                "over-cap"
+            ]
+            .contains(&test),
+            "{d}"
+        );
+        // Its ends lie in the file's pixel grid (the sky region starts at column 16).
+        let x = d["ends"][0][0].as_f64().unwrap();
+        assert!((0.0..=1088.0).contains(&x), "{d}");
+    }
+    // Each line names the stage and the test's measured value against its knob.
+    assert!(
+        lines.iter().all(|l| [
+            "refine: ",
+            "star trails: ",
+            "accept: ",
+            "explaining away: ",
+            "output: "
+        ]
+        .iter()
+        .any(|s| l.contains(s))),
+        "{stdout}"
+    );
+    // Without --explain, detections.json has no `dropped`.
+    let out2 = tmp.path().join("det2");
+    ok(soig(&[
+        "detect",
+        frame.to_str().unwrap(),
+        "--out",
+        out2.to_str().unwrap(),
+    ]));
+    assert!(json(&out2.join("detections.json"))["frames"][0]["dropped"].is_null());
 }
 
 fn assert_fails(args: &[&str], out: &Path, expect: &[&str]) {

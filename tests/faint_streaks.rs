@@ -122,11 +122,12 @@ fn debris_free_backgrounds_of_the_three_frames_give_no_box() {
 }
 
 /// Measured 2026-11-26 (IoU of the best box at confidence 0.5): every streak of L >= 300 px off
-/// the rows is found on all three frames (IoU 0.88-1.00), and all six on the raw science frame.
-/// Missed: on the dark frame (the semisynthetic test sets' noise) the 240 px at 20 deg (MF SNR
-/// 25), the 200 px at 60 deg (23) and the row-aligned 400 px (32.5: its row-correlated noise
-/// makes sums along rows several times noisier than white noise), and on the calibrated frame
-/// the 240 px at 20 deg. The test asserts the first set and at least 14 of the 18.
+/// the rows is found on all three frames (IoU 0.89-1.00), and all six on the raw science frame
+/// and on the calibrated frame (0.91-1.00; its 240 px at 20 deg was missed before the map was
+/// centred on its median, see `detect::streak`). Missed: on the dark frame (the semisynthetic
+/// test sets' noise) the 240 px at 20 deg (MF SNR 25), the 200 px at 60 deg (23) and the
+/// row-aligned 400 px (32.5: its row-correlated noise makes sums along rows several times noisier
+/// than white noise). The test asserts the first set and at least 15 of the 18.
 #[test]
 fn streaks_of_per_pixel_snr_1_and_integrated_snr_20_to_40_are_found() {
     // (length px, angle deg): lengths chosen so that the white-noise matched-filter SNR
@@ -177,5 +178,5 @@ fn streaks_of_per_pixel_snr_1_and_integrated_snr_20_to_40_are_found() {
         must_miss, 0,
         "a streak of L >= 300 px off the rows missed:\n{report}"
     );
-    assert!(found_n >= 14, "only {found_n} of 18 found:\n{report}");
+    assert!(found_n >= 15, "only {found_n} of 18 found:\n{report}");
 }

@@ -19,7 +19,7 @@ use anyhow::{Context, bail};
 
 use crate::campaign::{Campaign, Detect};
 use crate::detect::Detection;
-use crate::detect::streak::{StreakParams, detect_streaks};
+use crate::detect::streak::{Dropped, StreakParams, detect_streaks_explained};
 use crate::detect::yolo::{YoloDetector, YoloParams};
 use crate::enhance::{self, Gray8};
 use crate::frames::{Frame, RegionPixels};
@@ -75,6 +75,8 @@ pub struct Options {
     pub star_trail_angle_deg: Option<f64>,
     /// The campaign the settings came from, for the record.
     pub campaign: Option<PathBuf>,
+    /// Record why the streak detector dropped each segment it refined (`--explain`).
+    pub explain: bool,
 }
 
 impl Options {
@@ -95,6 +97,7 @@ impl Options {
             optics: Optics::default(),
             star_trail_angle_deg: None,
             campaign: campaign.map(|c| c.source.clone()),
+            explain: false,
         }
     }
 }
@@ -155,6 +158,10 @@ pub struct FrameResult {
     /// calibrated frame whose sky was subtracted), so the square root does not clip half of it.
     pub pedestal: f64,
     pub detections: Vec<Found>,
+    /// With `--explain`: the streak detector's segments that did not become detections, and why
+    /// (ends shifted into the file's pixel grid as the detections').
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub dropped: Vec<Dropped>,
 }
 
 /// The outcome of `soig detect`.
@@ -268,6 +275,7 @@ fn detect_frame(
         ),
     };
     let mut found = Vec::new();
+    let mut dropped = Vec::new();
     let (ox, oy) = (frame.region.x0 as f64, frame.region.y0 as f64);
     let shift = |d: &Detection| [d.x1 + ox, d.y1 + oy, d.x2 + ox, d.y2 + oy];
     if opts.which != Which::Yolo {
@@ -275,7 +283,15 @@ fn detect_frame(
             psf_sigma_px: psf_fwhm_px / FWHM_PER_SIGMA,
             ..opts.streak.clone()
         };
-        for c in detect_streaks(&enhanced.pixels, rw, rh, &params, opts.star_trail_angle_deg) {
+        let (cands, why) =
+            detect_streaks_explained(&enhanced.pixels, rw, rh, &params, opts.star_trail_angle_deg);
+        if opts.explain {
+            dropped = why;
+            for d in &mut dropped {
+                d.ends = d.ends.map(|[x, y]| [x + ox, y + oy]);
+            }
+        }
+        for c in cands {
             let ends = c.ends.map(|[x, y]| [x + ox, y + oy]);
             found.push(Found {
                 detector: "streak",
@@ -330,6 +346,7 @@ fn detect_frame(
         non_finite_pixels: non_finite,
         pedestal,
         detections: found,
+        dropped,
     };
     Ok((result, enhanced))
 }

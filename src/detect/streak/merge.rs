@@ -124,3 +124,69 @@ impl Ctx<'_> {
         gap <= p.merge_gap
     }
 }
+
+/// The gap test: a chunk of a candidate whose mean contrast is below this fraction of the
+/// candidate's level ...
+const GAP_LEVEL: f64 = 0.5;
+/// ... by more than this many of the chunk's noise sigmas is a gap (see [`Ctx::gap`]).
+const GAP_SIGMA: f64 = 2.5;
+
+/// A chunk of a candidate that holds no streak: which one, its level as a fraction of the
+/// candidate's, and how many noise sigmas below that level it lies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Gap {
+    pub(super) chunk: usize,
+    pub(super) chunks: usize,
+    pub(super) level: f64,
+    pub(super) sigma: f64,
+}
+
+impl Ctx<'_> {
+    /// The first gap of `s`, if any. A streak is there along its whole length; a chain of
+    /// stars or of star blobs (the jitter-smeared stars of fixed-pointing images, two or three
+    /// in a row make a short "streak" of SNR 9-12) is not. The contrast profile is cut into
+    /// chunks, as many as keep each chunk's SNR about 4 ((snr / 4)^2, 2 to 8), and a chunk whose
+    /// mean is below `GAP_LEVEL` of the segment's median and `GAP_SIGMA` of its own noise below
+    /// it is a gap. A tumbling debris' brightness varies by at most a factor of 3 (1.15 mag in
+    /// 160 test images), so its faintest chunk stays above half the median but for noise; the
+    /// sigma test keeps faint streaks, whose chunks are noisy, from failing by chance (0.6 % a
+    /// chunk). On 100 fixed-pointing synthetic images it drops 52 of 63 false boxes at
+    /// confidence 0.5 and no streak; on 60 semisynthetic ones all 3 and no streak.
+    pub(super) fn gap(&self, s: &Seg) -> Option<Gap> {
+        let (ux, uy) = s.dir();
+        let (nx, ny) = (-uy, ux);
+        let hl = 0.5 * s.length;
+        let ta = (-hl + 0.5).ceil() as i64;
+        let tb = (hl - 0.5).floor() as i64;
+        let taps = self.contrast_taps();
+        let vals: Vec<f64> = (ta..=tb)
+            .map(|t| {
+                let (x, y) = (s.cx + t as f64 * ux, s.cy + t as f64 * uy);
+                self.contrast(&taps, x, y, nx, ny)
+            })
+            .collect();
+        let n = vals.len();
+        if n < 4 {
+            return None;
+        }
+        let level = median_of(&mut vals.clone());
+        if level <= 0.0 {
+            return None;
+        }
+        let k = ((s.snr / 4.0).powi(2).floor().max(0.0) as usize)
+            .clamp(2, 8)
+            .min(n / 2);
+        (0..k).find_map(|c| {
+            let (a, b) = (c * n / k, (c + 1) * n / k);
+            let m = (b - a) as f64;
+            let mean = vals[a..b].iter().sum::<f64>() / m;
+            let sd = self.contrast_sum_sd(&taps, s.theta, b - a) / m;
+            (mean < GAP_LEVEL * level && level - mean > GAP_SIGMA * sd).then_some(Gap {
+                chunk: c,
+                chunks: k,
+                level: mean / level,
+                sigma: (level - mean) / sd,
+            })
+        })
+    }
+}

@@ -12,7 +12,7 @@
 //! 2. **Cross-section matched filter.** `q` is smoothed by a Gaussian of `psf_sigma_px` (the
 //!    streak's cross-section profile; mirrored edges, with the edge rows and columns rescaled to
 //!    the interior noise) and divided by its robust (MAD) standard deviation, giving `z` with
-//!    unit noise. Survey images (trail direction given): structures along the trail direction
+//!    unit noise, less its median where that is above zero (a sensor's hot pixels skew it). Survey images (trail direction given): structures along the trail direction
 //!    are subtracted (one-sided means over `trail_filter_px` pixels along it, see
 //!    `remove_trails`). Stars are masked: round local maxima of `z` above `star_mask_sigma`
 //!    (ring test, `star_ring_ratio`) are zeroed out to where they fade into the noise. A copy
@@ -56,7 +56,9 @@
 //!    `min_fragment_px` are dropped; collinear fragments (angle within `merge_angle_deg`,
 //!    lateral offsets within `merge_offset_px`, gap along the axis within `merge_gap_px`) are
 //!    merged and re-refined until none merge. Candidates need length >= `min_length_px`,
-//!    elongation >= `min_elongation` and SNR >= `min_snr`; the trail test is applied again.
+//!    elongation >= `min_elongation` and SNR >= `min_snr`; the trail test is applied again;
+//!    and no gap: no chunk of the profile far below its level (a chain of stars, `merge::gap`).
+//!    Every segment dropped, and why, is recorded (`explain`, `soig detect --explain`).
 //!    Explaining away, best score first: the profile samples of a candidate within
 //!    `duplicate_distance_px` of a better candidate are ignored and the rest must still pass
 //!    the length and SNR tests (drops duplicates and the off-axis echoes of bright streaks).
@@ -84,6 +86,7 @@
 
 mod background;
 mod components;
+mod explain;
 mod lines;
 mod merge;
 mod noise;
@@ -103,6 +106,7 @@ mod trails;
 use super::Detection;
 use background::background;
 use components::components;
+pub use explain::{Dropped, Reason, Seeds};
 use lines::line_filter;
 use merge::angle_diff_deg;
 use noise::LineNoise;
@@ -413,6 +417,18 @@ pub fn detect_streaks(
     params: &StreakParams,
     star_trail_angle_deg: Option<f64>,
 ) -> Vec<Candidate> {
+    detect(pixels, width, height, params, star_trail_angle_deg, None).0
+}
+
+/// [`detect_streaks`], and every refined segment that did not become a candidate, with why
+/// (`soig detect --explain`).
+pub fn detect_streaks_explained(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    params: &StreakParams,
+    star_trail_angle_deg: Option<f64>,
+) -> (Vec<Candidate>, Vec<Dropped>) {
     detect(pixels, width, height, params, star_trail_angle_deg, None)
 }
 
@@ -434,7 +450,7 @@ pub fn detect_streaks_among_stars(
     stars: Option<&[StarTrail]>,
 ) -> Vec<Candidate> {
     let trail = star_trail_angle_deg.filter(|a| a.is_finite());
-    let mut found = detect(pixels, width, height, params, star_trail_angle_deg, None);
+    let mut found = detect(pixels, width, height, params, star_trail_angle_deg, None).0;
     let (Some(stars), Some(trail)) = (stars, trail) else {
         return found;
     };
@@ -460,6 +476,7 @@ pub fn detect_streaks_among_stars(
     };
     found.extend(
         detect(pixels, width, height, params, Some(trail), Some(stars))
+            .0
             .into_iter()
             .filter(|c| near_trail(c) && new_one(c)),
     );
@@ -468,7 +485,8 @@ pub fn detect_streaks_among_stars(
     found
 }
 
-/// The detector's pipeline; with `stars`, the star-aware variant of its second pass.
+/// The detector's pipeline; with `stars`, the star-aware variant of its second pass. Returns
+/// the candidates and the segments dropped on the way, with why.
 fn detect(
     pixels: &[u8],
     width: usize,
@@ -476,14 +494,14 @@ fn detect(
     params: &StreakParams,
     star_trail_angle_deg: Option<f64>,
     stars: Option<&[StarTrail]>,
-) -> Vec<Candidate> {
+) -> (Vec<Candidate>, Vec<Dropped>) {
     assert_eq!(
         pixels.len(),
         width * height,
         "pixels.len() must be width * height"
     );
     if width < 2 || height < 2 {
-        return Vec::new();
+        return (Vec::new(), Vec::new());
     }
     let p = Sanitized::new(params);
     let (w, h) = (width, height);
@@ -502,9 +520,18 @@ fn detect(
     drop(q);
     equalise_edge_noise(&mut z, w, h, &kernel);
     let kappa_white: f64 = kernel.iter().map(|&k| (k as f64) * (k as f64)).sum();
-    let kappa = map_stats(&z, w, h).1.max(0.5 * kappa_white);
+    let (z_med, z_sd) = map_stats(&z, w, h);
+    let kappa = z_sd.max(0.5 * kappa_white);
     let inv_kappa = (1.0 / kappa) as f32;
-    z.iter_mut().for_each(|v| *v *= inv_kappa);
+    // Centred on the map's own median where that is above zero. A real sensor's warm and hot
+    // pixels skew its noise to the right, and smoothing moves the map's centre from the pixels'
+    // median towards their mean: 2 sigma above zero on the raw 187 s NEOSSat frame, which left
+    // a bright streak, clipped at `clip_sigma`, 2 sigma of headroom, no more than the warm
+    // pixels around it, and it was lost. Synthetic maps sit a little below zero (-0.5 to -1.7
+    // sigma), which leaves more headroom than `clip_sigma`; they stay as tuned (centring them too
+    // raised their false boxes at confidence 0.5 from 63 to 100 in 100 fixed-pointing images).
+    let centre = z_med.max(0.0) as f32;
+    z.iter_mut().for_each(|v| *v = (*v - centre) * inv_kappa);
     // The map before any trail is subtracted: what the star-aware test compares levels on.
     let sky = stars.map(|t| (sky::Sky::new(t, &z, w, h, &p), z.clone()));
     if let Some((sky, _)) = &sky {
@@ -561,28 +588,39 @@ fn detect(
         }
         (None, None) => false,
     };
-    let fragments = |comps: &[(components::Component, f64)], contrast: bool| -> Vec<Seg> {
-        let mut frags = Vec::new();
-        for &(ref c, kmax) in comps {
-            let shrink = (kmax / 2.0).min(c.half_len / 2.0);
-            let seed = Seed {
-                cx: c.cx,
-                cy: c.cy,
-                theta: c.theta,
-                half: c.half_len,
-                shrink,
-                ext: kmax,
-                contrast,
-            };
-            if let Some(s) = ctx.refine(&seed)
-                && s.length >= p.min_fragment
-                && !aligned(&s)
-            {
-                frags.push(s);
+    let mut dropped: Vec<Dropped> = Vec::new();
+    let mut fragments =
+        |comps: &[(components::Component, f64)], contrast: bool, seeds: Seeds| -> Vec<Seg> {
+            let mut frags = Vec::new();
+            for &(ref c, kmax) in comps {
+                let shrink = (kmax / 2.0).min(c.half_len / 2.0);
+                let seed = Seed {
+                    cx: c.cx,
+                    cy: c.cy,
+                    theta: c.theta,
+                    half: c.half_len,
+                    shrink,
+                    ext: kmax,
+                    contrast,
+                };
+                let Some(s) = ctx.refine(&seed) else {
+                    dropped.push(Dropped::of_axis((c.cx, c.cy), c.theta, c.half_len, seeds));
+                    continue;
+                };
+                if s.length < p.min_fragment {
+                    let r = Reason::ShortFragment {
+                        length_px: s.length,
+                        limit: p.min_fragment,
+                    };
+                    dropped.push(Dropped::of_seg(&s, seeds, r));
+                } else if aligned(&s) {
+                    dropped.push(Dropped::of_seg(&s, seeds, Reason::StarTrail));
+                } else {
+                    frags.push(s);
+                }
             }
-        }
-        frags
-    };
+            frags
+        };
     // The two stages' fragments are merged apart: a long-line fragment overlapping a local
     // one (the same streak, its ends less sharp) would otherwise re-refine it into a segment
     // that can fail where the local one passed. Where both find a streak, explaining away
@@ -590,25 +628,57 @@ fn detect(
     // Profiles by contrast (see `refine`), except for the local seeds of survey images, where
     // parallel star trails fall in the side bands (a false candidate at confidence 0.66 in
     // `survey_trails_rejected_and_debris_found`).
-    let mut merged = ctx.merge(fragments(&local, trail.is_none()), &aligned);
-    merged.extend(ctx.merge(fragments(&long, true), &aligned));
+    let local_frags = fragments(&local, trail.is_none(), Seeds::Local);
+    let long_frags = fragments(&long, true, Seeds::LongLine);
+    let mut merged: Vec<(Seg, Seeds)> = ctx
+        .merge(local_frags, &aligned)
+        .into_iter()
+        .map(|s| (s, Seeds::Local))
+        .collect();
+    merged.extend(
+        ctx.merge(long_frags, &aligned)
+            .into_iter()
+            .map(|s| (s, Seeds::LongLine)),
+    );
 
     // 7. Acceptance, scoring, duplicates.
-    let mut cands: Vec<(Seg, f64)> = merged
-        .into_iter()
-        .filter(|s| {
-            s.length >= p.min_length
-                && s.elongation >= p.min_elongation
-                && s.snr >= p.min_snr
-                && !aligned(s)
-        })
-        .map(|s| {
-            let score = confidence(s.snr, s.elongation, (w * h) as f64, &p);
-            (s, score)
-        })
-        .collect();
+    let mut cands: Vec<(Seg, Seeds, f64)> = Vec::new();
+    for (s, seeds) in merged {
+        let failed = if s.length < p.min_length {
+            Some(Reason::TooShort {
+                length_px: s.length,
+                limit: p.min_length,
+            })
+        } else if s.elongation < p.min_elongation {
+            Some(Reason::NotElongated {
+                elongation: s.elongation,
+                limit: p.min_elongation,
+            })
+        } else if s.snr < p.min_snr {
+            Some(Reason::LowSnr {
+                snr: s.snr,
+                limit: p.min_snr,
+            })
+        } else if aligned(&s) {
+            Some(Reason::StarTrail)
+        } else {
+            ctx.gap(&s).map(|g| Reason::Gap {
+                chunk: g.chunk,
+                chunks: g.chunks,
+                level: g.level,
+                sigma: g.sigma,
+            })
+        };
+        match failed {
+            Some(r) => dropped.push(Dropped::of_seg(&s, seeds, r)),
+            None => {
+                let score = confidence(s.snr, s.elongation, (w * h) as f64, &p);
+                cands.push((s, seeds, score));
+            }
+        }
+    }
     cands.sort_by(|a, b| {
-        b.1.total_cmp(&a.1)
+        b.2.total_cmp(&a.2)
             .then(a.0.cx.total_cmp(&b.0.cx))
             .then(a.0.cy.total_cmp(&b.0.cy))
     });
@@ -616,19 +686,26 @@ fn detect(
     // neighbourhood of every better one (drops duplicates and the off-axis responses of
     // bright streaks).
     let mut kept: Vec<(Seg, f64)> = Vec::new();
-    for (s, sc) in cands {
+    for (s, seeds, sc) in cands {
         if kept.len() >= p.max_candidates {
-            break;
+            let r = Reason::OverCap {
+                limit: p.max_candidates,
+            };
+            dropped.push(Dropped::of_seg(&s, seeds, r));
+            continue;
         }
         let others: Vec<(Point, Point)> = kept.iter().map(|(k, _)| k.ends()).collect();
         if !others.is_empty() && !ctx.survives(&s, &others) {
+            dropped.push(Dropped::of_seg(&s, seeds, Reason::Duplicate));
             continue;
         }
         kept.push((s, sc));
     }
-    kept.into_iter()
+    let found = kept
+        .into_iter()
         .map(|(s, sc)| ctx.candidate(&s, sc))
-        .collect()
+        .collect();
+    (found, dropped)
 }
 
 /// Parameters checked and converted once.
