@@ -294,8 +294,25 @@ pub fn provenance_cards(
         }
     }
     push("GAIN", Card::Real(sensor.gain_e_per_adu), "[e-/ADU]");
-    match scene.pointing {
+    match &scene.pointing {
         Pointing::Fixed { .. } => push("POINTING", Card::Str("fixed".into()), "fixed or survey"),
+        Pointing::Track(track) => {
+            push(
+                "POINTING",
+                Card::Str("track".into()),
+                "follows the debris; WCS at mid-exposure",
+            );
+            push(
+                "DRIFTANG",
+                Card::Real(track.trail_angle_deg),
+                "[deg] star-trail direction from +x to +y",
+            );
+            push(
+                "DRIFT",
+                Card::Real(track.drift_deg),
+                "[deg] boresight path over the exposure",
+            );
+        }
         Pointing::Survey(track) => {
             push(
                 "POINTING",

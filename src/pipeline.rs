@@ -491,11 +491,11 @@ fn render(
             )?;
             let conversion_s = products.product.as_ref().map_or(0.0, |p| p.seconds)
                 + image.png.as_ref().map_or(0.0, |p| p.seconds);
-            let trail_angle_deg: Option<f64> = match (products.scene.pointing, c.enhance.geometry)
+            let trail_angle_deg: Option<f64> = match (&products.scene.pointing, c.enhance.geometry)
             {
-                (Pointing::Survey(_), FrameKind::Rotated) => Some(0.0),
-                (Pointing::Survey(t), _) => Some(t.trail_angle_deg),
                 (Pointing::Fixed { .. }, _) => None,
+                (_, FrameKind::Rotated) => Some(0.0),
+                (p, _) => p.trail_angle_deg(),
             };
             let record = Record {
                 index: i,
@@ -656,6 +656,9 @@ fn rejection_fields(reason: Rejection) -> &'static str {
         Rejection::LowSnr => "`visibility.snr_min`, `visibility.snr_definition` and `exposure`",
         Rejection::PropagationFailed => "the `window` and the orbits' epochs",
         Rejection::TooFast => "`exposure.max_s` and `render.trajectory_samples`",
+        Rejection::TrackTooFast => {
+            "`exposure.max_s` (track pointing follows the debris' apparent motion)"
+        }
     }
 }
 
@@ -729,11 +732,15 @@ fn detect_and_report(
     if c.detect.classical {
         let params: &StreakParams = &c.detect.streak;
         // Survey images: the catalogued stars' trails, predicted as the images were drawn.
+        // Track images get the trail direction alone: the star-aware pass recovers debris
+        // moving along the trails, and a tracked object does not move; its prediction misses
+        // trails bent by the pointing jitter (up to 8 px at the ends of 300 px trails, which it
+        // then reported as debris in the track quickstart; with the direction alone, none).
         let sky = match c.pointing.mode {
             PointingMode::Survey => {
                 Some((Experiment::new(campaign), experiment::inputs(campaign)?))
             }
-            PointingMode::Fixed => None,
+            PointingMode::Fixed | PointingMode::Track => None,
         };
         progress.start("streak", images.len() as u64);
         let results: Vec<(Vec<Detection>, f64)> = images
@@ -844,6 +851,7 @@ fn detect_and_report(
     let mode = match c.pointing.mode {
         PointingMode::Fixed => "fixed",
         PointingMode::Survey => "survey",
+        PointingMode::Track => "track",
     };
     let conversion: Vec<f64> = written.iter().filter_map(|w| w.conversion_s).collect();
     report::write(

@@ -83,6 +83,9 @@ pub enum PointingMode {
     Fixed,
     /// Following the observer's nadir-pointing attitude: star trails across the image.
     Survey,
+    /// Rate-tracking the image's debris object over the exposure: the object is a point, the
+    /// stars streak.
+    Track,
 }
 
 /// The tumbling light curve's ranges: period uniform in [min, max], amplitude in [0, max].
@@ -163,6 +166,28 @@ pub fn julian_year(t: Epoch) -> f64 {
 pub enum Pointing {
     Fixed { ra_deg: f64, dec_deg: f64 },
     Survey(SurveyTrack),
+    Track(TargetTrack),
+}
+
+impl Pointing {
+    /// Boresight at mid-exposure: the centre of the FITS WCS.
+    pub fn mid_radec_deg(&self) -> (f64, f64) {
+        match self {
+            Pointing::Fixed { ra_deg, dec_deg } => (*ra_deg, *dec_deg),
+            Pointing::Survey(t) => (t.mid_ra_deg, t.mid_dec_deg),
+            Pointing::Track(t) => (t.mid_ra_deg, t.mid_dec_deg),
+        }
+    }
+
+    /// Direction in which stars move in the image, degrees from +x towards +y (None when they
+    /// stand still).
+    pub fn trail_angle_deg(&self) -> Option<f64> {
+        match self {
+            Pointing::Fixed { .. } => None,
+            Pointing::Survey(t) => Some(t.trail_angle_deg),
+            Pointing::Track(t) => Some(t.trail_angle_deg),
+        }
+    }
 }
 
 /// Survey pointing (paper 3.2.1): the sensor is fixed on the observer, whose attitude is nadir
@@ -209,6 +234,132 @@ impl SurveyTrack {
             -self.angle_rad(t_s),
         ))
     }
+}
+
+/// Track pointing: the sensor rate-tracks the image's debris object. At each instant the camera
+/// is the mid-exposure camera turned by the smallest rotation that carries the debris'
+/// mid-exposure direction onto its direction then (no roll about the line of sight), so the
+/// object stays on the pixel where it was placed and the stars move against its apparent
+/// motion. The debris directions are kept at nodes close enough (`TRACK_NODE_SPACING_PX`)
+/// that normalised linear interpolation between them is exact to well under 0.01 px; the
+/// truth records the boresight at the start, middle and end, the nodes stay in memory.
+#[derive(Clone, Debug, Serialize)]
+pub struct TargetTrack {
+    /// Boresight at mid-exposure (the FITS WCS) and at the start and end of the exposure.
+    pub mid_ra_deg: f64,
+    pub mid_dec_deg: f64,
+    pub boresight_radec_start_deg: [f64; 2],
+    pub boresight_radec_end_deg: [f64; 2],
+    /// Seconds from the start of the exposure to mid-exposure.
+    pub t_mid_s: f64,
+    /// Angle the boresight turns through over the exposure (its path, not the chord), degrees.
+    pub drift_deg: f64,
+    /// Direction in which a star at the image centre moves, degrees from +x towards +y: from
+    /// its places at the start and end of the exposure, as survey pointing defines it.
+    pub trail_angle_deg: f64,
+    /// The debris' unit direction at mid-exposure and at nodes `step_s` apart from the start.
+    #[serde(skip)]
+    debris_mid: Vec3,
+    #[serde(skip)]
+    step_s: f64,
+    #[serde(skip)]
+    nodes: Vec<Vec3>,
+}
+
+/// Largest distance, in pixels, between the debris' directions at two consecutive nodes of a
+/// `TargetTrack`: over half a pixel the apparent path's curvature and rate change leave
+/// interpolation errors of micro-pixels (the path is a great circle to second order).
+const TRACK_NODE_SPACING_PX: f64 = 0.5;
+
+impl TargetTrack {
+    /// The debris' unit direction `t_s` seconds after the start, interpolated between nodes.
+    fn debris_at(&self, t_s: f64) -> Vec3 {
+        let last = self.nodes.len() - 1;
+        let u = (t_s / self.step_s).clamp(0.0, last as f64);
+        let i = (u.floor() as usize).min(last - 1);
+        let f = u - i as f64;
+        let (a, b) = (self.nodes[i], self.nodes[i + 1]);
+        unit([0, 1, 2].map(|k| a[k] + f * (b[k] - a[k])))
+    }
+
+    /// The sky direction that the camera at `t_s` sees where the mid-exposure camera sees
+    /// (ra, dec): the camera turned by R(t), so a star s appears at R(t)^-1 s of the mid frame.
+    pub fn to_mid_frame(&self, t_s: f64, ra_deg: f64, dec_deg: f64) -> (f64, f64) {
+        let s = radec_unit(ra_deg, dec_deg);
+        let n = cross(self.debris_mid, self.debris_at(t_s));
+        let sin = norm(n);
+        if sin == 0.0 {
+            return (ra_deg, dec_deg);
+        }
+        let angle = sin.atan2(dot(self.debris_mid, self.debris_at(t_s)));
+        radec_deg(rotate(s, scale(n, 1.0 / sin), -angle))
+    }
+
+    /// Boresight (RA, Dec) at `t_s` seconds after the start of the exposure.
+    pub fn radec_at(&self, t_s: f64) -> (f64, f64) {
+        let b = radec_unit(self.mid_ra_deg, self.mid_dec_deg);
+        let n = cross(self.debris_mid, self.debris_at(t_s));
+        let sin = norm(n);
+        if sin == 0.0 {
+            return (self.mid_ra_deg, self.mid_dec_deg);
+        }
+        let angle = sin.atan2(dot(self.debris_mid, self.debris_at(t_s)));
+        radec_deg(rotate(b, scale(n, 1.0 / sin), angle))
+    }
+}
+
+/// The track pointing that follows the debris of `sights` over an exposure of `exposure_s`,
+/// with the boresight `(ra, dec)` at mid-exposure; None if the debris direction is not finite.
+fn target_track(
+    sensor: &Sensor,
+    sights: &crate::sighting::Track,
+    exposure_s: f64,
+    boresight: (f64, f64),
+) -> Option<TargetTrack> {
+    let at = |t_s: f64| unit(sights.at(t_s).direction);
+    // A coarse pass measures the path, which sets the node spacing.
+    let coarse = 64;
+    let path_deg = |n: usize| -> f64 {
+        (0..n)
+            .map(|k| {
+                let t = exposure_s / n as f64;
+                angle_deg(at(k as f64 * t), at((k + 1) as f64 * t))
+            })
+            .sum()
+    };
+    let coarse_deg = path_deg(coarse);
+    if !coarse_deg.is_finite() {
+        return None;
+    }
+    let segments = ((coarse_deg / sensor.pixel_scale_deg() / TRACK_NODE_SPACING_PX).ceil()
+        as usize)
+        .max(coarse);
+    let step_s = exposure_s / segments as f64;
+    let nodes: Vec<Vec3> = (0..=segments).map(|k| at(k as f64 * step_s)).collect();
+    let drift_deg = nodes.windows(2).map(|w| angle_deg(w[0], w[1])).sum();
+    let mut track = TargetTrack {
+        mid_ra_deg: boresight.0,
+        mid_dec_deg: boresight.1,
+        boresight_radec_start_deg: [0.0; 2],
+        boresight_radec_end_deg: [0.0; 2],
+        t_mid_s: exposure_s / 2.0,
+        drift_deg,
+        trail_angle_deg: 0.0,
+        debris_mid: at(exposure_s / 2.0),
+        step_s,
+        nodes,
+    };
+    let (ra0, dec0) = track.radec_at(0.0);
+    let (ra1, dec1) = track.radec_at(exposure_s);
+    track.boresight_radec_start_deg = [ra0, dec0];
+    track.boresight_radec_end_deg = [ra1, dec1];
+    let tan = sensor.projection(boresight.0, boresight.1);
+    let (ra0, dec0) = track.to_mid_frame(0.0, boresight.0, boresight.1);
+    let (ra1, dec1) = track.to_mid_frame(exposure_s, boresight.0, boresight.1);
+    let (x0, y0) = tan.standard(ra0, dec0)?;
+    let (x1, y1) = tan.standard(ra1, dec1)?;
+    track.trail_angle_deg = (y1 - y0).atan2(x1 - x0).to_degrees();
+    Some(track)
 }
 
 /// One point of the debris trajectory: a source with its share of the exposure.
@@ -281,10 +432,8 @@ pub struct Scene {
 impl Scene {
     /// The projection at mid-exposure: the one the FITS WCS describes.
     pub fn projection(&self, sensor: &Sensor) -> Tan {
-        match self.pointing {
-            Pointing::Fixed { ra_deg, dec_deg } => sensor.projection(ra_deg, dec_deg),
-            Pointing::Survey(track) => sensor.projection(track.mid_ra_deg, track.mid_dec_deg),
-        }
+        let (ra, dec) = self.pointing.mid_radec_deg();
+        sensor.projection(ra, dec)
     }
 
     /// A hand-made fixed-pointing scene (for tests, or to inject a known streak): the sensor
@@ -353,9 +502,13 @@ impl Scene {
 
     /// Pixel coordinates of a sky position with the pointing of `t_s` seconds after the start.
     pub fn pixel_at(&self, tan: &Tan, t_s: f64, ra_deg: f64, dec_deg: f64) -> Option<(f64, f64)> {
-        match self.pointing {
+        match &self.pointing {
             Pointing::Fixed { .. } => tan.pixel(ra_deg, dec_deg),
             Pointing::Survey(track) => {
+                let (ra, dec) = track.to_mid_frame(t_s, ra_deg, dec_deg);
+                tan.pixel(ra, dec)
+            }
+            Pointing::Track(track) => {
                 let (ra, dec) = track.to_mid_frame(t_s, ra_deg, dec_deg);
                 tan.pixel(ra, dec)
             }
@@ -378,6 +531,7 @@ pub enum Rejection {
     LowSnr,
     PropagationFailed,
     TooFast,
+    TrackTooFast,
 }
 
 impl Rejection {
@@ -393,6 +547,7 @@ impl Rejection {
             Rejection::LowSnr => "signal to noise below the gate",
             Rejection::PropagationFailed => "propagation failed",
             Rejection::TooFast => "streak too fast to sample (over 1e6 trajectory samples)",
+            Rejection::TrackTooFast => "tracking drift beyond the survey drift limit",
         }
     }
 }
@@ -621,6 +776,23 @@ fn try_draw(
                 track.drift_deg / 2.0 + half_diag_deg + STAR_CONE_MARGIN_DEG,
             )
         }
+        PointingMode::Track => {
+            let sights = sighting
+                .track(start, exposure_s)
+                .ok_or(Rejection::PropagationFailed)?;
+            let track = target_track(sensor, &sights, exposure_s, (ra_p, dec_p))
+                .ok_or(Rejection::PropagationFailed)?;
+            // The star budget of the campaign (`campaign::validate`) allows a survey's drift.
+            if track.drift_deg > crate::campaign::MAX_SURVEY_DRIFT_DEG {
+                return Err(Rejection::TrackTooFast);
+            }
+            // The boresight at t is the mid one turned by R(t), whose angle (the debris' from
+            // mid-exposure to t) is at most the path: the cone around the mid boresight.
+            let half_diag_deg =
+                scale * (sensor.width_px as f64).hypot(sensor.height_px as f64) / 2.0;
+            let cone = track.drift_deg + half_diag_deg + STAR_CONE_MARGIN_DEG;
+            (Pointing::Track(track), cone)
+        }
     };
 
     // Field stars in the cone; a star brighter than the limit spoils the image (paper 3.2.3).
@@ -658,9 +830,10 @@ fn try_draw(
             } else {
                 0.0
             };
-            let (ra_cam, dec_cam) = match pointing {
+            let (ra_cam, dec_cam) = match &pointing {
                 Pointing::Fixed { .. } => (ra_deg, dec_deg),
                 Pointing::Survey(track) => track.to_mid_frame(t_s, ra_deg, dec_deg),
+                Pointing::Track(track) => track.to_mid_frame(t_s, ra_deg, dec_deg),
             };
             let (x_px, y_px) = mid_tan
                 .pixel(ra_cam, dec_cam)

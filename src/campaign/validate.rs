@@ -171,6 +171,11 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     // scene loads, in the galactic plane. Beyond this an image's star query alone takes minutes.
     let cone_deg = match c.pointing.mode {
         PointingMode::Fixed => c.stars.cone_radius_deg(),
+        // A tracking scene's cone is its whole path plus the field (`scene::try_draw`).
+        PointingMode::Track => {
+            super::MAX_SURVEY_DRIFT_DEG
+                + s.fov_radius_deg * (1.0f64).hypot(s.height_px as f64 / s.width_px as f64)
+        }
         PointingMode::Survey => {
             super::MAX_SURVEY_DRIFT_DEG / 2.0
                 + s.fov_radius_deg * (1.0f64).hypot(s.height_px as f64 / s.width_px as f64)
@@ -357,9 +362,9 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     )?;
     check(en.pad_px <= 4096, "enhance.pad_px", "must be at most 4096")?;
     check(
-        en.geometry != FrameKind::Rotated || c.pointing.mode == PointingMode::Survey,
+        en.geometry != FrameKind::Rotated || c.pointing.mode != PointingMode::Fixed,
         "enhance.geometry",
-        "`rotated` needs survey pointing (fixed images have no star trails to align)",
+        "`rotated` needs survey or track pointing (fixed images have no star trails to align)",
     )?;
     let t = &c.train;
     check(

@@ -7,7 +7,7 @@ use rand::RngExt;
 use serde::Serialize;
 
 use super::Jitter;
-use crate::scene::{Pointing, Scene};
+use crate::scene::{Pointing, Scene, SurveyTrack, TargetTrack};
 use crate::sensor::Sensor;
 use crate::sky::photometry::photon_rate;
 
@@ -101,7 +101,7 @@ pub(super) fn for_each_source(
             && y < height - 0.5 + margin
     };
     let mut traced = Vec::new();
-    match scene.pointing {
+    match &scene.pointing {
         Pointing::Fixed { .. } => {
             // Fixed on the sky, photons uniform over the exposure.
             for star in &scene.stars {
@@ -129,11 +129,12 @@ pub(super) fn for_each_source(
                 });
             }
         }
-        Pointing::Survey(track) => {
+        Pointing::Survey(SurveyTrack { drift_deg, .. })
+        | Pointing::Track(TargetTrack { drift_deg, .. }) => {
             // Each star's trail is sampled on a time grid fine enough that linear interpolation
             // between nodes is exact to well under 0.01 px (the trail is straight to second
             // order in the drift), and every photon takes the position of its arrival time.
-            let drift_px = track.drift_deg / scale;
+            let drift_px = drift_deg / scale;
             let nodes = ((drift_px / SURVEY_NODE_SPACING_PX).ceil() as usize + 1).max(2);
             let step = t_exp / (nodes - 1) as f64;
             let mut trail = vec![(f64::NAN, f64::NAN); nodes];
