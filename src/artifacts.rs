@@ -331,6 +331,28 @@ pub fn provenance_cards(
             );
         }
     }
+    if let Some(k) = &t.collect {
+        push(
+            "COLLECT",
+            Card::Int(k.collect as i64),
+            "multi-frame collect of this image",
+        );
+        push(
+            "CFRAME",
+            Card::Int(k.frame as i64),
+            "0-based frame in the collect",
+        );
+        push(
+            "CFRAMES",
+            Card::Int(k.frames as i64),
+            "frames in the collect",
+        );
+        push(
+            "TRACKID",
+            Card::Int(k.track_id as i64),
+            "object id across the collect",
+        );
+    }
     if let Some(f) = &t.frame {
         push(
             "GEOMETRY",

@@ -187,10 +187,15 @@ pub(crate) fn record_check(
     let c = &campaign.resolved;
     let n = c.images as usize;
     let enhance = c.stages.contains(&Stage::Enhance);
-    let subsets = c
-        .stages
-        .contains(&Stage::Dataset)
-        .then(|| dataset::assign(c.seed, n, c.split.train, c.split.val));
+    let subsets = c.stages.contains(&Stage::Dataset).then(|| {
+        dataset::assign_collects(
+            c.seed,
+            n,
+            c.collect_frames() as usize,
+            c.split.train,
+            c.split.val,
+        )
+    });
     move |r: &Record| {
         if !share.contains(&r.index) {
             return Err(format!(
@@ -412,7 +417,13 @@ fn render(
     let n = c.images as usize;
     let enhance_stage = c.stages.contains(&Stage::Enhance);
     let dataset_stage = c.stages.contains(&Stage::Dataset);
-    let subsets = dataset::assign(c.seed, n, c.split.train, c.split.val);
+    let subsets = dataset::assign_collects(
+        c.seed,
+        n,
+        c.collect_frames() as usize,
+        c.split.train,
+        c.split.val,
+    );
 
     let mut dirs = vec![dir.join("truth")];
     if c.artifacts.fits || c.artifacts.noise_free_fits {
@@ -544,7 +555,13 @@ pub(crate) fn finish(
     let c = &campaign.resolved;
     let stages = &c.stages;
     let dataset_stage = stages.contains(&Stage::Dataset);
-    let subsets = dataset::assign(c.seed, c.images as usize, c.split.train, c.split.val);
+    let subsets = dataset::assign_collects(
+        c.seed,
+        c.images as usize,
+        c.collect_frames() as usize,
+        c.split.train,
+        c.split.val,
+    );
     let written: Vec<Written> = records
         .iter()
         .map(|r| {
@@ -570,6 +587,11 @@ pub(crate) fn finish(
             dir.join("data.yaml"),
             dataset::data_yaml(&c.name, &campaign.hash),
         )?;
+    }
+    if c.collect_frames() > 1 {
+        let indices: Vec<u64> = records.iter().map(|r| r.index).collect();
+        let subset = |i: u64| dataset_stage.then(|| subsets[i as usize]);
+        crate::collect::write_manifests(dir, &indices, subset)?;
     }
     journal::abort_if_testing("dataset");
     // The dataset's own digest goes into the report: taken before training and detection add

@@ -152,6 +152,9 @@ pub struct Spec {
     /// The share of images with a real frame under them when the inputs have frames (1: all);
     /// the others get the uniform model.
     pub frame_share: f64,
+    /// Frames per collect (1: single images) and the gap between frames, seconds (`[collect]`).
+    pub collect_frames: u64,
+    pub collect_gap_s: f64,
 }
 
 /// Julian year (TT) of an instant, e.g. 2016.0 for the Gaia DR3 epoch.
@@ -427,6 +430,20 @@ pub struct Scene {
     /// Draws tried, and why the rejected ones were rejected.
     pub attempts: u32,
     pub rejections: BTreeMap<Rejection, u32>,
+    /// Its place in a multi-frame collect (None: a single image).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collect: Option<CollectFrame>,
+}
+
+/// A frame's place in its collect, recorded in the truth: the object keeps its `track_id`
+/// over the collect's frames (one object per image: the collect's number).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct CollectFrame {
+    pub collect: u64,
+    /// 0-based, in time order.
+    pub frame: u64,
+    pub frames: u64,
+    pub track_id: u64,
 }
 
 impl Scene {
@@ -497,6 +514,7 @@ impl Scene {
             snr_noise_sigma: 1.0,
             attempts: 1,
             rejections: BTreeMap::new(),
+            collect: None,
         }
     }
 
@@ -625,7 +643,9 @@ pub fn choose_debris(spec: &Spec, debris: usize, seed: u64, image: u64) -> usize
 }
 
 /// Draw the scene of image `image` of a campaign with this seed: the debris object first,
-/// then the rest, retried on the scene stream until the gate accepts it.
+/// then the rest, retried on the scene stream until the gate accepts it. In collects the
+/// streams are the collect's, the gate judges its first frame, and a later frame follows the
+/// first's pointing plan whatever it shows (the object may leave a fixed field or fade).
 pub fn draw(
     spec: &Spec,
     sensor: &Sensor,
@@ -633,48 +653,88 @@ pub fn draw(
     seed: u64,
     image: u64,
 ) -> Result<Scene, NoScene> {
-    let debris_index = choose_debris(spec, inputs.debris.len(), seed, image);
+    let frames = spec.collect_frames.max(1);
+    let (collect, frame) = (image / frames, image % frames);
+    let debris_index = choose_debris(spec, inputs.debris.len(), seed, collect);
     // Drawn only in a mixed campaign, so that every other keeps its streams.
     let on_frame = spec.frame_share >= 1.0
-        || stream(seed, image, Purpose::BackgroundKind).random::<f64>() < spec.frame_share;
-    let rng = &mut stream(seed, image, Purpose::Scene);
+        || stream(seed, collect, Purpose::BackgroundKind).random::<f64>() < spec.frame_share;
+    let rng = &mut stream(seed, collect, Purpose::Scene);
     let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
     let max = spec.gate.max_attempts;
+    let no_scene = |attempts: u32, rejections: BTreeMap<Rejection, u32>| {
+        let debris = &inputs.debris[debris_index];
+        NoScene {
+            image,
+            debris_index,
+            object: debris.name.clone(),
+            norad: debris.norad,
+            attempts,
+            reasons: rejections
+                .iter()
+                .map(|(k, v)| format!("{k} x{v}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            rejections,
+        }
+    };
     for attempt in 1..=max {
-        match try_draw(spec, sensor, inputs, image, debris_index, on_frame, rng) {
-            Ok(mut scene) => {
+        let d = draw_values(spec, inputs, on_frame, rng);
+        match try_draw(spec, sensor, inputs, image, debris_index, &d, Plan::First) {
+            Ok(first) => {
+                let mut scene = if frame == 0 {
+                    first
+                } else {
+                    let later = Plan::Later {
+                        frame,
+                        first: &first,
+                    };
+                    match try_draw(spec, sensor, inputs, image, debris_index, &d, later) {
+                        Ok(s) => s,
+                        // The collect was accepted by its first frame: no retry here.
+                        Err(reason) => {
+                            *rejections.entry(reason).or_default() += 1;
+                            return Err(no_scene(attempt, rejections));
+                        }
+                    }
+                };
                 scene.attempts = attempt;
                 scene.rejections = rejections;
+                if frames > 1 {
+                    scene.collect = Some(CollectFrame {
+                        collect,
+                        frame,
+                        frames,
+                        track_id: collect,
+                    });
+                }
                 return Ok(scene);
             }
             Err(reason) => *rejections.entry(reason).or_default() += 1,
         }
     }
-    let debris = &inputs.debris[debris_index];
-    Err(NoScene {
-        image,
-        debris_index,
-        object: debris.name.clone(),
-        norad: debris.norad,
-        attempts: max,
-        reasons: rejections
-            .iter()
-            .map(|(k, v)| format!("{k} x{v}"))
-            .collect::<Vec<_>>()
-            .join(", "),
-        rejections,
-    })
+    Err(no_scene(max, rejections))
 }
 
-fn try_draw(
-    spec: &Spec,
-    sensor: &Sensor,
-    inputs: &Inputs,
-    image: u64,
-    debris_index: usize,
-    on_frame: bool,
-    rng: &mut ChaCha12Rng,
-) -> Result<Scene, Rejection> {
+/// The random values of one draw attempt, in the scene stream's order.
+struct Draws {
+    exposure_s: f64,
+    start: Epoch,
+    area_m2: f64,
+    placement: (f64, f64),
+    background: Option<FrameChoice>,
+    tumble: Option<Tumble>,
+}
+
+/// Which frame of its collect a scene is: the first (a single image is one), judged by the
+/// gate, or a later one, which follows the first's pointing plan and is not judged.
+#[derive(Clone, Copy)]
+enum Plan<'a> {
+    First,
+    Later { frame: u64, first: &'a Scene },
+}
+
+fn draw_values(spec: &Spec, inputs: &Inputs, on_frame: bool, rng: &mut ChaCha12Rng) -> Draws {
     let span_s = (spec.window_end - spec.window_start).to_seconds();
     let exposure_s = if spec.exposure_max_s > spec.exposure_min_s {
         rng.random_range(spec.exposure_min_s..=spec.exposure_max_s)
@@ -682,7 +742,6 @@ fn try_draw(
         spec.exposure_min_s
     };
     let start = spec.window_start + Duration::from_seconds(rng.random_range(0.0..span_s));
-    let mid = start + Duration::from_seconds(exposure_s / 2.0);
     let area_m2 = spec.area.draw(rng);
     let placement = (
         rng.random_range(-1.0..1.0) * spec.placement_fraction,
@@ -708,6 +767,44 @@ fn try_draw(
         amplitude: rng.random_range(0.0..=r.amplitude_max),
         phase_rad: rng.random_range(0.0..std::f64::consts::TAU),
     });
+    Draws {
+        exposure_s,
+        start,
+        area_m2,
+        placement,
+        background,
+        tumble,
+    }
+}
+
+fn try_draw(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    image: u64,
+    debris_index: usize,
+    d: &Draws,
+    plan: Plan,
+) -> Result<Scene, Rejection> {
+    let Draws {
+        exposure_s,
+        area_m2,
+        placement,
+        background,
+        tumble,
+        ..
+    } = *d;
+    let gated = matches!(plan, Plan::First);
+    // Frame k of a collect starts k (exposure + gap) after the first.
+    let offset_s = match plan {
+        Plan::First => 0.0,
+        Plan::Later { frame, .. } => frame as f64 * (exposure_s + spec.collect_gap_s),
+    };
+    let start = match plan {
+        Plan::First => d.start,
+        Plan::Later { .. } => d.start + Duration::from_seconds(offset_s),
+    };
+    let mid = start + Duration::from_seconds(exposure_s / 2.0);
 
     // Visibility at mid-exposure (paper 3.2.2).
     let sighting = Sighting::new(
@@ -722,28 +819,31 @@ fn try_draw(
     let sun = sun_position_km(mid);
     let moon = moon_position_km(mid);
     let v = &spec.gate;
+    // A later frame of a collect is not judged (`gated` false).
     let earth_angle_deg = angle_deg(los, sub([0.0; 3], obs));
-    if earth_angle_deg <= v.earth_min_deg {
+    if gated && earth_angle_deg <= v.earth_min_deg {
         return Err(Rejection::EarthAngle);
     }
     let sun_angle_deg = angle_deg(los, sub(sun, obs));
-    if sun_angle_deg <= v.sun_min_deg {
+    if gated && sun_angle_deg <= v.sun_min_deg {
         return Err(Rejection::SunAngle);
     }
     let moon_angle_deg = angle_deg(los, sub(moon, obs));
-    if moon_angle_deg <= v.moon_min_deg {
+    if gated && moon_angle_deg <= v.moon_min_deg {
         return Err(Rejection::MoonAngle);
     }
-    if segment_hits_sphere(obs, deb, EARTH_RADIUS_KM + v.earth_clearance_km) {
+    if gated && segment_hits_sphere(obs, deb, EARTH_RADIUS_KM + v.earth_clearance_km) {
         return Err(Rejection::ThroughEarth);
     }
-    if segment_hits_sphere(deb, sun, EARTH_RADIUS_KM) {
+    // In a later frame the object may have entered the shadow: it then sends no light.
+    let shadowed = segment_hits_sphere(deb, sun, EARTH_RADIUS_KM);
+    if gated && shadowed {
         return Err(Rejection::EarthShadow);
     }
     let phase_angle_deg = angle_deg(sub(sun, deb), sub(obs, deb));
     let range_km = norm(los);
     let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km);
-    if magnitude.is_nan() || magnitude > sensor.mag_limit {
+    if gated && (magnitude.is_nan() || magnitude > sensor.mag_limit) {
         return Err(Rejection::TooFaint);
     }
 
@@ -753,10 +853,20 @@ fn try_draw(
     let around_debris = sensor.projection(ra_mid, dec_mid);
     let half_w = sensor.width_px as f64 / 2.0;
     let half_h = sensor.height_px as f64 / 2.0;
-    let (ra_p, dec_p) = around_debris.sky(
+    let placed = around_debris.sky(
         around_debris.cx - placement.0 * half_w,
         around_debris.cy - placement.1 * half_h,
     );
+    // A later frame keeps the first's plan: a fixed direction, the survey attitude running on
+    // (the first frame's rotation, continued), or the object held on its pixel.
+    let (ra_p, dec_p) = match plan {
+        Plan::Later { first, .. } => match &first.pointing {
+            Pointing::Fixed { ra_deg, dec_deg } => (*ra_deg, *dec_deg),
+            Pointing::Survey(t0) => t0.radec_at(t0.t_mid_s + offset_s),
+            Pointing::Track(_) => placed,
+        },
+        Plan::First => placed,
+    };
     let (pointing, cone) = match spec.pointing {
         PointingMode::Fixed => (
             Pointing::Fixed {
@@ -799,7 +909,7 @@ fn try_draw(
     let field = inputs
         .stars
         .stars_in_cone(ra_p, dec_p, cone, sensor.mag_limit, mid);
-    if field.iter().any(|s| s.mag < v.brightest_star_mag) {
+    if gated && field.iter().any(|s| s.mag < v.brightest_star_mag) {
         return Err(Rejection::BrightStar);
     }
 
@@ -825,7 +935,7 @@ fn try_draw(
                         * (std::f64::consts::TAU * t_s / tb.period_s + tb.phase_rad).sin();
                 mag -= 2.5 * factor.log10();
             }
-            let expected_electrons = if mag.is_finite() {
+            let expected_electrons = if mag.is_finite() && !shadowed {
                 photon_rate(mag, sensor.zero_point_mag) * dt
             } else {
                 0.0
@@ -882,7 +992,7 @@ fn try_draw(
         SnrDefinition::NoiseLevel => snr_noise_level,
         SnrDefinition::NoiseSigma => snr_noise_sigma,
     };
-    if snr < v.snr_min {
+    if gated && snr < v.snr_min {
         return Err(Rejection::LowSnr);
     }
 
@@ -915,6 +1025,7 @@ fn try_draw(
         snr_noise_sigma,
         attempts: 0,
         rejections: BTreeMap::new(),
+        collect: None,
     })
 }
 

@@ -24,6 +24,23 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     let pos = |x: f64| x.is_finite() && x > 0.0;
     let nonneg = |x: f64| x.is_finite() && x >= 0.0;
     check(!c.name.trim().is_empty(), "name", "must not be empty")?;
+    if let Some(k) = &c.collect {
+        check(
+            (1..=10_000).contains(&k.frames),
+            "collect.frames",
+            "must be between 1 and 10000",
+        )?;
+        check(
+            c.images.is_multiple_of(k.frames),
+            "collect.frames",
+            "must divide `images` (every collect has all its frames)",
+        )?;
+        check(
+            k.gap_s.is_finite() && (0.0..=86_400.0).contains(&k.gap_s),
+            "collect.gap_s",
+            "must be in [0, 86400] seconds",
+        )?;
+    }
     check(
         c.name
             .chars()

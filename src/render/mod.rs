@@ -265,6 +265,7 @@ pub fn render_with_jitter(
         attempts: scene.attempts,
         rejections: scene.rejections.clone(),
         ephemeris: scene.ephemeris,
+        collect: scene.collect,
     };
     Exposure {
         width,

@@ -70,6 +70,9 @@ pub struct Truth {
     /// The debris' RA/Dec at start, middle and end, and the GCRS states at mid-exposure.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ephemeris: Option<crate::sighting::Ephemeris>,
+    /// The image's place in its multi-frame collect, with the object's track id.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collect: Option<crate::scene::CollectFrame>,
 }
 
 /// The pixel and sky conventions of every truth, written into it so that it says them itself.
