@@ -260,6 +260,10 @@ pub struct TargetTrack {
     /// Direction in which a star at the image centre moves, degrees from +x towards +y: from
     /// its places at the start and end of the exposure, as survey pointing defines it.
     pub trail_angle_deg: f64,
+    /// Largest angle between the debris' mid-exposure direction and its direction at any
+    /// node: how far the boresight strays from its mid-exposure place (the star cone's reach).
+    #[serde(skip)]
+    reach_deg: f64,
     /// The debris' unit direction at mid-exposure and at nodes `step_s` apart from the start.
     #[serde(skip)]
     debris_mid: Vec3,
@@ -285,17 +289,28 @@ impl TargetTrack {
         unit([0, 1, 2].map(|k| a[k] + f * (b[k] - a[k])))
     }
 
+    /// The camera's turn R(t) from mid-exposure to `t_s`: its unit axis and angle (radians),
+    /// None when it has not turned.
+    pub fn turn_at(&self, t_s: f64) -> Option<(Vec3, f64)> {
+        let u = self.debris_at(t_s);
+        let n = cross(self.debris_mid, u);
+        let sin = norm(n);
+        (sin != 0.0).then(|| (scale(n, 1.0 / sin), sin.atan2(dot(self.debris_mid, u))))
+    }
+
+    /// Where (ra, dec) appears in the mid-exposure frame for a camera turned by `turn`
+    /// (`turn_at`): R^-1 s. The renderer takes each node's turn once for all stars.
+    pub fn undo_turn(turn: Option<(Vec3, f64)>, ra_deg: f64, dec_deg: f64) -> (f64, f64) {
+        match turn {
+            Some((axis, angle)) => radec_deg(rotate(radec_unit(ra_deg, dec_deg), axis, -angle)),
+            None => (ra_deg, dec_deg),
+        }
+    }
+
     /// The sky direction that the camera at `t_s` sees where the mid-exposure camera sees
     /// (ra, dec): the camera turned by R(t), so a star s appears at R(t)^-1 s of the mid frame.
     pub fn to_mid_frame(&self, t_s: f64, ra_deg: f64, dec_deg: f64) -> (f64, f64) {
-        let s = radec_unit(ra_deg, dec_deg);
-        let n = cross(self.debris_mid, self.debris_at(t_s));
-        let sin = norm(n);
-        if sin == 0.0 {
-            return (ra_deg, dec_deg);
-        }
-        let angle = sin.atan2(dot(self.debris_mid, self.debris_at(t_s)));
-        radec_deg(rotate(s, scale(n, 1.0 / sin), -angle))
+        Self::undo_turn(self.turn_at(t_s), ra_deg, dec_deg)
     }
 
     /// Boresight (RA, Dec) at `t_s` seconds after the start of the exposure.
@@ -340,6 +355,11 @@ fn target_track(
     let step_s = exposure_s / segments as f64;
     let nodes: Vec<Vec3> = (0..=segments).map(|k| at(k as f64 * step_s)).collect();
     let drift_deg = nodes.windows(2).map(|w| angle_deg(w[0], w[1])).sum();
+    let debris_mid = at(exposure_s / 2.0);
+    let reach_deg = nodes
+        .iter()
+        .map(|&n| angle_deg(debris_mid, n))
+        .fold(0.0, f64::max);
     let mut track = TargetTrack {
         mid_ra_deg: boresight.0,
         mid_dec_deg: boresight.1,
@@ -348,7 +368,8 @@ fn target_track(
         t_mid_s: exposure_s / 2.0,
         drift_deg,
         trail_angle_deg: 0.0,
-        debris_mid: at(exposure_s / 2.0),
+        reach_deg,
+        debris_mid,
         step_s,
         nodes,
     };
@@ -896,11 +917,12 @@ fn try_draw(
             if track.drift_deg > crate::campaign::MAX_SURVEY_DRIFT_DEG {
                 return Err(Rejection::TrackTooFast);
             }
-            // The boresight at t is the mid one turned by R(t), whose angle (the debris' from
-            // mid-exposure to t) is at most the path: the cone around the mid boresight.
+            // The boresight at t is the mid one turned by R(t), by the debris' angle from
+            // mid-exposure to t (at most the reach; between nodes, half a pixel more at most,
+            // within the margin): the cone around the mid boresight.
             let half_diag_deg =
                 scale * (sensor.width_px as f64).hypot(sensor.height_px as f64) / 2.0;
-            let cone = track.drift_deg + half_diag_deg + STAR_CONE_MARGIN_DEG;
+            let cone = track.reach_deg + half_diag_deg + STAR_CONE_MARGIN_DEG;
             (Pointing::Track(track), cone)
         }
     };
