@@ -294,8 +294,25 @@ pub fn provenance_cards(
         }
     }
     push("GAIN", Card::Real(sensor.gain_e_per_adu), "[e-/ADU]");
-    match scene.pointing {
+    match &scene.pointing {
         Pointing::Fixed { .. } => push("POINTING", Card::Str("fixed".into()), "fixed or survey"),
+        Pointing::Track(track) => {
+            push(
+                "POINTING",
+                Card::Str("track".into()),
+                "follows the debris; WCS at mid-exposure",
+            );
+            push(
+                "DRIFTANG",
+                Card::Real(track.trail_angle_deg),
+                "[deg] star-trail direction from +x to +y",
+            );
+            push(
+                "DRIFT",
+                Card::Real(track.drift_deg),
+                "[deg] boresight path over the exposure",
+            );
+        }
         Pointing::Survey(track) => {
             push(
                 "POINTING",
@@ -313,6 +330,28 @@ pub fn provenance_cards(
                 "[deg] boresight drift over the exposure",
             );
         }
+    }
+    if let Some(k) = &t.collect {
+        push(
+            "COLLECT",
+            Card::Int(k.collect as i64),
+            "multi-frame collect of this image",
+        );
+        push(
+            "CFRAME",
+            Card::Int(k.frame as i64),
+            "0-based frame in the collect",
+        );
+        push(
+            "CFRAMES",
+            Card::Int(k.frames as i64),
+            "frames in the collect",
+        );
+        push(
+            "TRACKID",
+            Card::Int(k.track_id as i64),
+            "object id across the collect",
+        );
     }
     if let Some(f) = &t.frame {
         push(

@@ -50,6 +50,16 @@ pub fn assign(seed: u64, n: usize, train: f64, val: f64) -> Vec<Subset> {
     subsets
 }
 
+/// The subset of every image when images come in collects of `frames` (image i in collect
+/// i / frames): the collects are assigned as `assign` assigns images, and every frame goes
+/// with its collect, so no collect is split between train and test. One frame per collect is
+/// `assign` itself.
+pub fn assign_collects(seed: u64, n: usize, frames: usize, train: f64, val: f64) -> Vec<Subset> {
+    let frames = frames.max(1);
+    let collects = assign(seed, n.div_ceil(frames), train, val);
+    (0..n).map(|i| collects[i / frames]).collect()
+}
+
 /// `data.yaml` for Ultralytics. It names no `path`, so Ultralytics takes the folder of the YAML
 /// file itself: the dataset trains from wherever it is moved, and its hash does not depend on
 /// the output directory.
@@ -72,6 +82,17 @@ mod tests {
     fn split_counts_and_determinism() {
         // The paper's 70/20/10.
         let a = assign(7, 100, 0.7, 0.2);
+        assert_eq!(a, assign_collects(7, 100, 1, 0.7, 0.2));
+        // Collects of 5: every frame in its collect's subset, the collects split 70/20/10.
+        let c = assign_collects(7, 100, 5, 0.7, 0.2);
+        for k in 0..20 {
+            assert!(
+                c[5 * k..5 * k + 5].iter().all(|&s| s == c[5 * k]),
+                "collect {k}"
+            );
+        }
+        assert_eq!(c.iter().filter(|&&s| s == Subset::Train).count(), 70);
+        assert_eq!(c.iter().filter(|&&s| s == Subset::Val).count(), 20);
         assert_eq!(a, assign(7, 100, 0.7, 0.2));
         assert_ne!(a, assign(8, 100, 0.7, 0.2));
         let count = |s| a.iter().filter(|&&x| x == s).count();

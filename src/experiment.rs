@@ -114,6 +114,8 @@ impl Experiment {
                 Background::Frames { share, .. } => *share,
                 Background::Uniform => 1.0,
             },
+            collect_frames: c.collect_frames() as u64,
+            collect_gap_s: c.collect.as_ref().map_or(0.0, |k| k.gap_s),
         };
         let render = render::Settings {
             method: c.render.method,

@@ -9,7 +9,7 @@
 //! ```text
 //! verbs          merge (of shards)   pipeline (run, train)   study   compare   tables   detect_frames   convert   main.rs: the CLI
 //! config layer   campaign (file, defaults, compose, validate, resolve)  experiment (-> values)
-//! product        simulate (one image in memory)   artifacts (its files)   dataset   train
+//! product        simulate (one image in memory)   artifacts (its files)   dataset   collect   train
 //!                shard (a share of the images)
 //! core           render -> scene -> sighting, sensor -> background     geometry (frames, label box)
 //!                enhance (+ clahe)   detect (streak, yolo)   metrics   report
@@ -53,6 +53,7 @@ pub(crate) mod artifacts;
 pub mod background;
 pub mod build_id;
 pub mod campaign;
+pub mod collect;
 pub mod compare;
 pub mod convert;
 pub mod dataset;

@@ -187,10 +187,15 @@ pub(crate) fn record_check(
     let c = &campaign.resolved;
     let n = c.images as usize;
     let enhance = c.stages.contains(&Stage::Enhance);
-    let subsets = c
-        .stages
-        .contains(&Stage::Dataset)
-        .then(|| dataset::assign(c.seed, n, c.split.train, c.split.val));
+    let subsets = c.stages.contains(&Stage::Dataset).then(|| {
+        dataset::assign_collects(
+            c.seed,
+            n,
+            c.collect_frames() as usize,
+            c.split.train,
+            c.split.val,
+        )
+    });
     move |r: &Record| {
         if !share.contains(&r.index) {
             return Err(format!(
@@ -412,7 +417,13 @@ fn render(
     let n = c.images as usize;
     let enhance_stage = c.stages.contains(&Stage::Enhance);
     let dataset_stage = c.stages.contains(&Stage::Dataset);
-    let subsets = dataset::assign(c.seed, n, c.split.train, c.split.val);
+    let subsets = dataset::assign_collects(
+        c.seed,
+        n,
+        c.collect_frames() as usize,
+        c.split.train,
+        c.split.val,
+    );
 
     let mut dirs = vec![dir.join("truth")];
     if c.artifacts.fits || c.artifacts.noise_free_fits {
@@ -491,11 +502,11 @@ fn render(
             )?;
             let conversion_s = products.product.as_ref().map_or(0.0, |p| p.seconds)
                 + image.png.as_ref().map_or(0.0, |p| p.seconds);
-            let trail_angle_deg: Option<f64> = match (products.scene.pointing, c.enhance.geometry)
+            let trail_angle_deg: Option<f64> = match (&products.scene.pointing, c.enhance.geometry)
             {
-                (Pointing::Survey(_), FrameKind::Rotated) => Some(0.0),
-                (Pointing::Survey(t), _) => Some(t.trail_angle_deg),
                 (Pointing::Fixed { .. }, _) => None,
+                (_, FrameKind::Rotated) => Some(0.0),
+                (p, _) => p.trail_angle_deg(),
             };
             let record = Record {
                 index: i,
@@ -544,7 +555,13 @@ pub(crate) fn finish(
     let c = &campaign.resolved;
     let stages = &c.stages;
     let dataset_stage = stages.contains(&Stage::Dataset);
-    let subsets = dataset::assign(c.seed, c.images as usize, c.split.train, c.split.val);
+    let subsets = dataset::assign_collects(
+        c.seed,
+        c.images as usize,
+        c.collect_frames() as usize,
+        c.split.train,
+        c.split.val,
+    );
     let written: Vec<Written> = records
         .iter()
         .map(|r| {
@@ -570,6 +587,11 @@ pub(crate) fn finish(
             dir.join("data.yaml"),
             dataset::data_yaml(&c.name, &campaign.hash),
         )?;
+    }
+    if c.collect_frames() > 1 {
+        let indices: Vec<u64> = records.iter().map(|r| r.index).collect();
+        let subset = |i: u64| dataset_stage.then(|| subsets[i as usize]);
+        crate::collect::write_manifests(dir, &indices, subset)?;
     }
     journal::abort_if_testing("dataset");
     // The dataset's own digest goes into the report: taken before training and detection add
@@ -656,6 +678,9 @@ fn rejection_fields(reason: Rejection) -> &'static str {
         Rejection::LowSnr => "`visibility.snr_min`, `visibility.snr_definition` and `exposure`",
         Rejection::PropagationFailed => "the `window` and the orbits' epochs",
         Rejection::TooFast => "`exposure.max_s` and `render.trajectory_samples`",
+        Rejection::TrackTooFast => {
+            "`exposure.max_s` (track pointing follows the debris' apparent motion)"
+        }
     }
 }
 
@@ -729,11 +754,15 @@ fn detect_and_report(
     if c.detect.classical {
         let params: &StreakParams = &c.detect.streak;
         // Survey images: the catalogued stars' trails, predicted as the images were drawn.
+        // Track images get the trail direction alone: the star-aware pass recovers debris
+        // moving along the trails, and a tracked object does not move; its prediction misses
+        // trails bent by the pointing jitter (up to 8 px at the ends of 300 px trails, which it
+        // then reported as debris in the track quickstart; with the direction alone, none).
         let sky = match c.pointing.mode {
             PointingMode::Survey => {
                 Some((Experiment::new(campaign), experiment::inputs(campaign)?))
             }
-            PointingMode::Fixed => None,
+            PointingMode::Fixed | PointingMode::Track => None,
         };
         progress.start("streak", images.len() as u64);
         let results: Vec<(Vec<Detection>, f64)> = images
@@ -844,6 +873,7 @@ fn detect_and_report(
     let mode = match c.pointing.mode {
         PointingMode::Fixed => "fixed",
         PointingMode::Survey => "survey",
+        PointingMode::Track => "track",
     };
     let conversion: Vec<f64> = written.iter().filter_map(|w| w.conversion_s).collect();
     report::write(

@@ -83,6 +83,9 @@ pub enum PointingMode {
     Fixed,
     /// Following the observer's nadir-pointing attitude: star trails across the image.
     Survey,
+    /// Rate-tracking the image's debris object over the exposure: the object is a point, the
+    /// stars streak.
+    Track,
 }
 
 /// The tumbling light curve's ranges: period uniform in [min, max], amplitude in [0, max].
@@ -149,6 +152,9 @@ pub struct Spec {
     /// The share of images with a real frame under them when the inputs have frames (1: all);
     /// the others get the uniform model.
     pub frame_share: f64,
+    /// Frames per collect (1: single images) and the gap between frames, seconds (`[collect]`).
+    pub collect_frames: u64,
+    pub collect_gap_s: f64,
 }
 
 /// Julian year (TT) of an instant, e.g. 2016.0 for the Gaia DR3 epoch.
@@ -163,6 +169,28 @@ pub fn julian_year(t: Epoch) -> f64 {
 pub enum Pointing {
     Fixed { ra_deg: f64, dec_deg: f64 },
     Survey(SurveyTrack),
+    Track(TargetTrack),
+}
+
+impl Pointing {
+    /// Boresight at mid-exposure: the centre of the FITS WCS.
+    pub fn mid_radec_deg(&self) -> (f64, f64) {
+        match self {
+            Pointing::Fixed { ra_deg, dec_deg } => (*ra_deg, *dec_deg),
+            Pointing::Survey(t) => (t.mid_ra_deg, t.mid_dec_deg),
+            Pointing::Track(t) => (t.mid_ra_deg, t.mid_dec_deg),
+        }
+    }
+
+    /// Direction in which stars move in the image, degrees from +x towards +y (None when they
+    /// stand still).
+    pub fn trail_angle_deg(&self) -> Option<f64> {
+        match self {
+            Pointing::Fixed { .. } => None,
+            Pointing::Survey(t) => Some(t.trail_angle_deg),
+            Pointing::Track(t) => Some(t.trail_angle_deg),
+        }
+    }
 }
 
 /// Survey pointing (paper 3.2.1): the sensor is fixed on the observer, whose attitude is nadir
@@ -209,6 +237,153 @@ impl SurveyTrack {
             -self.angle_rad(t_s),
         ))
     }
+}
+
+/// Track pointing: the sensor rate-tracks the image's debris object. At each instant the camera
+/// is the mid-exposure camera turned by the smallest rotation that carries the debris'
+/// mid-exposure direction onto its direction then (no roll about the line of sight), so the
+/// object stays on the pixel where it was placed and the stars move against its apparent
+/// motion. The debris directions are kept at nodes close enough (`TRACK_NODE_SPACING_PX`)
+/// that normalised linear interpolation between them is exact to well under 0.01 px; the
+/// truth records the boresight at the start, middle and end, the nodes stay in memory.
+#[derive(Clone, Debug, Serialize)]
+pub struct TargetTrack {
+    /// Boresight at mid-exposure (the FITS WCS) and at the start and end of the exposure.
+    pub mid_ra_deg: f64,
+    pub mid_dec_deg: f64,
+    pub boresight_radec_start_deg: [f64; 2],
+    pub boresight_radec_end_deg: [f64; 2],
+    /// Seconds from the start of the exposure to mid-exposure.
+    pub t_mid_s: f64,
+    /// Angle the boresight turns through over the exposure (its path, not the chord), degrees.
+    pub drift_deg: f64,
+    /// Direction in which a star at the image centre moves, degrees from +x towards +y: from
+    /// its places at the start and end of the exposure, as survey pointing defines it.
+    pub trail_angle_deg: f64,
+    /// Largest angle between the debris' mid-exposure direction and its direction at any
+    /// node: how far the boresight strays from its mid-exposure place (the star cone's reach).
+    #[serde(skip)]
+    reach_deg: f64,
+    /// The debris' unit direction at mid-exposure and at nodes `step_s` apart from the start.
+    #[serde(skip)]
+    debris_mid: Vec3,
+    #[serde(skip)]
+    step_s: f64,
+    #[serde(skip)]
+    nodes: Vec<Vec3>,
+}
+
+/// Largest distance, in pixels, between the debris' directions at two consecutive nodes of a
+/// `TargetTrack`: over half a pixel the apparent path's curvature and rate change leave
+/// interpolation errors of micro-pixels (the path is a great circle to second order).
+const TRACK_NODE_SPACING_PX: f64 = 0.5;
+
+impl TargetTrack {
+    /// The debris' unit direction `t_s` seconds after the start, interpolated between nodes.
+    fn debris_at(&self, t_s: f64) -> Vec3 {
+        let last = self.nodes.len() - 1;
+        let u = (t_s / self.step_s).clamp(0.0, last as f64);
+        let i = (u.floor() as usize).min(last - 1);
+        let f = u - i as f64;
+        let (a, b) = (self.nodes[i], self.nodes[i + 1]);
+        unit([0, 1, 2].map(|k| a[k] + f * (b[k] - a[k])))
+    }
+
+    /// The camera's turn R(t) from mid-exposure to `t_s`: its unit axis and angle (radians),
+    /// None when it has not turned.
+    pub fn turn_at(&self, t_s: f64) -> Option<(Vec3, f64)> {
+        let u = self.debris_at(t_s);
+        let n = cross(self.debris_mid, u);
+        let sin = norm(n);
+        (sin != 0.0).then(|| (scale(n, 1.0 / sin), sin.atan2(dot(self.debris_mid, u))))
+    }
+
+    /// Where (ra, dec) appears in the mid-exposure frame for a camera turned by `turn`
+    /// (`turn_at`): R^-1 s. The renderer takes each node's turn once for all stars.
+    pub fn undo_turn(turn: Option<(Vec3, f64)>, ra_deg: f64, dec_deg: f64) -> (f64, f64) {
+        match turn {
+            Some((axis, angle)) => radec_deg(rotate(radec_unit(ra_deg, dec_deg), axis, -angle)),
+            None => (ra_deg, dec_deg),
+        }
+    }
+
+    /// The sky direction that the camera at `t_s` sees where the mid-exposure camera sees
+    /// (ra, dec): the camera turned by R(t), so a star s appears at R(t)^-1 s of the mid frame.
+    pub fn to_mid_frame(&self, t_s: f64, ra_deg: f64, dec_deg: f64) -> (f64, f64) {
+        Self::undo_turn(self.turn_at(t_s), ra_deg, dec_deg)
+    }
+
+    /// Boresight (RA, Dec) at `t_s` seconds after the start of the exposure.
+    pub fn radec_at(&self, t_s: f64) -> (f64, f64) {
+        let b = radec_unit(self.mid_ra_deg, self.mid_dec_deg);
+        let n = cross(self.debris_mid, self.debris_at(t_s));
+        let sin = norm(n);
+        if sin == 0.0 {
+            return (self.mid_ra_deg, self.mid_dec_deg);
+        }
+        let angle = sin.atan2(dot(self.debris_mid, self.debris_at(t_s)));
+        radec_deg(rotate(b, scale(n, 1.0 / sin), angle))
+    }
+}
+
+/// The track pointing that follows the debris of `sights` over an exposure of `exposure_s`,
+/// with the boresight `(ra, dec)` at mid-exposure; None if the debris direction is not finite.
+fn target_track(
+    sensor: &Sensor,
+    sights: &crate::sighting::Track,
+    exposure_s: f64,
+    boresight: (f64, f64),
+) -> Option<TargetTrack> {
+    let at = |t_s: f64| unit(sights.at(t_s).direction);
+    // A coarse pass measures the path, which sets the node spacing.
+    let coarse = 64;
+    let path_deg = |n: usize| -> f64 {
+        (0..n)
+            .map(|k| {
+                let t = exposure_s / n as f64;
+                angle_deg(at(k as f64 * t), at((k + 1) as f64 * t))
+            })
+            .sum()
+    };
+    let coarse_deg = path_deg(coarse);
+    if !coarse_deg.is_finite() {
+        return None;
+    }
+    let segments = ((coarse_deg / sensor.pixel_scale_deg() / TRACK_NODE_SPACING_PX).ceil()
+        as usize)
+        .max(coarse);
+    let step_s = exposure_s / segments as f64;
+    let nodes: Vec<Vec3> = (0..=segments).map(|k| at(k as f64 * step_s)).collect();
+    let drift_deg = nodes.windows(2).map(|w| angle_deg(w[0], w[1])).sum();
+    let debris_mid = at(exposure_s / 2.0);
+    let reach_deg = nodes
+        .iter()
+        .map(|&n| angle_deg(debris_mid, n))
+        .fold(0.0, f64::max);
+    let mut track = TargetTrack {
+        mid_ra_deg: boresight.0,
+        mid_dec_deg: boresight.1,
+        boresight_radec_start_deg: [0.0; 2],
+        boresight_radec_end_deg: [0.0; 2],
+        t_mid_s: exposure_s / 2.0,
+        drift_deg,
+        trail_angle_deg: 0.0,
+        reach_deg,
+        debris_mid,
+        step_s,
+        nodes,
+    };
+    let (ra0, dec0) = track.radec_at(0.0);
+    let (ra1, dec1) = track.radec_at(exposure_s);
+    track.boresight_radec_start_deg = [ra0, dec0];
+    track.boresight_radec_end_deg = [ra1, dec1];
+    let tan = sensor.projection(boresight.0, boresight.1);
+    let (ra0, dec0) = track.to_mid_frame(0.0, boresight.0, boresight.1);
+    let (ra1, dec1) = track.to_mid_frame(exposure_s, boresight.0, boresight.1);
+    let (x0, y0) = tan.standard(ra0, dec0)?;
+    let (x1, y1) = tan.standard(ra1, dec1)?;
+    track.trail_angle_deg = (y1 - y0).atan2(x1 - x0).to_degrees();
+    Some(track)
 }
 
 /// One point of the debris trajectory: a source with its share of the exposure.
@@ -276,15 +451,27 @@ pub struct Scene {
     /// Draws tried, and why the rejected ones were rejected.
     pub attempts: u32,
     pub rejections: BTreeMap<Rejection, u32>,
+    /// Its place in a multi-frame collect (None: a single image).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collect: Option<CollectFrame>,
+}
+
+/// A frame's place in its collect, recorded in the truth: the object keeps its `track_id`
+/// over the collect's frames (one object per image: the collect's number).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct CollectFrame {
+    pub collect: u64,
+    /// 0-based, in time order.
+    pub frame: u64,
+    pub frames: u64,
+    pub track_id: u64,
 }
 
 impl Scene {
     /// The projection at mid-exposure: the one the FITS WCS describes.
     pub fn projection(&self, sensor: &Sensor) -> Tan {
-        match self.pointing {
-            Pointing::Fixed { ra_deg, dec_deg } => sensor.projection(ra_deg, dec_deg),
-            Pointing::Survey(track) => sensor.projection(track.mid_ra_deg, track.mid_dec_deg),
-        }
+        let (ra, dec) = self.pointing.mid_radec_deg();
+        sensor.projection(ra, dec)
     }
 
     /// A hand-made fixed-pointing scene (for tests, or to inject a known streak): the sensor
@@ -348,14 +535,19 @@ impl Scene {
             snr_noise_sigma: 1.0,
             attempts: 1,
             rejections: BTreeMap::new(),
+            collect: None,
         }
     }
 
     /// Pixel coordinates of a sky position with the pointing of `t_s` seconds after the start.
     pub fn pixel_at(&self, tan: &Tan, t_s: f64, ra_deg: f64, dec_deg: f64) -> Option<(f64, f64)> {
-        match self.pointing {
+        match &self.pointing {
             Pointing::Fixed { .. } => tan.pixel(ra_deg, dec_deg),
             Pointing::Survey(track) => {
+                let (ra, dec) = track.to_mid_frame(t_s, ra_deg, dec_deg);
+                tan.pixel(ra, dec)
+            }
+            Pointing::Track(track) => {
                 let (ra, dec) = track.to_mid_frame(t_s, ra_deg, dec_deg);
                 tan.pixel(ra, dec)
             }
@@ -378,6 +570,7 @@ pub enum Rejection {
     LowSnr,
     PropagationFailed,
     TooFast,
+    TrackTooFast,
 }
 
 impl Rejection {
@@ -393,6 +586,7 @@ impl Rejection {
             Rejection::LowSnr => "signal to noise below the gate",
             Rejection::PropagationFailed => "propagation failed",
             Rejection::TooFast => "streak too fast to sample (over 1e6 trajectory samples)",
+            Rejection::TrackTooFast => "tracking drift beyond the survey drift limit",
         }
     }
 }
@@ -470,7 +664,9 @@ pub fn choose_debris(spec: &Spec, debris: usize, seed: u64, image: u64) -> usize
 }
 
 /// Draw the scene of image `image` of a campaign with this seed: the debris object first,
-/// then the rest, retried on the scene stream until the gate accepts it.
+/// then the rest, retried on the scene stream until the gate accepts it. In collects the
+/// streams are the collect's, the gate judges its first frame, and a later frame follows the
+/// first's pointing plan whatever it shows (the object may leave a fixed field or fade).
 pub fn draw(
     spec: &Spec,
     sensor: &Sensor,
@@ -478,48 +674,88 @@ pub fn draw(
     seed: u64,
     image: u64,
 ) -> Result<Scene, NoScene> {
-    let debris_index = choose_debris(spec, inputs.debris.len(), seed, image);
+    let frames = spec.collect_frames.max(1);
+    let (collect, frame) = (image / frames, image % frames);
+    let debris_index = choose_debris(spec, inputs.debris.len(), seed, collect);
     // Drawn only in a mixed campaign, so that every other keeps its streams.
     let on_frame = spec.frame_share >= 1.0
-        || stream(seed, image, Purpose::BackgroundKind).random::<f64>() < spec.frame_share;
-    let rng = &mut stream(seed, image, Purpose::Scene);
+        || stream(seed, collect, Purpose::BackgroundKind).random::<f64>() < spec.frame_share;
+    let rng = &mut stream(seed, collect, Purpose::Scene);
     let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
     let max = spec.gate.max_attempts;
+    let no_scene = |attempts: u32, rejections: BTreeMap<Rejection, u32>| {
+        let debris = &inputs.debris[debris_index];
+        NoScene {
+            image,
+            debris_index,
+            object: debris.name.clone(),
+            norad: debris.norad,
+            attempts,
+            reasons: rejections
+                .iter()
+                .map(|(k, v)| format!("{k} x{v}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            rejections,
+        }
+    };
     for attempt in 1..=max {
-        match try_draw(spec, sensor, inputs, image, debris_index, on_frame, rng) {
-            Ok(mut scene) => {
+        let d = draw_values(spec, inputs, on_frame, rng);
+        match try_draw(spec, sensor, inputs, image, debris_index, &d, Plan::First) {
+            Ok(first) => {
+                let mut scene = if frame == 0 {
+                    first
+                } else {
+                    let later = Plan::Later {
+                        frame,
+                        first: &first,
+                    };
+                    match try_draw(spec, sensor, inputs, image, debris_index, &d, later) {
+                        Ok(s) => s,
+                        // The collect was accepted by its first frame: no retry here.
+                        Err(reason) => {
+                            *rejections.entry(reason).or_default() += 1;
+                            return Err(no_scene(attempt, rejections));
+                        }
+                    }
+                };
                 scene.attempts = attempt;
                 scene.rejections = rejections;
+                if frames > 1 {
+                    scene.collect = Some(CollectFrame {
+                        collect,
+                        frame,
+                        frames,
+                        track_id: collect,
+                    });
+                }
                 return Ok(scene);
             }
             Err(reason) => *rejections.entry(reason).or_default() += 1,
         }
     }
-    let debris = &inputs.debris[debris_index];
-    Err(NoScene {
-        image,
-        debris_index,
-        object: debris.name.clone(),
-        norad: debris.norad,
-        attempts: max,
-        reasons: rejections
-            .iter()
-            .map(|(k, v)| format!("{k} x{v}"))
-            .collect::<Vec<_>>()
-            .join(", "),
-        rejections,
-    })
+    Err(no_scene(max, rejections))
 }
 
-fn try_draw(
-    spec: &Spec,
-    sensor: &Sensor,
-    inputs: &Inputs,
-    image: u64,
-    debris_index: usize,
-    on_frame: bool,
-    rng: &mut ChaCha12Rng,
-) -> Result<Scene, Rejection> {
+/// The random values of one draw attempt, in the scene stream's order.
+struct Draws {
+    exposure_s: f64,
+    start: Epoch,
+    area_m2: f64,
+    placement: (f64, f64),
+    background: Option<FrameChoice>,
+    tumble: Option<Tumble>,
+}
+
+/// Which frame of its collect a scene is: the first (a single image is one), judged by the
+/// gate, or a later one, which follows the first's pointing plan and is not judged.
+#[derive(Clone, Copy)]
+enum Plan<'a> {
+    First,
+    Later { frame: u64, first: &'a Scene },
+}
+
+fn draw_values(spec: &Spec, inputs: &Inputs, on_frame: bool, rng: &mut ChaCha12Rng) -> Draws {
     let span_s = (spec.window_end - spec.window_start).to_seconds();
     let exposure_s = if spec.exposure_max_s > spec.exposure_min_s {
         rng.random_range(spec.exposure_min_s..=spec.exposure_max_s)
@@ -527,7 +763,6 @@ fn try_draw(
         spec.exposure_min_s
     };
     let start = spec.window_start + Duration::from_seconds(rng.random_range(0.0..span_s));
-    let mid = start + Duration::from_seconds(exposure_s / 2.0);
     let area_m2 = spec.area.draw(rng);
     let placement = (
         rng.random_range(-1.0..1.0) * spec.placement_fraction,
@@ -553,6 +788,44 @@ fn try_draw(
         amplitude: rng.random_range(0.0..=r.amplitude_max),
         phase_rad: rng.random_range(0.0..std::f64::consts::TAU),
     });
+    Draws {
+        exposure_s,
+        start,
+        area_m2,
+        placement,
+        background,
+        tumble,
+    }
+}
+
+fn try_draw(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    image: u64,
+    debris_index: usize,
+    d: &Draws,
+    plan: Plan,
+) -> Result<Scene, Rejection> {
+    let Draws {
+        exposure_s,
+        area_m2,
+        placement,
+        background,
+        tumble,
+        ..
+    } = *d;
+    let gated = matches!(plan, Plan::First);
+    // Frame k of a collect starts k (exposure + gap) after the first.
+    let offset_s = match plan {
+        Plan::First => 0.0,
+        Plan::Later { frame, .. } => frame as f64 * (exposure_s + spec.collect_gap_s),
+    };
+    let start = match plan {
+        Plan::First => d.start,
+        Plan::Later { .. } => d.start + Duration::from_seconds(offset_s),
+    };
+    let mid = start + Duration::from_seconds(exposure_s / 2.0);
 
     // Visibility at mid-exposure (paper 3.2.2).
     let sighting = Sighting::new(
@@ -567,28 +840,31 @@ fn try_draw(
     let sun = sun_position_km(mid);
     let moon = moon_position_km(mid);
     let v = &spec.gate;
+    // A later frame of a collect is not judged (`gated` false).
     let earth_angle_deg = angle_deg(los, sub([0.0; 3], obs));
-    if earth_angle_deg <= v.earth_min_deg {
+    if gated && earth_angle_deg <= v.earth_min_deg {
         return Err(Rejection::EarthAngle);
     }
     let sun_angle_deg = angle_deg(los, sub(sun, obs));
-    if sun_angle_deg <= v.sun_min_deg {
+    if gated && sun_angle_deg <= v.sun_min_deg {
         return Err(Rejection::SunAngle);
     }
     let moon_angle_deg = angle_deg(los, sub(moon, obs));
-    if moon_angle_deg <= v.moon_min_deg {
+    if gated && moon_angle_deg <= v.moon_min_deg {
         return Err(Rejection::MoonAngle);
     }
-    if segment_hits_sphere(obs, deb, EARTH_RADIUS_KM + v.earth_clearance_km) {
+    if gated && segment_hits_sphere(obs, deb, EARTH_RADIUS_KM + v.earth_clearance_km) {
         return Err(Rejection::ThroughEarth);
     }
-    if segment_hits_sphere(deb, sun, EARTH_RADIUS_KM) {
+    // In a later frame the object may have entered the shadow: it then sends no light.
+    let shadowed = segment_hits_sphere(deb, sun, EARTH_RADIUS_KM);
+    if gated && shadowed {
         return Err(Rejection::EarthShadow);
     }
     let phase_angle_deg = angle_deg(sub(sun, deb), sub(obs, deb));
     let range_km = norm(los);
     let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km);
-    if magnitude.is_nan() || magnitude > sensor.mag_limit {
+    if gated && (magnitude.is_nan() || magnitude > sensor.mag_limit) {
         return Err(Rejection::TooFaint);
     }
 
@@ -598,10 +874,20 @@ fn try_draw(
     let around_debris = sensor.projection(ra_mid, dec_mid);
     let half_w = sensor.width_px as f64 / 2.0;
     let half_h = sensor.height_px as f64 / 2.0;
-    let (ra_p, dec_p) = around_debris.sky(
+    let placed = around_debris.sky(
         around_debris.cx - placement.0 * half_w,
         around_debris.cy - placement.1 * half_h,
     );
+    // A later frame keeps the first's plan: a fixed direction, the survey attitude running on
+    // (the first frame's rotation, continued), or the object held on its pixel.
+    let (ra_p, dec_p) = match plan {
+        Plan::Later { first, .. } => match &first.pointing {
+            Pointing::Fixed { ra_deg, dec_deg } => (*ra_deg, *dec_deg),
+            Pointing::Survey(t0) => t0.radec_at(t0.t_mid_s + offset_s),
+            Pointing::Track(_) => placed,
+        },
+        Plan::First => placed,
+    };
     let (pointing, cone) = match spec.pointing {
         PointingMode::Fixed => (
             Pointing::Fixed {
@@ -621,13 +907,31 @@ fn try_draw(
                 track.drift_deg / 2.0 + half_diag_deg + STAR_CONE_MARGIN_DEG,
             )
         }
+        PointingMode::Track => {
+            let sights = sighting
+                .track(start, exposure_s)
+                .ok_or(Rejection::PropagationFailed)?;
+            let track = target_track(sensor, &sights, exposure_s, (ra_p, dec_p))
+                .ok_or(Rejection::PropagationFailed)?;
+            // The star budget of the campaign (`campaign::validate`) allows a survey's drift.
+            if track.drift_deg > crate::campaign::MAX_SURVEY_DRIFT_DEG {
+                return Err(Rejection::TrackTooFast);
+            }
+            // The boresight at t is the mid one turned by R(t), by the debris' angle from
+            // mid-exposure to t (at most the reach; between nodes, half a pixel more at most,
+            // within the margin): the cone around the mid boresight.
+            let half_diag_deg =
+                scale * (sensor.width_px as f64).hypot(sensor.height_px as f64) / 2.0;
+            let cone = track.reach_deg + half_diag_deg + STAR_CONE_MARGIN_DEG;
+            (Pointing::Track(track), cone)
+        }
     };
 
     // Field stars in the cone; a star brighter than the limit spoils the image (paper 3.2.3).
     let field = inputs
         .stars
         .stars_in_cone(ra_p, dec_p, cone, sensor.mag_limit, mid);
-    if field.iter().any(|s| s.mag < v.brightest_star_mag) {
+    if gated && field.iter().any(|s| s.mag < v.brightest_star_mag) {
         return Err(Rejection::BrightStar);
     }
 
@@ -653,14 +957,15 @@ fn try_draw(
                         * (std::f64::consts::TAU * t_s / tb.period_s + tb.phase_rad).sin();
                 mag -= 2.5 * factor.log10();
             }
-            let expected_electrons = if mag.is_finite() {
+            let expected_electrons = if mag.is_finite() && !shadowed {
                 photon_rate(mag, sensor.zero_point_mag) * dt
             } else {
                 0.0
             };
-            let (ra_cam, dec_cam) = match pointing {
+            let (ra_cam, dec_cam) = match &pointing {
                 Pointing::Fixed { .. } => (ra_deg, dec_deg),
                 Pointing::Survey(track) => track.to_mid_frame(t_s, ra_deg, dec_deg),
+                Pointing::Track(track) => track.to_mid_frame(t_s, ra_deg, dec_deg),
             };
             let (x_px, y_px) = mid_tan
                 .pixel(ra_cam, dec_cam)
@@ -709,7 +1014,7 @@ fn try_draw(
         SnrDefinition::NoiseLevel => snr_noise_level,
         SnrDefinition::NoiseSigma => snr_noise_sigma,
     };
-    if snr < v.snr_min {
+    if gated && snr < v.snr_min {
         return Err(Rejection::LowSnr);
     }
 
@@ -742,6 +1047,7 @@ fn try_draw(
         snr_noise_sigma,
         attempts: 0,
         rejections: BTreeMap::new(),
+        collect: None,
     })
 }
 

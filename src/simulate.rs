@@ -12,7 +12,7 @@ use crate::enhance::{self, Gray8};
 use crate::geometry::{self, BoxPx, Fill, Frame, FrameKind, LABEL_SHARE};
 use crate::render::{self, Exposure};
 use crate::rng::{PixelPurpose, PixelRng, pixel_stream};
-use crate::scene::{self, Inputs, NoScene, Pointing, Scene};
+use crate::scene::{self, Inputs, NoScene, Scene};
 use crate::sensor::Sensor;
 
 /// Everything one image needs besides its inputs and index.
@@ -71,10 +71,7 @@ pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProduct
     let product = x.product.as_ref().map(|p| {
         let started = Instant::now();
         let (w, h) = (exposure.width, exposure.height);
-        let trail_angle_deg = match scene.pointing {
-            Pointing::Survey(track) => track.trail_angle_deg,
-            Pointing::Fixed { .. } => 0.0,
-        };
+        let trail_angle_deg = scene.pointing.trail_angle_deg().unwrap_or(0.0);
         let frame = Frame::new(p.frame, w, h, p.pad_px, trail_angle_deg);
         // The debris alone is warped like the image, so the label is the tight box of the
         // rendered streak in the final frame.

@@ -23,10 +23,7 @@ fn campaign(render: &str) -> Campaign {
 }
 
 fn boresight(p: &Pointing) -> (f64, f64) {
-    match p {
-        Pointing::Fixed { ra_deg, dec_deg } => (*ra_deg, *dec_deg),
-        Pointing::Survey(t) => (t.mid_ra_deg, t.mid_dec_deg),
-    }
+    p.mid_radec_deg()
 }
 
 #[test]

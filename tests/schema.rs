@@ -146,6 +146,14 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "51b4e0046a486878a8c4af90c3ce8dd4fb195a9ac6babff8b3a66d3c0d38af82",
     ),
     (
+        "campaigns/collect-quickstart.toml",
+        "371096f25008c5f6e2440eea2d542da8ce7fea59d213e36ae3192797d07cbdf8",
+    ),
+    (
+        "campaigns/track-quickstart.toml",
+        "c5d62dec9fb0b5ce4d553ffd1ac6b5091f9bdbe8f5048543de3d649696d93ec8",
+    ),
+    (
         "results/campaigns/results-fixed-original-semisynthetic.toml",
         "147e7e32437371dd26048d97f29c60918947cee87b17c3c1c5455998693fc59e",
     ),

@@ -8,13 +8,13 @@ use soig::render::trails::star_trails;
 mod common;
 use common::{CampaignToml, rendered, tle_object};
 
-/// Survey images of 512 px; `sensor` adds keys to `[sensor]`.
-fn survey(sensor: &str) -> Campaign {
+/// Images of 512 px in pointing `mode`; `sensor` adds keys to `[sensor]`.
+fn campaign(mode: &str, sensor: &str) -> Campaign {
     CampaignToml::new("trails", 11, 4)
         .debris(&tle_object(37476))
         .debris(&tle_object(40989))
         .tables(&format!(
-            "[pointing]\nmode = \"survey\"\n[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n{sensor}[render]\ntrajectory_samples = 800\n",
+            "[pointing]\nmode = \"{mode}\"\n[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n{sensor}[render]\ntrajectory_samples = 800\n",
         ))
         .load("trails.toml")
 }
@@ -43,10 +43,13 @@ fn distance(q: (f64, f64), nodes: &[[f64; 2]]) -> f64 {
 #[test]
 fn predicted_star_trails_lie_on_the_rendered_starlight() {
     let mut centroids = 0;
-    // With the paper's jitter, and without (the prediction then knows the whole pointing).
+    // Survey and track pointing, with the paper's jitter and without (the prediction then
+    // knows the whole pointing).
     for (c, jitter) in [
-        (survey(""), true),
-        (survey("jitter_deg_per_sqrt_s = 0.0\n"), false),
+        (campaign("survey", ""), true),
+        (campaign("survey", "jitter_deg_per_sqrt_s = 0.0\n"), false),
+        (campaign("track", ""), true),
+        (campaign("track", "jitter_deg_per_sqrt_s = 0.0\n"), false),
     ] {
         let sensor = Experiment::new(&c).sensor;
         let psf = sensor.psf_sigma_px();

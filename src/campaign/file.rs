@@ -34,6 +34,10 @@ pub struct CampaignFile {
     pub exposure: Exposure,
     #[serde(default)]
     pub pointing: Pointing,
+    /// `[collect]`: images taken in collects of several frames on one pointing plan; omitted
+    /// from the resolved campaign when absent (single frames), so hashes stay.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub collect: Option<Collect>,
     #[serde(default)]
     pub sensor: Sensor,
     #[serde(default)]
@@ -158,6 +162,27 @@ pub struct Pointing {
     /// field radius (in each axis) from the image centre.
     #[serde(default = "defaults::placement_fraction")]
     pub placement_fraction: f64,
+}
+
+impl CampaignFile {
+    /// Frames per collect (1 without `[collect]`).
+    pub fn collect_frames(&self) -> u32 {
+        self.collect.as_ref().map_or(1, |k| k.frames)
+    }
+}
+
+/// Multi-frame collects: image i is frame `i % frames` of collect `i / frames`. A collect's
+/// frames share its draw (object, first start, exposure, placement, background, light curve)
+/// and its pointing plan (fixed: one direction; survey: the observer's attitude running on;
+/// track: the object followed), frame k starting `k * (exposure + gap_s)` after the first.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Collect {
+    /// Frames per collect (`images` must be a multiple).
+    pub frames: u32,
+    /// Seconds between the end of one frame and the start of the next.
+    #[serde(default)]
+    pub gap_s: f64,
 }
 
 /// The camera and detector.

@@ -250,6 +250,8 @@ impl Campaign {
             .unwrap_or(match self.resolved.pointing.mode {
                 PointingMode::Fixed => defaults::snr_fixed(),
                 PointingMode::Survey => defaults::snr_survey(),
+                // The debris is a point, as a fixed-pointing streak seen end-on.
+                PointingMode::Track => defaults::snr_fixed(),
             })
     }
 }
@@ -374,7 +376,10 @@ mod tests {
         assert_eq!(e.field.as_deref(), Some("window.start"));
 
         let e = load(&minimal("[enhance]\ngeometry = \"rotated\"\n")).unwrap_err();
-        assert!(e.to_string().contains("needs survey pointing"), "{e}");
+        assert!(
+            e.to_string().contains("needs survey or track pointing"),
+            "{e}"
+        );
         assert!(
             load(&minimal(
                 "[pointing]\nmode = \"survey\"\n[enhance]\ngeometry = \"rotated\"\n"

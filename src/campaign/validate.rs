@@ -24,6 +24,23 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     let pos = |x: f64| x.is_finite() && x > 0.0;
     let nonneg = |x: f64| x.is_finite() && x >= 0.0;
     check(!c.name.trim().is_empty(), "name", "must not be empty")?;
+    if let Some(k) = &c.collect {
+        check(
+            (1..=10_000).contains(&k.frames),
+            "collect.frames",
+            "must be between 1 and 10000",
+        )?;
+        check(
+            c.images.is_multiple_of(k.frames),
+            "collect.frames",
+            "must divide `images` (every collect has all its frames)",
+        )?;
+        check(
+            k.gap_s.is_finite() && (0.0..=86_400.0).contains(&k.gap_s),
+            "collect.gap_s",
+            "must be in [0, 86400] seconds",
+        )?;
+    }
     check(
         c.name
             .chars()
@@ -171,6 +188,11 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     // scene loads, in the galactic plane. Beyond this an image's star query alone takes minutes.
     let cone_deg = match c.pointing.mode {
         PointingMode::Fixed => c.stars.cone_radius_deg(),
+        // A tracking scene's cone is its whole path plus the field (`scene::try_draw`).
+        PointingMode::Track => {
+            super::MAX_SURVEY_DRIFT_DEG
+                + s.fov_radius_deg * (1.0f64).hypot(s.height_px as f64 / s.width_px as f64)
+        }
         PointingMode::Survey => {
             super::MAX_SURVEY_DRIFT_DEG / 2.0
                 + s.fov_radius_deg * (1.0f64).hypot(s.height_px as f64 / s.width_px as f64)
@@ -357,9 +379,9 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
     )?;
     check(en.pad_px <= 4096, "enhance.pad_px", "must be at most 4096")?;
     check(
-        en.geometry != FrameKind::Rotated || c.pointing.mode == PointingMode::Survey,
+        en.geometry != FrameKind::Rotated || c.pointing.mode != PointingMode::Fixed,
         "enhance.geometry",
-        "`rotated` needs survey pointing (fixed images have no star trails to align)",
+        "`rotated` needs survey or track pointing (fixed images have no star trails to align)",
     )?;
     let t = &c.train;
     check(

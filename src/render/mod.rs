@@ -220,6 +220,9 @@ pub fn render_with_jitter(
         crate::scene::Pointing::Survey(_) => {
             format!("{} {}", truth::COORDINATES, truth::SURVEY_COORDINATES)
         }
+        crate::scene::Pointing::Track(_) => {
+            format!("{} {}", truth::COORDINATES, truth::TRACK_COORDINATES)
+        }
         crate::scene::Pointing::Fixed { .. } => truth::COORDINATES.to_string(),
     };
     let truth = Truth {
@@ -262,6 +265,7 @@ pub fn render_with_jitter(
         attempts: scene.attempts,
         rejections: scene.rejections.clone(),
         ephemeris: scene.ephemeris,
+        collect: scene.collect,
     };
     Exposure {
         width,

@@ -7,7 +7,7 @@ use rand::RngExt;
 use serde::Serialize;
 
 use super::Jitter;
-use crate::scene::{Pointing, Scene};
+use crate::scene::{Pointing, Scene, SurveyTrack, TargetTrack};
 use crate::sensor::Sensor;
 use crate::sky::photometry::photon_rate;
 
@@ -101,7 +101,7 @@ pub(super) fn for_each_source(
             && y < height - 0.5 + margin
     };
     let mut traced = Vec::new();
-    match scene.pointing {
+    match &scene.pointing {
         Pointing::Fixed { .. } => {
             // Fixed on the sky, photons uniform over the exposure.
             for star in &scene.stars {
@@ -129,20 +129,34 @@ pub(super) fn for_each_source(
                 });
             }
         }
-        Pointing::Survey(track) => {
+        Pointing::Survey(SurveyTrack { drift_deg, .. })
+        | Pointing::Track(TargetTrack { drift_deg, .. }) => {
             // Each star's trail is sampled on a time grid fine enough that linear interpolation
             // between nodes is exact to well under 0.01 px (the trail is straight to second
             // order in the drift), and every photon takes the position of its arrival time.
-            let drift_px = track.drift_deg / scale;
+            let drift_px = drift_deg / scale;
             let nodes = ((drift_px / SURVEY_NODE_SPACING_PX).ceil() as usize + 1).max(2);
             let step = t_exp / (nodes - 1) as f64;
             let mut trail = vec![(f64::NAN, f64::NAN); nodes];
+            // A tracking camera's turn at each node, once for all stars.
+            let turns: Option<Vec<_>> = match &scene.pointing {
+                Pointing::Track(t) => {
+                    Some((0..nodes).map(|i| t.turn_at(i as f64 * step)).collect())
+                }
+                _ => None,
+            };
             for star in &scene.stars {
                 let (mut first, mut last) = (None, None);
                 for (i, node) in trail.iter_mut().enumerate() {
-                    *node = scene
-                        .pixel_at(&tan, i as f64 * step, star.ra_deg, star.dec_deg)
-                        .unwrap_or((f64::NAN, f64::NAN));
+                    *node = match &turns {
+                        Some(turns) => {
+                            let (ra, dec) =
+                                TargetTrack::undo_turn(turns[i], star.ra_deg, star.dec_deg);
+                            tan.pixel(ra, dec)
+                        }
+                        None => scene.pixel_at(&tan, i as f64 * step, star.ra_deg, star.dec_deg),
+                    }
+                    .unwrap_or((f64::NAN, f64::NAN));
                     if near(node.0, node.1) {
                         first.get_or_insert(i);
                         last = Some(i);

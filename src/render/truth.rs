@@ -70,6 +70,9 @@ pub struct Truth {
     /// The debris' RA/Dec at start, middle and end, and the GCRS states at mid-exposure.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ephemeris: Option<crate::sighting::Ephemeris>,
+    /// The image's place in its multi-frame collect, with the object's track id.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collect: Option<crate::scene::CollectFrame>,
 }
 
 /// The pixel and sky conventions of every truth, written into it so that it says them itself.
@@ -87,6 +90,13 @@ exposure, so ephemeris.debris_radec_start_deg and _end_deg (where the debris is 
 those instants) fall away from streak_start_px and streak_end_px through the mid-exposure WCS \
 (by the drift over half the exposure); streak_start_wcs_radec_deg and streak_end_wcs_radec_deg \
 are what that WCS gives at the streak's ends.";
+
+/// The track addendum: the boresight follows the debris, so its streak is a point.
+pub const TRACK_COORDINATES: &str = "Track pointing: the boresight follows the debris over the \
+exposure (pointing.boresight_radec_start_deg, mid_*, _end_deg), so the debris stays where it is \
+at mid-exposure (streak_start_px and streak_end_px differ by the jitter alone) while \
+ephemeris.debris_radec_start_deg and _end_deg move with it on the sky; the stars trail along \
+pointing.trail_angle_deg.";
 
 /// ISO 8601 UTC with microseconds, e.g. `2022-03-04T05:06:07.891234` (a millisecond is 6 px
 /// of LEO motion; the FITS `DATE-OBS` and the truth's `start_utc`). Truncated, not rounded, so

@@ -1,0 +1,178 @@
+//! Multi-frame collects (issue #34): N frames with given gaps on one pointing plan, linked by a
+//! track id, kept whole by the split, replayable from their FITS and the collect manifest.
+
+use std::path::Path;
+
+use soig::campaign::Campaign;
+use soig::scene::{CollectFrame, Pointing};
+use soig::sky::{angle_deg, radec_unit};
+
+mod common;
+use common::{CampaignToml, digest, rendered, soig, tle_object};
+
+/// `collects` collects of `frames` frames 10 s apart, 256 px at the paper's pixel scale, in
+/// pointing `mode`, a LEO and a GEO object.
+fn collects(mode: &str, collects: u32, frames: u32, extra: &str) -> CampaignToml {
+    CampaignToml::new("collect", 5, collects * frames)
+        .debris(&tle_object(37476))
+        .debris(&tle_object(40989))
+        .tables(&format!(
+            "[pointing]\nmode = \"{mode}\"\n[collect]\nframes = {frames}\ngap_s = 10.0\n[sensor]\nwidth_px = 256\nheight_px = 256\nfov_radius_deg = 0.025\n[render]\ntrajectory_samples = 500\n{extra}"
+        ))
+}
+
+fn load(mode: &str, n: u32, frames: u32) -> Campaign {
+    collects(mode, n, frames, "").load("collect.toml")
+}
+
+#[test]
+fn frames_of_a_collect_share_its_draw_and_plan() {
+    for mode in ["fixed", "survey", "track"] {
+        let c = load(mode, 3, 4);
+        let images = rendered(&c, 12);
+        for (k, chunk) in images.chunks(4).enumerate() {
+            let first = &chunk[0].scene;
+            for (f, image) in chunk.iter().enumerate() {
+                let s = &image.scene;
+                assert_eq!(
+                    s.collect,
+                    Some(CollectFrame {
+                        collect: k as u64,
+                        frame: f as u64,
+                        frames: 4,
+                        track_id: k as u64,
+                    })
+                );
+                assert_eq!(image.exposure.truth.collect, s.collect);
+                assert_eq!(s.debris_index, first.debris_index);
+                assert_eq!(s.exposure_s, first.exposure_s);
+                // Frame f starts f (exposure + gap) after the first, to the microsecond of
+                // hifitime's arithmetic on a 2022 epoch (nanoseconds, 1e-6 s is slack).
+                let dt = (s.start - first.start).to_seconds();
+                let want = f as f64 * (first.exposure_s + 10.0);
+                assert!((dt - want).abs() < 1e-6, "{mode} {k}/{f}: {dt} vs {want}");
+                match (&first.pointing, &s.pointing) {
+                    // One inertial direction for the whole collect.
+                    (Pointing::Fixed { .. }, p) => assert_eq!(
+                        p.mid_radec_deg(),
+                        first.pointing.mid_radec_deg(),
+                        "fixed {k}/{f}"
+                    ),
+                    // The first frame's attitude rotation, run on to this frame's middle.
+                    // (dt is the epochs' difference, the plan's offset the seconds it added:
+                    // nanoseconds apart, 1e-10 deg at the orbital rate; 1e-8 deg allowed.)
+                    (Pointing::Survey(t0), Pointing::Survey(t)) => {
+                        let (ra, dec) = t0.radec_at(t0.t_mid_s + dt);
+                        let off =
+                            angle_deg(radec_unit(ra, dec), radec_unit(t.mid_ra_deg, t.mid_dec_deg));
+                        assert!(off < 1e-8, "survey {k}/{f}: {off} deg");
+                        if f > 0 {
+                            assert!(
+                                angle_deg(
+                                    radec_unit(t0.mid_ra_deg, t0.mid_dec_deg),
+                                    radec_unit(ra, dec)
+                                ) > 0.1
+                            );
+                        }
+                    }
+                    // The object held on the first frame's pixel (0.01 px, as tests/track.rs).
+                    (Pointing::Track(_), Pointing::Track(_)) => {
+                        let home = first.trajectory[first.trajectory.len() / 2];
+                        for p in &s.trajectory {
+                            let d = (p.x_px - home.x_px).hypot(p.y_px - home.y_px);
+                            assert!(d < 0.01, "track {k}/{f}: {d} px");
+                        }
+                    }
+                    (a, b) => panic!("pointing changed kind: {a:?} -> {b:?}"),
+                }
+            }
+        }
+    }
+}
+
+/// A run: every frame of a collect in one subset, the manifest in time order with the FITS'
+/// DATE-OBS, the same bytes on 1 and 2 threads, and `soig verify` content.
+#[test]
+fn a_collect_run_keeps_collects_whole_and_replays() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = collects(
+        "track",
+        6,
+        5,
+        "[artifacts]\nfits = true\n[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n",
+    )
+    .write(&tmp.path().join("collect.toml"));
+    let run = |threads: &str, out: &Path| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
+            .args([
+                "run",
+                file.to_str().unwrap(),
+                "--quiet",
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .unwrap();
+        digest(&o)
+    };
+    let (one, two) = (tmp.path().join("one"), tmp.path().join("two"));
+    assert_eq!(run("1", &one), run("2", &two));
+    let v = soig(&["verify", one.to_str().unwrap()]);
+    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+
+    let mut subsets = std::collections::BTreeSet::new();
+    for c in 0..6u64 {
+        let path = one.join("collects").join(format!("collect_{c:06}.json"));
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        assert_eq!(m["track_id"], c);
+        let subset = m["subset"].as_str().unwrap().to_string();
+        let frames = m["frames"].as_array().unwrap();
+        assert_eq!(frames.len(), 5);
+        let mut last = String::new();
+        for (k, f) in frames.iter().enumerate() {
+            assert_eq!(f["frame"], k as u64);
+            assert_eq!(f["image_index"], c * 5 + k as u64);
+            // ISO 8601 strings of one format order as their times.
+            let date = f["date_obs"].as_str().unwrap().to_string();
+            assert!(date > last, "{date} after {last}");
+            last = date.clone();
+            // The frame's PNG is in the collect's subset, and its FITS says the same time.
+            let png = f["png"].as_str().unwrap();
+            assert!(png.starts_with(&format!("images/{subset}/")), "{png}");
+            let fits = std::fs::read(one.join(f["fits"].as_str().unwrap())).unwrap();
+            let header = String::from_utf8_lossy(&fits[..2880 * 4]).to_string();
+            assert!(
+                header.contains(&format!("DATE-OBS= '{date}")),
+                "DATE-OBS {date}"
+            );
+            assert!(
+                header.contains(&format!("TRACKID = {c:>20}")),
+                "TRACKID {c}"
+            );
+            let truth: serde_json::Value = serde_json::from_str(
+                &std::fs::read_to_string(one.join(f["truth"].as_str().unwrap())).unwrap(),
+            )
+            .unwrap();
+            assert_eq!(truth["collect"]["track_id"], c);
+            assert_eq!(truth["collect"]["frame"], k as u64);
+        }
+        subsets.insert(subset);
+    }
+    // Both subsets hold collects (3 of 6 each).
+    assert_eq!(subsets.len(), 2, "{subsets:?}");
+}
+
+#[test]
+fn collect_frames_must_divide_the_images() {
+    let e = Campaign::from_toml(
+        &collects("track", 1, 5, "")
+            .text()
+            .replace("images = 5", "images = 7"),
+        Path::new("c.toml"),
+    )
+    .unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("collect.frames"), "{e}");
+    assert!(e.to_string().contains("must divide `images`"), "{e}");
+}
