@@ -114,6 +114,14 @@ impl Experiment {
                 Background::Frames { share, .. } => *share,
                 Background::Uniform => 1.0,
             },
+            objects: c.objects.as_ref().map(|o| {
+                let (min, max) = o.per_frame.bounds();
+                scene::ObjectCount {
+                    min,
+                    max,
+                    empty_share: o.empty_share,
+                }
+            }),
         };
         let render = render::Settings {
             method: c.render.method,

@@ -14,9 +14,9 @@ use rand_chacha::ChaCha12Rng;
 use serde::Serialize;
 
 use crate::background::{BackgroundModel, FrameChoice, RealFrame};
-use crate::rng::{Purpose, stream};
+use crate::rng::{Purpose, object_stream, stream};
 use crate::sensor::Sensor;
-use crate::sighting::{Ephemeris, Sighting};
+use crate::sighting::{Ephemeris, Sight, Sighting};
 use crate::sky::ephemeris::{moon_position_km, sun_position_km};
 use crate::sky::orbit::Propagator;
 use crate::sky::photometry::{debris_magnitude, photon_rate};
@@ -149,6 +149,29 @@ pub struct Spec {
     /// The share of images with a real frame under them when the inputs have frames (1: all);
     /// the others get the uniform model.
     pub frame_share: f64,
+    /// How many objects each image shows (`[objects]`); None: the one the pointing is drawn
+    /// around (the paper's scenes).
+    pub objects: Option<ObjectCount>,
+}
+
+/// How many debris objects an image shows: none with probability `empty_share`, else a number
+/// uniform in [min, max].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObjectCount {
+    pub min: u32,
+    pub max: u32,
+    pub empty_share: f64,
+}
+
+impl ObjectCount {
+    /// The number of objects of image `image`, from its own stream.
+    pub fn draw(&self, seed: u64, image: u64) -> u32 {
+        let rng = &mut stream(seed, image, Purpose::ObjectCount);
+        if rng.random::<f64>() < self.empty_share {
+            return 0;
+        }
+        rng.random_range(self.min..=self.max)
+    }
 }
 
 /// Julian year (TT) of an instant, e.g. 2016.0 for the Gaia DR3 epoch.
@@ -276,6 +299,12 @@ pub struct Scene {
     /// Draws tried, and why the rejected ones were rejected.
     pub attempts: u32,
     pub rejections: BTreeMap<Rejection, u32>,
+    /// The objects of an image of a campaign with `[objects]` (possibly none), each a scene of
+    /// its own with this one's time, pointing and background and no stars; this scene's own
+    /// object then only chose the pointing and is not rendered. None: this scene's object is
+    /// the image's one object.
+    #[serde(skip)]
+    pub placed: Option<Vec<Scene>>,
 }
 
 impl Scene {
@@ -348,6 +377,15 @@ impl Scene {
             snr_noise_sigma: 1.0,
             attempts: 1,
             rejections: BTreeMap::new(),
+            placed: None,
+        }
+    }
+
+    /// The objects the image shows: the placed ones, or this scene itself.
+    pub fn shown(&self) -> Vec<&Scene> {
+        match &self.placed {
+            Some(placed) => placed.iter().collect(),
+            None => vec![self],
         }
     }
 
@@ -456,9 +494,14 @@ impl NoScene {
 /// The debris object of image `image`, by the spec's weights, from the image's own debris
 /// stream (so the retries of the scene draw never change which object an image shows).
 pub fn choose_debris(spec: &Spec, debris: usize, seed: u64, image: u64) -> usize {
+    pick_debris(spec, debris, &mut stream(seed, image, Purpose::Debris))
+}
+
+/// A debris index by the spec's weights, from `rng`.
+fn pick_debris(spec: &Spec, debris: usize, rng: &mut ChaCha12Rng) -> usize {
     let weight = |i: usize| spec.debris_weights.get(i).copied().unwrap_or(1.0);
     let total: f64 = (0..debris).map(weight).sum();
-    let mut u = stream(seed, image, Purpose::Debris).random_range(0.0..total);
+    let mut u = rng.random_range(0.0..total);
     for i in 0..debris {
         if u < weight(i) {
             return i;
@@ -490,71 +533,134 @@ pub fn draw(
             Ok(mut scene) => {
                 scene.attempts = attempt;
                 scene.rejections = rejections;
+                if let Some(count) = spec.objects {
+                    let n = count.draw(seed, image);
+                    let placed = (0..n as u64)
+                        .map(|k| place(spec, sensor, inputs, seed, &scene, k))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    scene.placed = Some(placed);
+                }
                 return Ok(scene);
             }
             Err(reason) => *rejections.entry(reason).or_default() += 1,
         }
     }
-    let debris = &inputs.debris[debris_index];
-    Err(NoScene {
-        image,
-        debris_index,
-        object: debris.name.clone(),
-        norad: debris.norad,
-        attempts: max,
-        reasons: rejections
-            .iter()
-            .map(|(k, v)| format!("{k} x{v}"))
-            .collect::<Vec<_>>()
-            .join(", "),
-        rejections,
-    })
+    Err(NoScene::of(inputs, image, debris_index, max, rejections))
 }
 
-fn try_draw(
+impl NoScene {
+    fn of(
+        inputs: &Inputs,
+        image: u64,
+        debris_index: usize,
+        attempts: u32,
+        rejections: BTreeMap<Rejection, u32>,
+    ) -> NoScene {
+        let debris = &inputs.debris[debris_index];
+        NoScene {
+            image,
+            debris_index,
+            object: debris.name.clone(),
+            norad: debris.norad,
+            attempts,
+            reasons: rejections
+                .iter()
+                .map(|(k, v)| format!("{k} x{v}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            rejections,
+        }
+    }
+}
+
+/// Object `k` of a frame (`Spec::objects`): its debris by the weights and its draw, from its
+/// own stream, both retried until its own checks accept it (the time is the frame's, so an
+/// object in the Earth's shadow then gives way to another: the weights hold among the objects
+/// visible at that time). The object keeps its own range, phase
+/// angle, brightness and apparent motion at the frame's time; its positions are turned rigidly
+/// about the observer so that at mid-exposure it lies at a uniform place within the
+/// placement fraction of the field (a catalogued object is rarely in another's field; this
+/// puts it there with its own kinematics). It then meets the checks of the pointing's own
+/// object there: Earth, Sun and Moon angles, line of sight, shadow, magnitude limit and
+/// signal to noise (the bright-star check is the frame's).
+fn place(
     spec: &Spec,
     sensor: &Sensor,
     inputs: &Inputs,
-    image: u64,
+    seed: u64,
+    frame: &Scene,
+    k: u64,
+) -> Result<Scene, NoScene> {
+    let image = frame.image_index;
+    let rng = &mut object_stream(seed, image, k, Purpose::ObjectScene);
+    let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
+    let max = spec.gate.max_attempts;
+    let mut debris_index = 0;
+    for attempt in 1..=max {
+        debris_index = pick_debris(spec, inputs.debris.len(), rng);
+        match try_place(spec, sensor, inputs, frame, debris_index, rng) {
+            Ok(mut scene) => {
+                scene.attempts = attempt;
+                scene.rejections = rejections;
+                return Ok(scene);
+            }
+            Err(reason) => *rejections.entry(reason).or_default() += 1,
+        }
+    }
+    Err(NoScene::of(inputs, image, debris_index, max, rejections))
+}
+
+/// A rigid turn about the observer (`place`): the debris' place relative to the observer, and
+/// its direction, are rotated by `angle_rad` about `axis`.
+#[derive(Clone, Copy)]
+struct Turn {
+    axis: Vec3,
+    angle_rad: f64,
+}
+
+impl Turn {
+    /// The turn that takes direction `from` onto direction `to`.
+    fn between(from: Vec3, to: Vec3) -> Turn {
+        let axis = cross(from, to);
+        if norm(axis) == 0.0 {
+            return Turn {
+                axis: [0.0, 0.0, 1.0],
+                angle_rad: 0.0,
+            };
+        }
+        Turn {
+            axis: unit(axis),
+            angle_rad: angle_deg(from, to).to_radians(),
+        }
+    }
+
+    fn apply(&self, sight: Sight) -> Sight {
+        let o = sight.observer_km;
+        let rel = rotate(sub(sight.debris_km, o), self.axis, self.angle_rad);
+        Sight {
+            observer_km: o,
+            debris_km: [o[0] + rel[0], o[1] + rel[1], o[2] + rel[2]],
+            direction: rotate(sight.direction, self.axis, self.angle_rad),
+        }
+    }
+}
+
+fn try_place(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    frame: &Scene,
     debris_index: usize,
-    on_frame: bool,
     rng: &mut ChaCha12Rng,
 ) -> Result<Scene, Rejection> {
-    let span_s = (spec.window_end - spec.window_start).to_seconds();
-    let exposure_s = if spec.exposure_max_s > spec.exposure_min_s {
-        rng.random_range(spec.exposure_min_s..=spec.exposure_max_s)
-    } else {
-        spec.exposure_min_s
-    };
-    let start = spec.window_start + Duration::from_seconds(rng.random_range(0.0..span_s));
+    let (start, exposure_s) = (frame.start, frame.exposure_s);
     let mid = start + Duration::from_seconds(exposure_s / 2.0);
     let area_m2 = spec.area.draw(rng);
     let placement = (
         rng.random_range(-1.0..1.0) * spec.placement_fraction,
         rng.random_range(-1.0..1.0) * spec.placement_fraction,
     );
-    let background = match &inputs.background {
-        BackgroundModel::Frames(frames) if on_frame => {
-            let frame = rng.random_range(0..frames.len());
-            let f = &frames[frame];
-            Some(FrameChoice {
-                frame,
-                offset: (rng.random_range(0..f.width), rng.random_range(0..f.height)),
-            })
-        }
-        _ => None,
-    };
-    let tumble = spec.tumble.map(|r| Tumble {
-        period_s: if r.period_max_s > r.period_min_s {
-            rng.random_range(r.period_min_s..=r.period_max_s)
-        } else {
-            r.period_min_s
-        },
-        amplitude: rng.random_range(0.0..=r.amplitude_max),
-        phase_rad: rng.random_range(0.0..std::f64::consts::TAU),
-    });
-
-    // Visibility at mid-exposure (paper 3.2.2).
+    let tumble = draw_tumble(spec, rng);
     let sighting = Sighting::new(
         &inputs.observer.propagator,
         &inputs.debris[debris_index].propagator,
@@ -562,9 +668,90 @@ fn try_draw(
         spec.apparent_positions,
     );
     let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
+    let mid_tan = frame.projection(sensor);
+    let (ra_t, dec_t) = mid_tan.sky(
+        mid_tan.cx + placement.0 * sensor.width_px as f64 / 2.0,
+        mid_tan.cy + placement.1 * sensor.height_px as f64 / 2.0,
+    );
+    // The camera's mid-exposure frame is the sky's in fixed pointing, and survey pointing is
+    // at its mid-exposure attitude then: the place is the same direction in both.
+    let turn = Turn::between(unit(sight.direction), radec_unit(ra_t, dec_t));
+    let sight = turn.apply(sight);
+    let sun = sun_position_km(mid);
+    let geometry = visibility(spec, sensor, &sight, sun, mid, area_m2)?;
+    let track = sighting
+        .track(start, exposure_s)
+        .ok_or(Rejection::PropagationFailed)?;
+    let trajectory = trajectory(
+        spec,
+        sensor,
+        &|t_s| turn.apply(track.at(t_s)),
+        &Shot {
+            exposure_s,
+            sun,
+            area_m2,
+            tumble,
+            pointing: &frame.pointing,
+            mid_tan: &mid_tan,
+        },
+    )?;
+    let (snr, snr_noise_level, snr_noise_sigma) = gate_snr(
+        spec,
+        sensor,
+        &trajectory,
+        exposure_s,
+        inputs.frame(frame.background),
+    )?;
+    let debris = &inputs.debris[debris_index];
+    Ok(Scene {
+        image_index: frame.image_index,
+        debris_index,
+        debris_name: debris.name.clone(),
+        norad: debris.norad,
+        start,
+        exposure_s,
+        pointing: frame.pointing.clone(),
+        area_m2,
+        tumble,
+        geometry,
+        // The object's own ephemeris is not where the image shows it.
+        ephemeris: None,
+        trajectory,
+        stars: Vec::new(),
+        background: frame.background,
+        snr,
+        snr_noise_level,
+        snr_noise_sigma,
+        attempts: 0,
+        rejections: BTreeMap::new(),
+        placed: None,
+    })
+}
+
+/// The tumbling modulation of one object's draw.
+fn draw_tumble(spec: &Spec, rng: &mut ChaCha12Rng) -> Option<Tumble> {
+    spec.tumble.map(|r| Tumble {
+        period_s: if r.period_max_s > r.period_min_s {
+            rng.random_range(r.period_min_s..=r.period_max_s)
+        } else {
+            r.period_min_s
+        },
+        amplitude: rng.random_range(0.0..=r.amplitude_max),
+        phase_rad: rng.random_range(0.0..std::f64::consts::TAU),
+    })
+}
+
+/// Visibility of the debris at mid-exposure (paper 3.2.2) and its geometry then.
+fn visibility(
+    spec: &Spec,
+    sensor: &Sensor,
+    sight: &Sight,
+    sun: Vec3,
+    mid: Epoch,
+    area_m2: f64,
+) -> Result<Geometry, Rejection> {
     let (obs, deb) = (sight.observer_km, sight.debris_km);
     let los = sub(deb, obs);
-    let sun = sun_position_km(mid);
     let moon = moon_position_km(mid);
     let v = &spec.gate;
     let earth_angle_deg = angle_deg(los, sub([0.0; 3], obs));
@@ -591,57 +778,48 @@ fn try_draw(
     if magnitude.is_nan() || magnitude > sensor.mag_limit {
         return Err(Rejection::TooFaint);
     }
+    Ok(Geometry {
+        range_km,
+        phase_angle_deg,
+        earth_angle_deg,
+        sun_angle_deg,
+        moon_angle_deg,
+        magnitude,
+    })
+}
 
-    // Pointing: the debris at mid-exposure lands at a random place in the field.
-    let (ra_mid, dec_mid) = radec_deg(sight.direction);
-    let scale = sensor.pixel_scale_deg();
-    let around_debris = sensor.projection(ra_mid, dec_mid);
-    let half_w = sensor.width_px as f64 / 2.0;
-    let half_h = sensor.height_px as f64 / 2.0;
-    let (ra_p, dec_p) = around_debris.sky(
-        around_debris.cx - placement.0 * half_w,
-        around_debris.cy - placement.1 * half_h,
-    );
-    let (pointing, cone) = match spec.pointing {
-        PointingMode::Fixed => (
-            Pointing::Fixed {
-                ra_deg: ra_p,
-                dec_deg: dec_p,
-            },
-            spec.star_cone_deg,
-        ),
-        PointingMode::Survey => {
-            let track = survey_track(sensor, &sighting, mid, exposure_s, (ra_p, dec_p))
-                .ok_or(Rejection::PropagationFailed)?;
-            // The star cone covers the field along the whole drift and nothing more.
-            let half_diag_deg =
-                scale * (sensor.width_px as f64).hypot(sensor.height_px as f64) / 2.0;
-            (
-                Pointing::Survey(track),
-                track.drift_deg / 2.0 + half_diag_deg + STAR_CONE_MARGIN_DEG,
-            )
-        }
-    };
+/// What the trajectory of one object needs of its frame and draw.
+struct Shot<'a> {
+    exposure_s: f64,
+    sun: Vec3,
+    area_m2: f64,
+    tumble: Option<Tumble>,
+    pointing: &'a Pointing,
+    mid_tan: &'a Tan,
+}
 
-    // Field stars in the cone; a star brighter than the limit spoils the image (paper 3.2.3).
-    let field = inputs
-        .stars
-        .stars_in_cone(ra_p, dec_p, cone, sensor.mag_limit, mid);
-    if field.iter().any(|s| s.mag < v.brightest_star_mag) {
-        return Err(Rejection::BrightStar);
-    }
-
-    // The trajectory, cut in samples at the centres of equal time slices.
-    let mid_tan = sensor.projection(ra_p, dec_p);
-    let track = sighting
-        .track(start, exposure_s)
-        .ok_or(Rejection::PropagationFailed)?;
+/// The trajectory of one object, cut in samples at the centres of equal time slices, sampled
+/// finer where the samples would render a row of dots (see the comment inside).
+fn trajectory(
+    spec: &Spec,
+    sensor: &Sensor,
+    at: &dyn Fn(f64) -> Sight,
+    shot: &Shot,
+) -> Result<Vec<TrajectorySample>, Rejection> {
+    let Shot {
+        exposure_s,
+        sun,
+        area_m2,
+        tumble,
+        pointing,
+        mid_tan,
+    } = *shot;
     let sample = |n: usize| -> Result<Vec<TrajectorySample>, Rejection> {
         let dt = exposure_s / n as f64;
         let mut trajectory = Vec::with_capacity(n);
         for k in 0..n {
             let t_s = (k as f64 + 0.5) * dt;
-            let sight = track.at(t_s);
+            let sight = at(t_s);
             let (o, d) = (sight.observer_km, sight.debris_km);
             let los = sub(d, o);
             let (ra_deg, dec_deg) = radec_deg(sight.direction);
@@ -693,25 +871,146 @@ fn try_draw(
         }
         trajectory = sample(finer)?;
     }
+    Ok(trajectory)
+}
 
-    let frame = inputs.frame(background);
+/// The signal-to-noise gate (paper 3.2.6): (the judged ratio, by level, by sigma).
+fn gate_snr(
+    spec: &Spec,
+    sensor: &Sensor,
+    trajectory: &[TrajectorySample],
+    exposure_s: f64,
+    frame: Option<&RealFrame>,
+) -> Result<(f64, f64, f64), Rejection> {
     let snr_noise_level = expected_snr(
         sensor,
-        &trajectory,
+        trajectory,
         sensor.noise_level_adu(exposure_s, frame),
     );
     let snr_noise_sigma = expected_snr(
         sensor,
-        &trajectory,
+        trajectory,
         sensor.background_sigma_adu(exposure_s, frame),
     );
-    let snr = match v.snr_definition {
+    let snr = match spec.gate.snr_definition {
         SnrDefinition::NoiseLevel => snr_noise_level,
         SnrDefinition::NoiseSigma => snr_noise_sigma,
     };
-    if snr < v.snr_min {
+    if snr < spec.gate.snr_min {
         return Err(Rejection::LowSnr);
     }
+    Ok((snr, snr_noise_level, snr_noise_sigma))
+}
+
+fn try_draw(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    image: u64,
+    debris_index: usize,
+    on_frame: bool,
+    rng: &mut ChaCha12Rng,
+) -> Result<Scene, Rejection> {
+    let span_s = (spec.window_end - spec.window_start).to_seconds();
+    let exposure_s = if spec.exposure_max_s > spec.exposure_min_s {
+        rng.random_range(spec.exposure_min_s..=spec.exposure_max_s)
+    } else {
+        spec.exposure_min_s
+    };
+    let start = spec.window_start + Duration::from_seconds(rng.random_range(0.0..span_s));
+    let mid = start + Duration::from_seconds(exposure_s / 2.0);
+    let area_m2 = spec.area.draw(rng);
+    let placement = (
+        rng.random_range(-1.0..1.0) * spec.placement_fraction,
+        rng.random_range(-1.0..1.0) * spec.placement_fraction,
+    );
+    let background = match &inputs.background {
+        BackgroundModel::Frames(frames) if on_frame => {
+            let frame = rng.random_range(0..frames.len());
+            let f = &frames[frame];
+            Some(FrameChoice {
+                frame,
+                offset: (rng.random_range(0..f.width), rng.random_range(0..f.height)),
+            })
+        }
+        _ => None,
+    };
+    let tumble = draw_tumble(spec, rng);
+
+    // Visibility at mid-exposure (paper 3.2.2).
+    let sighting = Sighting::new(
+        &inputs.observer.propagator,
+        &inputs.debris[debris_index].propagator,
+        mid,
+        spec.apparent_positions,
+    );
+    let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
+    let sun = sun_position_km(mid);
+    let geometry = visibility(spec, sensor, &sight, sun, mid, area_m2)?;
+
+    // Pointing: the debris at mid-exposure lands at a random place in the field.
+    let (ra_mid, dec_mid) = radec_deg(sight.direction);
+    let scale = sensor.pixel_scale_deg();
+    let around_debris = sensor.projection(ra_mid, dec_mid);
+    let half_w = sensor.width_px as f64 / 2.0;
+    let half_h = sensor.height_px as f64 / 2.0;
+    let (ra_p, dec_p) = around_debris.sky(
+        around_debris.cx - placement.0 * half_w,
+        around_debris.cy - placement.1 * half_h,
+    );
+    let (pointing, cone) = match spec.pointing {
+        PointingMode::Fixed => (
+            Pointing::Fixed {
+                ra_deg: ra_p,
+                dec_deg: dec_p,
+            },
+            spec.star_cone_deg,
+        ),
+        PointingMode::Survey => {
+            let track = survey_track(sensor, &sighting, mid, exposure_s, (ra_p, dec_p))
+                .ok_or(Rejection::PropagationFailed)?;
+            // The star cone covers the field along the whole drift and nothing more.
+            let half_diag_deg =
+                scale * (sensor.width_px as f64).hypot(sensor.height_px as f64) / 2.0;
+            (
+                Pointing::Survey(track),
+                track.drift_deg / 2.0 + half_diag_deg + STAR_CONE_MARGIN_DEG,
+            )
+        }
+    };
+
+    // Field stars in the cone; a star brighter than the limit spoils the image (paper 3.2.3).
+    let field = inputs
+        .stars
+        .stars_in_cone(ra_p, dec_p, cone, sensor.mag_limit, mid);
+    if field.iter().any(|s| s.mag < spec.gate.brightest_star_mag) {
+        return Err(Rejection::BrightStar);
+    }
+
+    let mid_tan = sensor.projection(ra_p, dec_p);
+    let track = sighting
+        .track(start, exposure_s)
+        .ok_or(Rejection::PropagationFailed)?;
+    let trajectory = trajectory(
+        spec,
+        sensor,
+        &|t_s| track.at(t_s),
+        &Shot {
+            exposure_s,
+            sun,
+            area_m2,
+            tumble,
+            pointing: &pointing,
+            mid_tan: &mid_tan,
+        },
+    )?;
+    let (snr, snr_noise_level, snr_noise_sigma) = gate_snr(
+        spec,
+        sensor,
+        &trajectory,
+        exposure_s,
+        inputs.frame(background),
+    )?;
 
     let ephemeris = sighting.ephemeris(start, exposure_s);
     let debris = &inputs.debris[debris_index];
@@ -725,14 +1024,7 @@ fn try_draw(
         pointing,
         area_m2,
         tumble,
-        geometry: Geometry {
-            range_km,
-            phase_angle_deg,
-            earth_angle_deg,
-            sun_angle_deg,
-            moon_angle_deg,
-            magnitude,
-        },
+        geometry,
         ephemeris,
         trajectory,
         stars: field,
@@ -742,6 +1034,7 @@ fn try_draw(
         snr_noise_sigma,
         attempts: 0,
         rejections: BTreeMap::new(),
+        placed: None,
     })
 }
 

@@ -55,6 +55,8 @@ pub struct ImageMatch {
     pub found: Vec<bool>,
     /// Detections with `score >= conf` that took no object.
     pub false_positives: usize,
+    /// Their boxes, in matching order (descending score).
+    pub false_positive_boxes: Vec<[f64; 4]>,
 }
 
 /// Match one image, greedy by score as COCO does: detections with `score >= conf` in descending
@@ -66,7 +68,7 @@ pub fn match_image(im: &ImageEval, conf: f64, iou_threshold: f64) -> ImageMatch 
     let mut dets: Vec<&Detection> = im.detections.iter().filter(|d| d.score >= conf).collect();
     dets.sort_by(|a, b| cmp_desc(a.score, b.score));
     let mut found = vec![false; im.truth.len()];
-    let mut false_positives = 0;
+    let mut false_positive_boxes = Vec::new();
     for d in dets {
         let db = det_box(d);
         let mut best: Option<(usize, f64)> = None;
@@ -81,12 +83,13 @@ pub fn match_image(im: &ImageEval, conf: f64, iou_threshold: f64) -> ImageMatch 
         }
         match best {
             Some((g, _)) => found[g] = true,
-            None => false_positives += 1,
+            None => false_positive_boxes.push(db),
         }
     }
     ImageMatch {
         found,
-        false_positives,
+        false_positives: false_positive_boxes.len(),
+        false_positive_boxes,
     }
 }
 

@@ -27,8 +27,8 @@ pub use jitter::Jitter;
 use photons::{Canvas, Tally, trace};
 pub use sources::TracedStar;
 use sources::{Path, Source, for_each_source};
-pub use truth::Truth;
 pub(crate) use truth::iso_utc;
+pub use truth::{FrameTruth, ObjectTruth, Truth};
 
 /// Above this many packets per source the packet weight grows so that no source traces more
 /// (only reached by sources far brighter than a scene allows, e.g. a magnitude -1 star). The
@@ -85,6 +85,15 @@ pub struct Exposure {
     pub adu: Vec<f32>,
     pub truth: Truth,
     pub stars: Vec<TracedStar>,
+    /// The placed objects (`Scene::placed`), in their order; None for a scene without.
+    pub objects: Option<Vec<ObjectExposure>>,
+}
+
+/// One placed object as rendered: its truth (the frame's fields as the image's) and its
+/// noise-free photo-electrons alone, for its label box in any frame.
+pub struct ObjectExposure {
+    pub truth: Truth,
+    pub debris_electrons: Vec<u32>,
 }
 
 /// Where the photons of the sources go: traced one by one (the debris' drawn per pixel, the
@@ -127,7 +136,7 @@ fn singles_only(scene: &Scene, merge_threshold: u64) -> bool {
     most + 12.0 * most.sqrt() + 12.0 < merge_threshold as f64
 }
 
-/// Render a scene for a given jitter path.
+/// Render a scene for a given jitter path (a scene with placed objects: `render_placed`).
 pub fn render_with_jitter(
     sensor: &Sensor,
     settings: &Settings,
@@ -137,11 +146,103 @@ pub fn render_with_jitter(
     photons_rng: &mut PixelRng,
     noise_rng: &mut PixelRng,
 ) -> Exposure {
+    render_placed(
+        sensor,
+        settings,
+        scene,
+        frame,
+        jitter,
+        photons_rng,
+        noise_rng,
+        &|_| unreachable!("a scene with placed objects is rendered with their streams"),
+    )
+}
+
+/// Render a scene whose placed objects (`Scene::placed`), if any, each trace their photons on
+/// their own stream, `object_photons(k)`, after the frame's stars, with the same jitter path.
+/// The pointing's own object is then not rendered.
+#[allow(clippy::too_many_arguments)]
+pub fn render_placed(
+    sensor: &Sensor,
+    settings: &Settings,
+    scene: &Scene,
+    frame: Option<&RealFrame>,
+    jitter: &Jitter,
+    photons_rng: &mut PixelRng,
+    noise_rng: &mut PixelRng,
+    object_photons: &dyn Fn(u64) -> PixelRng,
+) -> Exposure {
+    let (width, height) = (sensor.width_px, sensor.height_px);
+    let unrendered;
+    let own = match &scene.placed {
+        Some(_) => {
+            unrendered = Scene {
+                trajectory: Vec::new(),
+                placed: None,
+                ..scene.clone()
+            };
+            &unrendered
+        }
+        None => scene,
+    };
+    let (mut canvas, traced, debris_flux) = photons(sensor, settings, own, jitter, photons_rng);
+    let objects = scene.placed.as_ref().map(|placed| {
+        placed
+            .iter()
+            .enumerate()
+            .map(|(k, object)| {
+                let (c, _, flux) = photons(
+                    sensor,
+                    settings,
+                    object,
+                    jitter,
+                    &mut object_photons(k as u64),
+                );
+                for (e, &d) in canvas.electrons.iter_mut().zip(&c.debris) {
+                    *e = e.saturating_add(d);
+                }
+                let truth = truth_of(sensor, object, frame, jitter, &c, &flux, 0);
+                ObjectExposure {
+                    truth,
+                    debris_electrons: c.debris,
+                }
+            })
+            .collect()
+    });
+    let adu = detector::adu(sensor, &canvas.electrons, scene, frame, noise_rng);
+    let truth = truth_of(
+        sensor,
+        own,
+        frame,
+        jitter,
+        &canvas,
+        &debris_flux,
+        traced.len(),
+    );
+    Exposure {
+        width,
+        height,
+        electrons: canvas.electrons,
+        debris_electrons: canvas.debris,
+        adu,
+        truth,
+        stars: traced,
+        objects,
+    }
+}
+
+/// The photons of a scene's stars and debris on the detector, the stars traced, and the
+/// debris' expected flux.
+fn photons(
+    sensor: &Sensor,
+    settings: &Settings,
+    scene: &Scene,
+    jitter: &Jitter,
+    photons_rng: &mut PixelRng,
+) -> (Canvas, Vec<TracedStar>, expected::DebrisFlux) {
     let s = sensor;
     let (width, height) = (s.width_px, s.height_px);
     let psf_px = sensor.psf_sigma_px();
-    let t_exp = scene.exposure_s;
-    let jitter_mean = jitter.mean();
     let merge = (settings.merge_threshold, settings.merge_factor);
     let mut photons = match settings.method {
         RenderMethod::PhotonMapping => Photons::Mapped(Tally::new(width, height)),
@@ -187,14 +288,29 @@ pub fn render_with_jitter(
         }
         Photons::Expected(flux) => flux.draw(photons_rng),
     };
+    (canvas, traced, debris_flux)
+}
+
+/// The truth of a scene's debris as rendered (`canvas`: its photons; `stars_traced`: the
+/// stars of the image).
+fn truth_of(
+    sensor: &Sensor,
+    scene: &Scene,
+    frame: Option<&RealFrame>,
+    jitter: &Jitter,
+    canvas: &Canvas,
+    debris_flux: &expected::DebrisFlux,
+    stars_traced: usize,
+) -> Truth {
+    let (width, height) = (sensor.width_px, sensor.height_px);
+    let t_exp = scene.exposure_s;
+    let jitter_mean = jitter.mean();
     let (expected_debris, mag_min, mag_max) = scene
         .trajectory
         .iter()
         .fold((0.0, f64::INFINITY, f64::NEG_INFINITY), |(e, lo, hi), p| {
             (e + p.expected_electrons, lo.min(p.mag), hi.max(p.mag))
         });
-
-    let adu = detector::adu(sensor, &canvas.electrons, scene, frame, noise_rng);
 
     let at = |p: Option<&crate::scene::TrajectorySample>| {
         p.map(|p| {
@@ -222,7 +338,7 @@ pub fn render_with_jitter(
         }
         crate::scene::Pointing::Fixed { .. } => truth::COORDINATES.to_string(),
     };
-    let truth = Truth {
+    Truth {
         coordinates,
         image_index: scene.image_index,
         object: scene.debris_name.clone(),
@@ -255,21 +371,12 @@ pub fn render_with_jitter(
         snr_noise_sigma: scene.snr_noise_sigma,
         snr_matched_filter: debris_flux.matched_filter_snr(sensor.gain_e_per_adu, sigma_adu),
         stars_in_cone: scene.stars.len(),
-        stars_traced: traced.len(),
+        stars_traced,
         background_sigma_adu: sigma_adu,
         background_frame: frame.map(|f| f.name.clone()),
         background_frame_sha256: frame.map(|f| f.sha256.clone()),
         attempts: scene.attempts,
         rejections: scene.rejections.clone(),
         ephemeris: scene.ephemeris,
-    };
-    Exposure {
-        width,
-        height,
-        electrons: canvas.electrons,
-        debris_electrons: canvas.debris,
-        adu,
-        truth,
-        stars: traced,
     }
 }
