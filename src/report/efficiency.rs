@@ -653,6 +653,64 @@ mod tests {
         assert!((magnitude - 11.125).abs() < 1e-12, "{magnitude}");
     }
 
+    /// Several objects per image and an empty one (#34), by hand: image 1 shows A (magnitude
+    /// 10.1, found) and B (12.2, missed), with a false positive whose centre (100, 100) is
+    /// nearer B's (105, 105) than A's (5, 5); image 2 shows C (11.3, found) with a false
+    /// positive far from it (its only object: its bin); image 3 shows nothing and has a false
+    /// positive (in no bin). Bins: 10.0-10.5 one object found; 11.0-11.5 one found, one FP;
+    /// 12.0-12.5 one missed, one FP.
+    #[test]
+    fn several_objects_count_in_their_own_bins_and_a_false_positive_in_the_nearest() {
+        let det = |b: [f64; 4], score: f64| Detection {
+            x1: b[0],
+            y1: b[1],
+            x2: b[2],
+            y2: b[3],
+            score,
+            class: 0,
+        };
+        let (a, b, c) = (
+            [0., 0., 10., 10.],
+            [100., 100., 110., 110.],
+            [0., 0., 20., 20.],
+        );
+        let evals = [
+            ImageEval {
+                truth: vec![a, b],
+                truth_class: vec![0, 0],
+                detections: vec![det(a, 0.9), det([95., 95., 105., 105.], 0.8)],
+            },
+            ImageEval {
+                truth: vec![c],
+                truth_class: vec![0],
+                detections: vec![det(c, 0.7), det([500., 500., 510., 510.], 0.6)],
+            },
+            ImageEval {
+                truth: vec![],
+                truth_class: vec![],
+                detections: vec![det([50., 50., 60., 60.], 0.85)],
+            },
+        ];
+        let f = [
+            vec![facts(10.1, 30.0, 40.0), facts(12.2, 3.0, 40.0)],
+            vec![facts(11.3, 9.0, 40.0)],
+            vec![],
+        ];
+        let e = efficiency("d", &evals, &f, 0.5);
+        let got: Vec<_> = e.curves[&Quantity::Magnitude]
+            .iter()
+            .map(|b| (b.lo, b.hi, b.objects, b.found, b.false_positives))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (10.0, 10.5, 1, 1, 0),
+                (11.0, 11.5, 1, 1, 1),
+                (12.0, 12.5, 1, 0, 1)
+            ]
+        );
+    }
+
     #[test]
     fn images_without_an_object_are_left_out() {
         let empty = ImageEval {
