@@ -191,20 +191,36 @@ pub fn render_placed(
             .iter()
             .enumerate()
             .map(|(k, object)| {
-                let (c, _, flux) = photons(
-                    sensor,
-                    settings,
-                    object,
-                    jitter,
-                    &mut object_photons(k as u64),
-                );
-                for (e, &d) in canvas.electrons.iter_mut().zip(&c.debris) {
-                    *e = e.saturating_add(d);
-                }
-                let truth = truth_of(sensor, object, frame, jitter, &c, &flux, 0);
+                let rng = &mut object_photons(k as u64);
+                let flux = expected::DebrisFlux::of_scene(sensor, object, jitter);
+                // An object alone, its photons all single: drawn per pixel as `photons` would
+                // (the same draws), and added to the image over the box they can reach, not
+                // over the whole image (two passes of 1M pixels an object).
+                let (debris, total) = if settings.method.is_photon_mapping()
+                    && singles_only(object, settings.merge_threshold)
+                {
+                    let mut debris = vec![0; width * height];
+                    let total = flux.draw(rng, &mut debris, width);
+                    for range in flux.rows(width) {
+                        for (e, &d) in canvas.electrons[range.clone()]
+                            .iter_mut()
+                            .zip(&debris[range])
+                        {
+                            *e = e.saturating_add(d);
+                        }
+                    }
+                    (debris, total)
+                } else {
+                    let (c, _, _) = photons(sensor, settings, object, jitter, rng);
+                    for (e, &d) in canvas.electrons.iter_mut().zip(&c.debris) {
+                        *e = e.saturating_add(d);
+                    }
+                    (c.debris, c.debris_total)
+                };
+                let truth = truth_of(sensor, object, frame, jitter, (&debris, total), &flux, 0);
                 ObjectExposure {
                     truth,
-                    debris_electrons: c.debris,
+                    debris_electrons: debris,
                 }
             })
             .collect()
@@ -215,7 +231,7 @@ pub fn render_placed(
         own,
         frame,
         jitter,
-        &canvas,
+        (&canvas.debris, canvas.debris_total),
         &debris_flux,
         traced.len(),
     );
@@ -291,14 +307,14 @@ fn photons(
     (canvas, traced, debris_flux)
 }
 
-/// The truth of a scene's debris as rendered (`canvas`: its photons; `stars_traced`: the
-/// stars of the image).
+/// The truth of a scene's debris as rendered (`debris`: its photo-electrons per pixel and in
+/// all; `stars_traced`: the stars of the image).
 fn truth_of(
     sensor: &Sensor,
     scene: &Scene,
     frame: Option<&RealFrame>,
     jitter: &Jitter,
-    canvas: &Canvas,
+    (debris, debris_total): (&[u32], u64),
     debris_flux: &expected::DebrisFlux,
     stars_traced: usize,
 ) -> Truth {
@@ -351,7 +367,7 @@ fn truth_of(
         streak_end_px: last.unwrap_or([f64::NAN; 2]),
         streak_start_wcs_radec_deg: through_wcs(first),
         streak_end_wcs_radec_deg: through_wcs(last),
-        label_box_px: flux_box(&canvas.debris, width, height, LABEL_SHARE),
+        label_box_px: flux_box(debris, width, height, LABEL_SHARE),
         frame: None,
         label_box_final_px: None,
         magnitude: g.magnitude,
@@ -365,7 +381,7 @@ fn truth_of(
         moon_angle_deg: g.moon_angle_deg,
         tumble: scene.tumble,
         expected_debris_electrons: expected_debris,
-        rendered_debris_electrons: canvas.debris_total,
+        rendered_debris_electrons: debris_total,
         snr: scene.snr,
         snr_noise_level: scene.snr_noise_level,
         snr_noise_sigma: scene.snr_noise_sigma,
