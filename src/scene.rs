@@ -3,8 +3,10 @@
 //! object is drawn once per image, from its own stream, by the campaign's weights; a rejected
 //! draw retries everything else for that object on the scene stream, so a rarely visible
 //! object keeps its share of the images, and the accepted scene is a pure function of (scene
-//! spec, sensor, inputs, seed, image index). The campaign file is never seen here: the config
-//! layer (`experiment`) builds the values.
+//! spec, sensor, inputs, seed, image index). With `Spec::objects` (several objects per frame,
+//! or none) that scene only points the sensor, and each of the frame's objects is drawn and
+//! placed in the field on its own streams (`place`). The campaign file is never seen here: the
+//! config layer (`experiment`) builds the values.
 
 use std::collections::BTreeMap;
 
