@@ -174,6 +174,9 @@ pub fn expected_files(
     if artifacts.star_list {
         files.insert(format!("truth/{stem}_stars.csv"));
     }
+    if artifacts.light_curve {
+        files.insert(format!("truth/{stem}_light_curve.csv"));
+    }
     files.insert(format!("truth/{stem}.json"));
     if png {
         let (p, l) = dataset_paths(index, subset);

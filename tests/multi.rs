@@ -60,6 +60,34 @@ fn several_objects_or_none_per_frame_agree_everywhere() {
     assert_eq!(one, two, "the digest depends on the thread count");
     let o = soig(&["verify", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // A run killed after 5 images resumes them (their light curves among their files) and
+    // ends with the same digest.
+    let resumed = tmp.path().join("resumed");
+    let killed = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
+        .env("RAYON_NUM_THREADS", "1")
+        .env("SOIG_TEST_ABORT_AT", "render:5")
+        .args([
+            "run",
+            c.to_str().unwrap(),
+            "--out",
+            resumed.to_str().unwrap(),
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(!killed.status.success());
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
+        .args([
+            "run",
+            c.to_str().unwrap(),
+            "--out",
+            resumed.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("(and 5 resumed)"), "{text}");
+    assert_eq!(digest(&o), one);
 
     // Per image: label lines, truth objects with a label, COCO annotations, DS9 lines and
     // light-curve rows agree. A label file rounds the normalised box to 6 decimals: at most
