@@ -39,8 +39,8 @@ fn main() -> Result<(), soig::Error> {
     );
     if let Some(product) = &image.product {
         println!(
-            "8-bit image {} x {} px ({:?} frame), label box {:?}",
-            product.png.width, product.png.height, product.frame.kind, product.label
+            "8-bit image {} x {} px ({:?} frame), label boxes {:?}",
+            product.png.width, product.png.height, product.frame.kind, product.labels
         );
     }
     Ok(())

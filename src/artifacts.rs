@@ -11,8 +11,8 @@ use crate::campaign::Artifacts;
 use crate::dataset::Subset;
 use crate::enhance;
 use crate::fits::{self, Card, Cards, Pixels};
-use crate::render::Exposure;
 use crate::render::iso_utc;
+use crate::render::{Exposure, FrameTruth};
 use crate::scene::{Pointing, Scene};
 use crate::sensor::Sensor;
 use crate::simulate::ImageProducts;
@@ -35,7 +35,8 @@ pub struct WrittenPng {
     pub path: PathBuf,
     pub width: usize,
     pub height: usize,
-    pub label: Option<[f64; 4]>,
+    /// One box per object with a label (none for an empty image).
+    pub labels: Vec<[f64; 4]>,
     /// PNG encoding and writing time, seconds.
     pub seconds: f64,
 }
@@ -106,13 +107,20 @@ pub fn write_image(
     if artifacts.light_curve {
         files.push(format!("truth/{stem}_light_curve.csv"));
         let path = dir.join("truth").join(format!("{stem}_light_curve.csv"));
-        crate::light_curve::write(&path, &products.scene)?;
+        crate::light_curve::write(&path, &products.scene.shown())?;
     }
     let truth_path = dir.join("truth").join(format!("{stem}.json"));
-    std::fs::write(
-        &truth_path,
-        serde_json::to_string_pretty(&exposure.truth)? + "\n",
-    )?;
+    let truth = match (&exposure.objects, &products.scene.placed) {
+        (Some(objects), Some(placed)) => serde_json::to_string_pretty(&FrameTruth::new(
+            &exposure.truth,
+            objects
+                .iter()
+                .zip(placed)
+                .map(|(o, s)| (&o.truth, s.debris_index)),
+        ))?,
+        _ => serde_json::to_string_pretty(&exposure.truth)?,
+    };
+    std::fs::write(&truth_path, truth + "\n")?;
 
     files.push(format!("truth/{stem}.json"));
     let Some(product) = &products.product else {
@@ -120,10 +128,11 @@ pub fn write_image(
     };
     let started = Instant::now();
     let frame = &product.frame;
-    let label_line = product
-        .label
+    let label_line: String = product
+        .labels
+        .iter()
         .map(|b| b.yolo_line(frame.width, frame.height))
-        .unwrap_or_default();
+        .collect();
     let (png_rel, label_rel) = dataset_paths(index, subset);
     let png_path = dir.join(&png_rel);
     enhance::write_png(&png_path, &product.png)?;
@@ -131,15 +140,17 @@ pub fn write_image(
     files.extend([png_rel, label_rel]);
     // Pixel-edge coordinates: pixel i spans [i, i + 1).
     let edges = product
-        .label
-        .map(|b| [b.x_min + 0.5, b.y_min + 0.5, b.x_max + 0.5, b.y_max + 0.5]);
+        .labels
+        .iter()
+        .map(|b| [b.x_min + 0.5, b.y_min + 0.5, b.x_max + 0.5, b.y_max + 0.5])
+        .collect();
     Ok(WrittenImage {
         files,
         png: Some(WrittenPng {
             path: png_path,
             width: frame.width,
             height: frame.height,
-            label: edges,
+            labels: edges,
             seconds: started.elapsed().as_secs_f64(),
         }),
     })
@@ -162,6 +173,9 @@ pub fn expected_files(
     }
     if artifacts.star_list {
         files.insert(format!("truth/{stem}_stars.csv"));
+    }
+    if artifacts.light_curve {
+        files.insert(format!("truth/{stem}_light_curve.csv"));
     }
     files.insert(format!("truth/{stem}.json"));
     if png {
@@ -219,12 +233,35 @@ pub fn provenance_cards(
         Card::Int(scene.image_index as i64),
         "image index in the campaign",
     );
-    push("OBJECT", Card::Str(t.object.clone()), "debris in the field");
-    push(
-        "NORAD",
-        Card::Int(t.norad as i64),
-        "NORAD catalogue number of the debris",
-    );
+    match &scene.placed {
+        None => {
+            push("OBJECT", Card::Str(t.object.clone()), "debris in the field");
+            push(
+                "NORAD",
+                Card::Int(t.norad as i64),
+                "NORAD catalogue number of the debris",
+            );
+        }
+        Some(placed) => {
+            let names: Vec<&str> = placed.iter().map(|s| s.debris_name.as_str()).collect();
+            // A FITS string holds 68 characters.
+            let object = match names.join(", ") {
+                n if n.is_empty() => "none".to_string(),
+                n if n.len() > 60 => format!("{} objects", names.len()),
+                n => n,
+            };
+            push(
+                "OBJECT",
+                Card::Str(object),
+                "debris in the field (truth: objects)",
+            );
+            push(
+                "NOBJECTS",
+                Card::Int(placed.len() as i64),
+                "debris objects in the field",
+            );
+        }
+    }
     push(
         "TELESCOP",
         Card::Str(p.observer.clone()),
@@ -381,10 +418,12 @@ pub fn provenance_cards(
         Card::Real(sensor.zero_point_mag),
         "magnitude of 1 e-/s",
     );
-    push(
-        "DEBMAG",
-        Card::Real(t.magnitude),
-        "debris magnitude at mid-exposure (Eq. 6)",
-    );
+    if scene.placed.is_none() {
+        push(
+            "DEBMAG",
+            Card::Real(t.magnitude),
+            "debris magnitude at mid-exposure (Eq. 6)",
+        );
+    }
     cards
 }

@@ -116,6 +116,14 @@ impl Experiment {
             },
             collect_frames: c.collect_frames() as u64,
             collect_gap_s: c.collect.as_ref().map_or(0.0, |k| k.gap_s),
+            objects: c.objects.as_ref().map(|o| {
+                let (min, max) = o.per_frame.bounds();
+                scene::ObjectCount {
+                    min,
+                    max,
+                    empty_share: o.empty_share,
+                }
+            }),
         };
         let render = render::Settings {
             method: c.render.method,

@@ -93,6 +93,10 @@ pub struct Record {
     pub index: u64,
     /// The debris object the image shows (index in the campaign's debris), for the mix.
     pub debris_index: usize,
+    /// The debris objects the image shows when the campaign has `[objects]` (indices in the
+    /// campaign's debris; `debris_index` is then the pointing's object, not rendered).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub objects: Option<Vec<usize>>,
     /// sha256 of each file the image wrote, by path relative to the output ('/' separated).
     pub files: BTreeMap<String, String>,
     pub png: Option<PngRecord>,
@@ -109,6 +113,41 @@ pub struct PngRecord {
     pub width: usize,
     pub height: usize,
     pub label_bits: Option<[u64; 4]>,
+    /// The label boxes after the first, of an image with several objects.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub more_label_bits: Vec<[u64; 4]>,
+}
+
+impl PngRecord {
+    /// The record of a PNG with these label boxes (pixel edges).
+    pub fn new(width: usize, height: usize, labels: &[[f64; 4]]) -> PngRecord {
+        let mut bits = labels.iter().map(|b| b.map(f64::to_bits));
+        PngRecord {
+            width,
+            height,
+            label_bits: bits.next(),
+            more_label_bits: bits.collect(),
+        }
+    }
+
+    /// Its label boxes, pixel edges.
+    pub fn labels(&self) -> Vec<[f64; 4]> {
+        self.label_bits
+            .iter()
+            .chain(&self.more_label_bits)
+            .map(|b| b.map(f64::from_bits))
+            .collect()
+    }
+}
+
+impl Record {
+    /// The debris objects the image shows (indices in the campaign's debris).
+    pub fn shown(&self) -> Vec<usize> {
+        match &self.objects {
+            Some(objects) => objects.clone(),
+            None => vec![self.debris_index],
+        }
+    }
 }
 
 #[derive(Serialize, Deserialize)]
@@ -328,11 +367,13 @@ mod tests {
         Record {
             index,
             debris_index: 0,
+            objects: None,
             files: hash_files(dir, &[rel]).unwrap(),
             png: Some(PngRecord {
                 width: 3,
                 height: 4,
                 label_bits: Some([0.1f64.to_bits(), 1, 2, 3]),
+                more_label_bits: Vec::new(),
             }),
             trail_angle_bits: None,
             conversion_s: Some(0.5),

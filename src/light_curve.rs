@@ -36,10 +36,37 @@ struct Row<'a> {
     y_px: f64,
 }
 
-/// Write the light curve of `scene` to `path`.
-pub fn write(path: &Path, scene: &Scene) -> anyhow::Result<()> {
+/// Write the light curves of the objects an image shows (`Scene::shown`, in their order) to
+/// `path`; an image with no object gets the header alone.
+pub fn write(path: &Path, objects: &[&Scene]) -> anyhow::Result<()> {
     let mut w =
         csv::Writer::from_path(path).with_context(|| format!("writing {}", path.display()))?;
+    if objects.is_empty() {
+        // The header is written with the first row; an empty image has none.
+        w.write_record([
+            "image",
+            "object",
+            "norad",
+            "sample",
+            "t_s",
+            "utc",
+            "magnitude",
+            "electrons_per_s",
+            "electrons",
+            "x_px",
+            "y_px",
+        ])
+        .with_context(|| format!("writing {}", path.display()))?;
+    }
+    for scene in objects {
+        rows(&mut w, path, scene)?;
+    }
+    w.flush()
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+fn rows(w: &mut csv::Writer<std::fs::File>, path: &Path, scene: &Scene) -> anyhow::Result<()> {
     let slice_s = scene.exposure_s / scene.trajectory.len() as f64;
     for (k, s) in scene.trajectory.iter().enumerate() {
         w.serialize(Row {
@@ -57,7 +84,5 @@ pub fn write(path: &Path, scene: &Scene) -> anyhow::Result<()> {
         })
         .with_context(|| format!("writing {}", path.display()))?;
     }
-    w.flush()
-        .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }

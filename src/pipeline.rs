@@ -61,7 +61,7 @@ pub struct DebrisCount {
 }
 
 /// Images per debris object, from the object index of each image.
-fn debris_mix(campaign: &Campaign, shown: impl Iterator<Item = usize>) -> Vec<DebrisCount> {
+fn debris_mix(campaign: &Campaign, shown: impl Iterator<Item = Vec<usize>>) -> Vec<DebrisCount> {
     let mut mix: Vec<DebrisCount> = campaign
         .debris
         .iter()
@@ -71,8 +71,13 @@ fn debris_mix(campaign: &Campaign, shown: impl Iterator<Item = usize>) -> Vec<De
             images: 0,
         })
         .collect();
-    for i in shown {
-        mix[i].images += 1;
+    for objects in shown {
+        let mut objects = objects;
+        objects.sort_unstable();
+        objects.dedup();
+        for i in objects {
+            mix[i].images += 1;
+        }
     }
     mix
 }
@@ -203,12 +208,20 @@ pub(crate) fn record_check(
                 r.index, share.start, share.end
             ));
         }
-        if r.debris_index >= campaign.debris.len() {
+        if let Some(i) = std::iter::once(r.debris_index)
+            .chain(r.objects.iter().flatten().copied())
+            .find(|&i| i >= campaign.debris.len())
+        {
             return Err(format!(
-                "debris index {} of image {}, the campaign has {} debris object(s)",
-                r.debris_index,
+                "debris index {i} of image {}, the campaign has {} debris object(s)",
                 r.index,
                 campaign.debris.len()
+            ));
+        }
+        if r.objects.is_some() != c.objects.is_some() {
+            return Err(format!(
+                "image {}: a list of objects where the campaign has no `[objects]`, or none where it has",
+                r.index
             ));
         }
         let subset = subsets.as_ref().map(|s| s[r.index as usize]);
@@ -237,7 +250,8 @@ pub(crate) fn record_check(
                         && y0 <= y1
                         && y1 <= p.height as f64
                 };
-                if p.width == 0 || p.height == 0 || !p.label_bits.as_ref().is_none_or(inside) {
+                let boxes = p.label_bits.iter().chain(&p.more_label_bits);
+                if p.width == 0 || p.height == 0 || !boxes.clone().all(inside) {
                     return Err(format!(
                         "image {}: its PNG size or label box is impossible",
                         r.index
@@ -511,12 +525,15 @@ fn render(
             let record = Record {
                 index: i,
                 debris_index: products.scene.debris_index,
+                objects: products
+                    .scene
+                    .placed
+                    .as_ref()
+                    .map(|placed| placed.iter().map(|s| s.debris_index).collect()),
                 files: journal::hash_files(dir, &image.files)?,
-                png: image.png.map(|p| PngRecord {
-                    width: p.width,
-                    height: p.height,
-                    label_bits: p.label.map(|b| b.map(f64::to_bits)),
-                }),
+                png: image
+                    .png
+                    .map(|p| PngRecord::new(p.width, p.height, &p.labels)),
                 trail_angle_bits: trail_angle_deg.map(f64::to_bits),
                 conversion_s: Some(conversion_s),
             };
@@ -573,7 +590,7 @@ pub(crate) fn finish(
                     path: dir.join(artifacts::dataset_paths(r.index, subset).0),
                     width: p.width,
                     height: p.height,
-                    label: p.label_bits.map(|b| b.map(f64::from_bits)),
+                    labels: p.labels(),
                     seconds: 0.0,
                 }),
                 conversion_s: r.conversion_s,
@@ -648,7 +665,7 @@ pub(crate) fn finish(
     if trained.is_some() {
         volatile.extend(volatile_files(dir)?);
     }
-    let mix = debris_mix(campaign, records.iter().map(|r| r.debris_index));
+    let mix = debris_mix(campaign, records.iter().map(Record::shown));
     let mut manifest = Manifest::build_knowing(
         dir,
         &campaign.hash,
@@ -733,13 +750,22 @@ fn detect_and_report(
                 .unwrap_or_default()
                 .to_string_lossy()
                 .into_owned();
-            let facts = ObjectFacts::read(&dir.join("truth").join(format!("{stem}.json")))?;
+            let sidecar = dir.join("truth").join(format!("{stem}.json"));
+            let facts = ObjectFacts::read(&sidecar)?;
+            if facts.len() != png.labels.len() {
+                anyhow::bail!(
+                    "{}: {} labelled objects, its image's record has {} label boxes",
+                    sidecar.display(),
+                    facts.len(),
+                    png.labels.len()
+                );
+            }
             Ok(TestImage {
                 stem,
                 png: png.path.clone(),
                 width: png.width,
                 height: png.height,
-                truth: png.label.into_iter().collect(),
+                truth: png.labels.clone(),
                 facts,
             })
         })

@@ -33,8 +33,9 @@ pub struct TestImage {
     pub width: usize,
     pub height: usize,
     pub truth: Vec<[f64; 4]>,
-    /// The debris' magnitude, SNR and length from the truth sidecar.
-    pub facts: ObjectFacts,
+    /// Each labelled object's magnitude, SNR and length from the truth sidecar, in the order
+    /// of `truth`.
+    pub facts: Vec<ObjectFacts>,
 }
 
 /// The detections of one detector on every test image, and its time per image.
@@ -266,7 +267,7 @@ pub fn write(
     progress.finish();
     csv_rows.flush()?;
 
-    let facts: Vec<ObjectFacts> = images.iter().map(|i| i.facts).collect();
+    let facts: Vec<Vec<ObjectFacts>> = images.iter().map(|i| i.facts.clone()).collect();
     let efficiencies: Vec<Efficiency> = runs
         .iter()
         .map(|run| efficiency::efficiency(&run.name, &evals(images, run), &facts, conf))

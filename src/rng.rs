@@ -29,6 +29,10 @@ pub enum Purpose {
     /// Whether an image of a mixed campaign (`background.share` below 1) has a real frame under
     /// it, drawn once before the scene's retries.
     BackgroundKind = 12,
+    /// How many objects an image of a campaign with `[objects]` shows (#34), drawn once.
+    ObjectCount = 13,
+    /// A placed object's own draws (`object_stream`): which debris and its draw, retried.
+    ObjectScene = 15,
 }
 
 /// A purpose of draws per photon or per pixel; each has an independent [`PixelRng`] stream
@@ -49,6 +53,8 @@ pub enum PixelPurpose {
     /// Hot pixels: their charge per image; their positions from the sensor's own index.
     HotPixels = 10,
     CosmicRays = 11,
+    /// A placed object's photons (`object_pixel_stream`).
+    ObjectPhotons = 16,
 }
 
 /// The generator of per-photon and per-pixel streams.
@@ -62,6 +68,29 @@ fn key(seed: u64, image: u64, purpose: u64) -> [u8; 32] {
     h.update(image.to_le_bytes());
     h.update(purpose.to_le_bytes());
     h.finalize().into()
+}
+
+/// The key of one placed object's stream: SHA-256 of (seed, image, object, purpose) under its
+/// own tag, so no object stream is ever an image stream.
+fn object_key(seed: u64, image: u64, object: u64, purpose: u64) -> [u8; 32] {
+    let mut h = Sha256::new();
+    h.update(b"soig-object-stream-v1");
+    h.update(seed.to_le_bytes());
+    h.update(image.to_le_bytes());
+    h.update(object.to_le_bytes());
+    h.update(purpose.to_le_bytes());
+    h.finalize().into()
+}
+
+/// The stream of object `object` (0-based) of image `image`, for one purpose: each object of a
+/// frame draws from its own streams, so adding an object never changes the others.
+pub fn object_stream(seed: u64, image: u64, object: u64, purpose: Purpose) -> ChaCha12Rng {
+    ChaCha12Rng::from_seed(object_key(seed, image, object, purpose as u64))
+}
+
+/// The per-photon stream of object `object` of image `image`.
+pub fn object_pixel_stream(seed: u64, image: u64, object: u64, purpose: PixelPurpose) -> PixelRng {
+    PixelRng::from_seed(object_key(seed, image, object, purpose as u64))
 }
 
 /// The stream for (seed, image index, purpose).
@@ -110,6 +139,11 @@ mod tests {
         let i: u64 = pixel_stream(1, 3, PixelPurpose::Photons).random();
         assert_eq!(f, g);
         assert!(f != h && f != i && h != i);
+        let j: u64 = object_stream(1, 2, 0, Purpose::Scene).random();
+        let k: u64 = object_stream(1, 2, 1, Purpose::Scene).random();
+        let l: u64 = object_pixel_stream(1, 2, 0, PixelPurpose::Photons).random();
+        assert_eq!(j, object_stream(1, 2, 0, Purpose::Scene).random::<u64>());
+        assert!(j != k && j != a && l != f);
     }
 
     #[test]

@@ -3,8 +3,10 @@
 //! object is drawn once per image, from its own stream, by the campaign's weights; a rejected
 //! draw retries everything else for that object on the scene stream, so a rarely visible
 //! object keeps its share of the images, and the accepted scene is a pure function of (scene
-//! spec, sensor, inputs, seed, image index). The campaign file is never seen here: the config
-//! layer (`experiment`) builds the values.
+//! spec, sensor, inputs, seed, image index). With `Spec::objects` (several objects per frame,
+//! or none) that scene only points the sensor, and each of the frame's objects is drawn and
+//! placed in the field on its own streams (`place`). The campaign file is never seen here: the
+//! config layer (`experiment`) builds the values.
 
 use std::collections::BTreeMap;
 
@@ -14,9 +16,9 @@ use rand_chacha::ChaCha12Rng;
 use serde::Serialize;
 
 use crate::background::{BackgroundModel, FrameChoice, RealFrame};
-use crate::rng::{Purpose, stream};
+use crate::rng::{Purpose, object_stream, stream};
 use crate::sensor::Sensor;
-use crate::sighting::{Ephemeris, Sighting};
+use crate::sighting::{Ephemeris, Sight, Sighting};
 use crate::sky::ephemeris::{moon_position_km, sun_position_km};
 use crate::sky::orbit::Propagator;
 use crate::sky::photometry::{debris_magnitude, photon_rate};
@@ -155,6 +157,29 @@ pub struct Spec {
     /// Frames per collect (1: single images) and the gap between frames, seconds (`[collect]`).
     pub collect_frames: u64,
     pub collect_gap_s: f64,
+    /// How many objects each image shows (`[objects]`); None: the one the pointing is drawn
+    /// around (the paper's scenes).
+    pub objects: Option<ObjectCount>,
+}
+
+/// How many debris objects an image shows: none with probability `empty_share`, else a number
+/// uniform in [min, max].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObjectCount {
+    pub min: u32,
+    pub max: u32,
+    pub empty_share: f64,
+}
+
+impl ObjectCount {
+    /// The number of objects of image `image`, from its own stream.
+    pub fn draw(&self, seed: u64, image: u64) -> u32 {
+        let rng = &mut stream(seed, image, Purpose::ObjectCount);
+        if rng.random::<f64>() < self.empty_share {
+            return 0;
+        }
+        rng.random_range(self.min..=self.max)
+    }
 }
 
 /// Julian year (TT) of an instant, e.g. 2016.0 for the Gaia DR3 epoch.
@@ -454,6 +479,12 @@ pub struct Scene {
     /// Its place in a multi-frame collect (None: a single image).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub collect: Option<CollectFrame>,
+    /// The objects of an image of a campaign with `[objects]` (possibly none), each a scene of
+    /// its own with this one's time, pointing and background and no stars; this scene's own
+    /// object then only chose the pointing and is not rendered. None: this scene's object is
+    /// the image's one object.
+    #[serde(skip)]
+    pub placed: Option<Vec<Scene>>,
 }
 
 /// A frame's place in its collect, recorded in the truth: the object keeps its `track_id`
@@ -536,6 +567,15 @@ impl Scene {
             attempts: 1,
             rejections: BTreeMap::new(),
             collect: None,
+            placed: None,
+        }
+    }
+
+    /// The objects the image shows: the placed ones, or this scene itself.
+    pub fn shown(&self) -> Vec<&Scene> {
+        match &self.placed {
+            Some(placed) => placed.iter().collect(),
+            None => vec![self],
         }
     }
 
@@ -650,9 +690,14 @@ impl NoScene {
 /// The debris object of image `image`, by the spec's weights, from the image's own debris
 /// stream (so the retries of the scene draw never change which object an image shows).
 pub fn choose_debris(spec: &Spec, debris: usize, seed: u64, image: u64) -> usize {
+    pick_debris(spec, debris, &mut stream(seed, image, Purpose::Debris))
+}
+
+/// A debris index by the spec's weights, from `rng`.
+fn pick_debris(spec: &Spec, debris: usize, rng: &mut ChaCha12Rng) -> usize {
     let weight = |i: usize| spec.debris_weights.get(i).copied().unwrap_or(1.0);
     let total: f64 = (0..debris).map(weight).sum();
-    let mut u = stream(seed, image, Purpose::Debris).random_range(0.0..total);
+    let mut u = rng.random_range(0.0..total);
     for i in 0..debris {
         if u < weight(i) {
             return i;
@@ -684,20 +729,7 @@ pub fn draw(
     let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
     let max = spec.gate.max_attempts;
     let no_scene = |attempts: u32, rejections: BTreeMap<Rejection, u32>| {
-        let debris = &inputs.debris[debris_index];
-        NoScene {
-            image,
-            debris_index,
-            object: debris.name.clone(),
-            norad: debris.norad,
-            attempts,
-            reasons: rejections
-                .iter()
-                .map(|(k, v)| format!("{k} x{v}"))
-                .collect::<Vec<_>>()
-                .join(", "),
-            rejections,
-        }
+        NoScene::of(inputs, image, debris_index, attempts, rejections)
     };
     for attempt in 1..=max {
         let d = draw_values(spec, inputs, on_frame, rng);
@@ -729,12 +761,375 @@ pub fn draw(
                         track_id: collect,
                     });
                 }
+                if let Some(count) = spec.objects {
+                    let n = count.draw(seed, image);
+                    let placed = (0..n as u64)
+                        .map(|k| place(spec, sensor, inputs, seed, &scene, k))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    scene.placed = Some(placed);
+                }
                 return Ok(scene);
             }
             Err(reason) => *rejections.entry(reason).or_default() += 1,
         }
     }
     Err(no_scene(max, rejections))
+}
+
+impl NoScene {
+    fn of(
+        inputs: &Inputs,
+        image: u64,
+        debris_index: usize,
+        attempts: u32,
+        rejections: BTreeMap<Rejection, u32>,
+    ) -> NoScene {
+        let debris = &inputs.debris[debris_index];
+        NoScene {
+            image,
+            debris_index,
+            object: debris.name.clone(),
+            norad: debris.norad,
+            attempts,
+            reasons: rejections
+                .iter()
+                .map(|(k, v)| format!("{k} x{v}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            rejections,
+        }
+    }
+}
+
+/// Object `k` of a frame (`Spec::objects`): its debris by the weights and its draw, from its
+/// own stream, both retried until its own checks accept it (the time is the frame's, so an
+/// object in the Earth's shadow then gives way to another: the weights hold among the objects
+/// visible at that time). The object keeps its own range, phase
+/// angle, brightness and apparent motion at the frame's time; its positions are turned rigidly
+/// about the observer so that at mid-exposure it lies at a uniform place within the
+/// placement fraction of the field (a catalogued object is rarely in another's field; this
+/// puts it there with its own kinematics). It then meets the checks of the pointing's own
+/// object there: Earth, Sun and Moon angles, line of sight, shadow, magnitude limit and
+/// signal to noise (the bright-star check is the frame's).
+fn place(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    seed: u64,
+    frame: &Scene,
+    k: u64,
+) -> Result<Scene, NoScene> {
+    let image = frame.image_index;
+    let rng = &mut object_stream(seed, image, k, Purpose::ObjectScene);
+    let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
+    let max = spec.gate.max_attempts;
+    let mut debris_index = 0;
+    for attempt in 1..=max {
+        debris_index = pick_debris(spec, inputs.debris.len(), rng);
+        match try_place(spec, sensor, inputs, frame, debris_index, rng) {
+            Ok(mut scene) => {
+                scene.attempts = attempt;
+                scene.rejections = rejections;
+                return Ok(scene);
+            }
+            Err(reason) => *rejections.entry(reason).or_default() += 1,
+        }
+    }
+    Err(NoScene::of(inputs, image, debris_index, max, rejections))
+}
+
+/// A rigid turn about the observer (`place`): the debris' place relative to the observer, and
+/// its direction, are rotated by `angle_rad` about `axis`.
+#[derive(Clone, Copy)]
+struct Turn {
+    axis: Vec3,
+    angle_rad: f64,
+}
+
+impl Turn {
+    /// The turn that takes direction `from` onto direction `to`.
+    fn between(from: Vec3, to: Vec3) -> Turn {
+        let axis = cross(from, to);
+        if norm(axis) == 0.0 {
+            return Turn {
+                axis: [0.0, 0.0, 1.0],
+                angle_rad: 0.0,
+            };
+        }
+        Turn {
+            axis: unit(axis),
+            angle_rad: angle_deg(from, to).to_radians(),
+        }
+    }
+
+    fn apply(&self, sight: Sight) -> Sight {
+        let o = sight.observer_km;
+        let rel = rotate(sub(sight.debris_km, o), self.axis, self.angle_rad);
+        Sight {
+            observer_km: o,
+            debris_km: [o[0] + rel[0], o[1] + rel[1], o[2] + rel[2]],
+            direction: rotate(sight.direction, self.axis, self.angle_rad),
+        }
+    }
+}
+
+fn try_place(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    frame: &Scene,
+    debris_index: usize,
+    rng: &mut ChaCha12Rng,
+) -> Result<Scene, Rejection> {
+    let (start, exposure_s) = (frame.start, frame.exposure_s);
+    let mid = start + Duration::from_seconds(exposure_s / 2.0);
+    let area_m2 = spec.area.draw(rng);
+    let placement = (
+        rng.random_range(-1.0..1.0) * spec.placement_fraction,
+        rng.random_range(-1.0..1.0) * spec.placement_fraction,
+    );
+    let tumble = draw_tumble(spec, rng);
+    let sighting = Sighting::new(
+        &inputs.observer.propagator,
+        &inputs.debris[debris_index].propagator,
+        mid,
+        spec.apparent_positions,
+    );
+    let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
+    let mid_tan = frame.projection(sensor);
+    let (ra_t, dec_t) = mid_tan.sky(
+        mid_tan.cx + placement.0 * sensor.width_px as f64 / 2.0,
+        mid_tan.cy + placement.1 * sensor.height_px as f64 / 2.0,
+    );
+    // The camera's mid-exposure frame is the sky's in fixed pointing, and survey pointing is
+    // at its mid-exposure attitude then: the place is the same direction in both.
+    let turn = Turn::between(unit(sight.direction), radec_unit(ra_t, dec_t));
+    let sight = turn.apply(sight);
+    let sun = sun_position_km(mid);
+    let geometry = visibility(spec, sensor, &sight, sun, mid, area_m2)?;
+    let track = sighting
+        .track(start, exposure_s)
+        .ok_or(Rejection::PropagationFailed)?;
+    let trajectory = trajectory(
+        spec,
+        sensor,
+        &|t_s| turn.apply(track.at(t_s)),
+        &Shot {
+            exposure_s,
+            sun,
+            area_m2,
+            tumble,
+            pointing: &frame.pointing,
+            mid_tan: &mid_tan,
+        },
+    )?;
+    let (snr, snr_noise_level, snr_noise_sigma) = gate_snr(
+        spec,
+        sensor,
+        &trajectory,
+        exposure_s,
+        inputs.frame(frame.background),
+    )?;
+    let debris = &inputs.debris[debris_index];
+    Ok(Scene {
+        image_index: frame.image_index,
+        debris_index,
+        debris_name: debris.name.clone(),
+        norad: debris.norad,
+        start,
+        exposure_s,
+        pointing: frame.pointing.clone(),
+        area_m2,
+        tumble,
+        geometry,
+        // The object's own ephemeris is not where the image shows it.
+        ephemeris: None,
+        trajectory,
+        stars: Vec::new(),
+        background: frame.background,
+        snr,
+        snr_noise_level,
+        snr_noise_sigma,
+        attempts: 0,
+        rejections: BTreeMap::new(),
+        collect: None,
+        placed: None,
+    })
+}
+
+/// The tumbling modulation of one object's draw.
+fn draw_tumble(spec: &Spec, rng: &mut ChaCha12Rng) -> Option<Tumble> {
+    spec.tumble.map(|r| Tumble {
+        period_s: if r.period_max_s > r.period_min_s {
+            rng.random_range(r.period_min_s..=r.period_max_s)
+        } else {
+            r.period_min_s
+        },
+        amplitude: rng.random_range(0.0..=r.amplitude_max),
+        phase_rad: rng.random_range(0.0..std::f64::consts::TAU),
+    })
+}
+
+/// Visibility of the debris at mid-exposure (paper 3.2.2) and its geometry then.
+fn visibility(
+    spec: &Spec,
+    sensor: &Sensor,
+    sight: &Sight,
+    sun: Vec3,
+    mid: Epoch,
+    area_m2: f64,
+) -> Result<Geometry, Rejection> {
+    let (obs, deb) = (sight.observer_km, sight.debris_km);
+    let los = sub(deb, obs);
+    let moon = moon_position_km(mid);
+    let v = &spec.gate;
+    let earth_angle_deg = angle_deg(los, sub([0.0; 3], obs));
+    if earth_angle_deg <= v.earth_min_deg {
+        return Err(Rejection::EarthAngle);
+    }
+    let sun_angle_deg = angle_deg(los, sub(sun, obs));
+    if sun_angle_deg <= v.sun_min_deg {
+        return Err(Rejection::SunAngle);
+    }
+    let moon_angle_deg = angle_deg(los, sub(moon, obs));
+    if moon_angle_deg <= v.moon_min_deg {
+        return Err(Rejection::MoonAngle);
+    }
+    if segment_hits_sphere(obs, deb, EARTH_RADIUS_KM + v.earth_clearance_km) {
+        return Err(Rejection::ThroughEarth);
+    }
+    if segment_hits_sphere(deb, sun, EARTH_RADIUS_KM) {
+        return Err(Rejection::EarthShadow);
+    }
+    let phase_angle_deg = angle_deg(sub(sun, deb), sub(obs, deb));
+    let range_km = norm(los);
+    let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km);
+    if magnitude.is_nan() || magnitude > sensor.mag_limit {
+        return Err(Rejection::TooFaint);
+    }
+    Ok(Geometry {
+        range_km,
+        phase_angle_deg,
+        earth_angle_deg,
+        sun_angle_deg,
+        moon_angle_deg,
+        magnitude,
+    })
+}
+
+/// What the trajectory of one object needs of its frame and draw.
+struct Shot<'a> {
+    exposure_s: f64,
+    sun: Vec3,
+    area_m2: f64,
+    tumble: Option<Tumble>,
+    pointing: &'a Pointing,
+    mid_tan: &'a Tan,
+}
+
+/// The trajectory of one object, cut in samples at the centres of equal time slices, sampled
+/// finer where the samples would render a row of dots (see the comment inside).
+fn trajectory(
+    spec: &Spec,
+    sensor: &Sensor,
+    at: &dyn Fn(f64) -> Sight,
+    shot: &Shot,
+) -> Result<Vec<TrajectorySample>, Rejection> {
+    let Shot {
+        exposure_s,
+        sun,
+        area_m2,
+        tumble,
+        pointing,
+        mid_tan,
+    } = *shot;
+    let sample = |n: usize| -> Result<Vec<TrajectorySample>, Rejection> {
+        let dt = exposure_s / n as f64;
+        let mut trajectory = Vec::with_capacity(n);
+        for k in 0..n {
+            let t_s = (k as f64 + 0.5) * dt;
+            let sight = at(t_s);
+            let (o, d) = (sight.observer_km, sight.debris_km);
+            let los = sub(d, o);
+            let (ra_deg, dec_deg) = radec_deg(sight.direction);
+            let phase = angle_deg(sub(sun, d), sub(o, d)).to_radians();
+            let mut mag = debris_magnitude(area_m2, spec.albedo, phase, norm(los));
+            if let Some(tb) = tumble {
+                let factor = 1.0
+                    + tb.amplitude
+                        * (std::f64::consts::TAU * t_s / tb.period_s + tb.phase_rad).sin();
+                mag -= 2.5 * factor.log10();
+            }
+            let expected_electrons = if mag.is_finite() {
+                photon_rate(mag, sensor.zero_point_mag) * dt
+            } else {
+                0.0
+            };
+            let (ra_cam, dec_cam) = match pointing {
+                Pointing::Fixed { .. } => (ra_deg, dec_deg),
+                Pointing::Survey(track) => track.to_mid_frame(t_s, ra_deg, dec_deg),
+                Pointing::Track(track) => track.to_mid_frame(t_s, ra_deg, dec_deg),
+            };
+            let (x_px, y_px) = mid_tan
+                .pixel(ra_cam, dec_cam)
+                .unwrap_or((f64::NAN, f64::NAN));
+            trajectory.push(TrajectorySample {
+                t_s,
+                ra_deg,
+                dec_deg,
+                mag,
+                expected_electrons,
+                x_px,
+                y_px,
+            });
+        }
+        Ok(trajectory)
+    };
+    let n = spec.trajectory_samples;
+    let mut trajectory = sample(n)?;
+    // Samples farther apart in the image than two PSF sigmas render a row of dots, not a
+    // streak (a 600 s exposure of LEO debris with 2000 samples: one dot per 128 px; 0.7% of the
+    // quickstart draws: 4-8 px). Such a trajectory is sampled again, finer by the factor that
+    // brings the spacing to two sigmas; beyond MAX_TRAJECTORY_SAMPLES the draw is rejected.
+    let psf_px = sensor.psf_sigma_px();
+    let spacing = max_sample_spacing_px(sensor, &trajectory);
+    if spacing > MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px {
+        let factor = (spacing / (MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px)).ceil() as usize;
+        let finer = n.saturating_mul(factor);
+        if finer > MAX_TRAJECTORY_SAMPLES {
+            return Err(Rejection::TooFast);
+        }
+        trajectory = sample(finer)?;
+    }
+    Ok(trajectory)
+}
+
+/// The signal-to-noise gate (paper 3.2.6): (the judged ratio, by level, by sigma).
+fn gate_snr(
+    spec: &Spec,
+    sensor: &Sensor,
+    trajectory: &[TrajectorySample],
+    exposure_s: f64,
+    frame: Option<&RealFrame>,
+) -> Result<(f64, f64, f64), Rejection> {
+    let snr_noise_level = expected_snr(
+        sensor,
+        trajectory,
+        sensor.noise_level_adu(exposure_s, frame),
+    );
+    let snr_noise_sigma = expected_snr(
+        sensor,
+        trajectory,
+        sensor.background_sigma_adu(exposure_s, frame),
+    );
+    let snr = match spec.gate.snr_definition {
+        SnrDefinition::NoiseLevel => snr_noise_level,
+        SnrDefinition::NoiseSigma => snr_noise_sigma,
+    };
+    if snr < spec.gate.snr_min {
+        return Err(Rejection::LowSnr);
+    }
+    Ok((snr, snr_noise_level, snr_noise_sigma))
 }
 
 /// The random values of one draw attempt, in the scene stream's order.
@@ -1048,6 +1443,7 @@ fn try_draw(
         attempts: 0,
         rejections: BTreeMap::new(),
         collect: None,
+        placed: None,
     })
 }
 

@@ -11,7 +11,7 @@ use std::time::Instant;
 use crate::enhance::{self, Gray8};
 use crate::geometry::{self, BoxPx, Fill, Frame, FrameKind, LABEL_SHARE};
 use crate::render::{self, Exposure};
-use crate::rng::{PixelPurpose, PixelRng, pixel_stream};
+use crate::rng::{PixelPurpose, PixelRng, object_pixel_stream, pixel_stream};
 use crate::scene::{self, Inputs, NoScene, Scene};
 use crate::sensor::Sensor;
 
@@ -50,8 +50,9 @@ pub struct ImageProducts {
 pub struct FinalImage {
     pub frame: Frame,
     pub png: Gray8,
-    /// The label box in the final frame (None when no debris photon landed).
-    pub label: Option<BoxPx>,
+    /// The label boxes in the final frame, one per object shown on which a debris photon
+    /// landed, in the objects' order.
+    pub labels: Vec<BoxPx>,
     /// Frame and enhancement time, seconds (the report's FITS -> PNG conversion time).
     pub seconds: f64,
 }
@@ -60,13 +61,18 @@ pub struct FinalImage {
 pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProducts, NoScene> {
     let seed = x.seed;
     let scene = scene::draw(&x.scene, &x.sensor, inputs, seed, index)?;
-    let mut exposure = render::render(
+    // `render::render`'s streams and order, with each placed object's photons on its own.
+    let photons = &mut pixel_stream(seed, index, PixelPurpose::Photons);
+    let jitter = render::Jitter::of_scene(&x.sensor, &x.render, &scene, photons);
+    let mut exposure = render::render_placed(
         &x.sensor,
         &x.render,
         &scene,
         inputs.frame(scene.background),
-        &mut pixel_stream(seed, index, PixelPurpose::Photons),
+        &jitter,
+        photons,
         &mut pixel_stream(seed, index, PixelPurpose::Noise),
+        &|k| object_pixel_stream(seed, index, k, PixelPurpose::ObjectPhotons),
     );
     let product = x.product.as_ref().map(|p| {
         let started = Instant::now();
@@ -79,24 +85,37 @@ pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProduct
         let adu = geometry::warp(&exposure.adu, w, h, &frame, Fill::SkyNoise(&mut rng));
         // In the original frame that is the box the renderer already found (the same
         // computation on the same pixels): not built again (7.5 ms a 1024 px image).
-        let label = if frame.is_identity() {
-            exposure.truth.label_box_px
-        } else {
-            let debris: Vec<f32> = exposure
-                .debris_electrons
-                .iter()
-                .map(|&v| v as f32)
-                .collect();
-            let debris = geometry::warp::<PixelRng>(&debris, w, h, &frame, Fill::Zero);
-            geometry::flux_box(&debris, frame.width, frame.height, LABEL_SHARE)
+        let final_box = |original: Option<BoxPx>, electrons: &[u32]| {
+            if frame.is_identity() {
+                original
+            } else {
+                let debris: Vec<f32> = electrons.iter().map(|&v| v as f32).collect();
+                let debris = geometry::warp::<PixelRng>(&debris, w, h, &frame, Fill::Zero);
+                geometry::flux_box(&debris, frame.width, frame.height, LABEL_SHARE)
+            }
+        };
+        let labels = match &mut exposure.objects {
+            Some(objects) => objects
+                .iter_mut()
+                .filter_map(|o| {
+                    let label = final_box(o.truth.label_box_px, &o.debris_electrons);
+                    o.truth.frame = Some(frame.clone());
+                    o.truth.label_box_final_px = label;
+                    label
+                })
+                .collect(),
+            None => {
+                let label = final_box(exposure.truth.label_box_px, &exposure.debris_electrons);
+                exposure.truth.label_box_final_px = label;
+                label.into_iter().collect()
+            }
         };
         exposure.truth.frame = Some(frame.clone());
-        exposure.truth.label_box_final_px = label;
         let png = enhance::enhance(&adu, frame.width, frame.height, &p.enhance);
         FinalImage {
             frame,
             png,
-            label,
+            labels,
             seconds: started.elapsed().as_secs_f64(),
         }
     });

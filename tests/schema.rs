@@ -138,6 +138,10 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "392d68d9abd59faded48d9ab0191328265cd74c0dba3a44f1ac321a956ee751e",
     ),
     (
+        "campaigns/quickstart-multi.toml",
+        "a8fb92c4de067f790f06c1fd2c2ef117a11bcf3be95b1f3f983d6adc8783fb68",
+    ),
+    (
         "campaigns/quickstart-nasa-fragments.toml",
         "032d4ebbfc399a7da711dd167b279593cec6c2149912b69911569f3511221727",
     ),

@@ -292,7 +292,21 @@ impl NativeCampaign {
             .map(|&v| v.min(i32::MAX as u32) as i32)
             .collect();
         out.set_item("clean", clean.into_pyarray(py).reshape([h, w])?)?;
-        out.set_item("truth", to_python(py, &exposure.truth)?)?;
+        // The truth sidecar as `soig run` writes it: one object, or the frame and its objects.
+        let truth = match (&exposure.objects, &products.scene.placed) {
+            (Some(objects), Some(placed)) => to_python(
+                py,
+                &soig::render::FrameTruth::new(
+                    &exposure.truth,
+                    objects
+                        .iter()
+                        .zip(placed)
+                        .map(|(o, s)| (&o.truth, s.debris_index)),
+                ),
+            )?,
+            _ => to_python(py, &exposure.truth)?,
+        };
+        out.set_item("truth", truth)?;
         out.set_item("header", header)?;
         match &products.product {
             Some(f) => {
@@ -304,21 +318,28 @@ impl NativeCampaign {
                         .into_pyarray(py)
                         .reshape([g.height, g.width])?,
                 )?;
-                let line = f
-                    .label
+                // The label file's text: one line per labelled object, none for an empty frame.
+                let lines: String = f
+                    .labels
+                    .iter()
                     .map(|b| b.yolo_line(f.frame.width, f.frame.height))
-                    .unwrap_or_default();
-                out.set_item("label", line)?;
+                    .collect();
+                out.set_item("label", lines)?;
+                let edges = |b: &soig::geometry::BoxPx| {
+                    (b.x_min + 0.5, b.y_min + 0.5, b.x_max + 0.5, b.y_max + 0.5)
+                };
+                // The first box (the one object of a campaign without `[objects]`), and all.
+                out.set_item("label_box", f.labels.first().map(edges))?;
                 out.set_item(
-                    "label_box",
-                    f.label
-                        .map(|b| (b.x_min + 0.5, b.y_min + 0.5, b.x_max + 0.5, b.y_max + 0.5)),
+                    "label_boxes",
+                    f.labels.iter().map(edges).collect::<Vec<_>>(),
                 )?;
             }
             None => {
                 out.set_item("png", py.None())?;
                 out.set_item("label", py.None())?;
                 out.set_item("label_box", py.None())?;
+                out.set_item("label_boxes", py.None())?;
             }
         }
         Ok(out)

@@ -28,6 +28,10 @@ pub struct CampaignFile {
     pub observer: ObjectSpec,
     /// The debris set; each image shows one of them, drawn uniformly (or by their `weight`).
     pub debris: Vec<ObjectSpec>,
+    /// `[objects]`: how many debris objects each image shows (issue #34). Not set: exactly one,
+    /// the one the pointing is drawn around (the paper's scenes, their bytes unchanged).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub objects: Option<Objects>,
     #[serde(default)]
     pub window: Window,
     #[serde(default)]
@@ -130,6 +134,40 @@ pub struct ElementsSpec {
     /// Epoch of the elements, UTC, e.g. `2022-01-01T00:00:00 UTC` (default: start of the window).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub epoch: Option<String>,
+}
+
+/// Several debris objects per image, or none. The image's pointing, time and stars are drawn
+/// as without this table (around an anchor object that is then not rendered); each of its
+/// objects is drawn on its own random streams by the debris weights, keeps its own range,
+/// phase angle, brightness and apparent motion at that time, and is placed uniformly within
+/// `pointing.placement_fraction` of the field (its sky track turned rigidly onto that place),
+/// with its own shadow, magnitude and signal-to-noise checks.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Objects {
+    /// Objects per non-empty image: a number, or `{ min, max }` drawn uniformly.
+    pub per_frame: PerFrame,
+    /// Share of images with no object at all, drawn before `per_frame` (default 0).
+    #[serde(default)]
+    pub empty_share: f64,
+}
+
+/// A number of objects per image, fixed or uniform in [min, max].
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(untagged)]
+pub enum PerFrame {
+    Fixed(u32),
+    Range { min: u32, max: u32 },
+}
+
+impl PerFrame {
+    /// (min, max) of the count.
+    pub fn bounds(self) -> (u32, u32) {
+        match self {
+            PerFrame::Fixed(n) => (n, n),
+            PerFrame::Range { min, max } => (min, max),
+        }
+    }
 }
 
 /// UTC window in which each image's start time is drawn uniformly.

@@ -9,6 +9,9 @@ const MAX_STARS_PER_CONE: f64 = 2e6;
 /// Highest background or bias level, ADU (see `validate`).
 const MAX_LEVEL_ADU: f64 = 1e9;
 
+/// Most objects an image may show (each is drawn, traced and labelled: the cost grows with it).
+pub const MAX_OBJECTS_PER_FRAME: u32 = 100;
+
 /// Largest debris area, m^2 (see `validate`).
 const MAX_AREA_M2: f64 = 1e4;
 
@@ -76,6 +79,31 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "debris",
         "name at least one debris object",
     )?;
+    if let Some(o) = &c.objects {
+        let (min, max) = o.per_frame.bounds();
+        check(
+            min <= max,
+            "objects.per_frame.max",
+            "must be >= objects.per_frame.min",
+        )?;
+        check(
+            max <= MAX_OBJECTS_PER_FRAME,
+            "objects.per_frame",
+            &format!("must be at most {MAX_OBJECTS_PER_FRAME} objects"),
+        )?;
+        check(
+            (0.0..=1.0).contains(&o.empty_share),
+            "objects.empty_share",
+            "must be in [0, 1]",
+        )?;
+        // A collect links its one object across frames by a track id; several objects per
+        // frame would need one per object, which is not built.
+        check(
+            c.collect.as_ref().is_none_or(|k| k.frames == 1),
+            "objects",
+            "cannot be combined with [collect] frames > 1 (a collect's track id follows one object)",
+        )?;
+    }
     let e = &c.exposure;
     check(
         pos(e.min_s),

@@ -17,21 +17,42 @@ use super::{detected_split, detectors, splits, stems};
 use crate::geometry::{BoxPx, Frame};
 use crate::metrics::read_yolo_file;
 
-/// What the regions need of a truth sidecar.
-#[derive(Deserialize)]
+/// What the regions need of a truth sidecar: its frame and its objects (the one object of a
+/// sidecar, or each of its `objects` list: none, one or many).
 struct Truth {
+    objects: Vec<Object>,
+    frame: Option<Frame>,
+}
+
+/// What the regions need of one object of a truth sidecar.
+#[derive(Deserialize)]
+struct Object {
     object: String,
     streak_start_px: [f64; 2],
     streak_end_px: [f64; 2],
     label_box_px: Option<BoxPx>,
-    frame: Option<Frame>,
 }
 
 fn read_truth(path: &Path) -> anyhow::Result<Truth> {
+    #[derive(Deserialize)]
+    struct Image {
+        frame: Option<Frame>,
+        #[serde(default)]
+        objects: Option<Vec<Object>>,
+    }
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    serde_json::from_str(&text)
-        .map_err(|e| anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display()))
+    let bad =
+        |e: serde_json::Error| anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display());
+    let image: Image = serde_json::from_str(&text).map_err(bad)?;
+    let objects = match image.objects {
+        Some(objects) => objects,
+        None => vec![serde_json::from_str(&text).map_err(bad)?],
+    };
+    Ok(Truth {
+        objects,
+        frame: image.frame,
+    })
 }
 
 /// The file's first lines: format, what it shows, its colour, the coordinate system.
@@ -50,26 +71,28 @@ fn truth_regions(stem: &str, t: &Truth) -> String {
         &format!("soig truth of {stem}: debris streak (first to last sample) and label box"),
         "green",
     );
-    let [x0, y0] = t.streak_start_px;
-    let [x1, y1] = t.streak_end_px;
-    let _ = writeln!(
-        s,
-        "line({:.3},{:.3},{:.3},{:.3}) # text={{{}}}",
-        x0 + 1.0,
-        y0 + 1.0,
-        x1 + 1.0,
-        y1 + 1.0,
-        text(&t.object)
-    );
-    if let Some(b) = &t.label_box_px {
+    for o in &t.objects {
+        let [x0, y0] = o.streak_start_px;
+        let [x1, y1] = o.streak_end_px;
         let _ = writeln!(
             s,
-            "box({:.3},{:.3},{:.3},{:.3},0)",
-            (b.x_min + b.x_max) / 2.0 + 1.0,
-            (b.y_min + b.y_max) / 2.0 + 1.0,
-            b.x_max - b.x_min,
-            b.y_max - b.y_min
+            "line({:.3},{:.3},{:.3},{:.3}) # text={{{}}}",
+            x0 + 1.0,
+            y0 + 1.0,
+            x1 + 1.0,
+            y1 + 1.0,
+            text(&o.object)
         );
+        if let Some(b) = &o.label_box_px {
+            let _ = writeln!(
+                s,
+                "box({:.3},{:.3},{:.3},{:.3},0)",
+                (b.x_min + b.x_max) / 2.0 + 1.0,
+                (b.y_min + b.y_max) / 2.0 + 1.0,
+                b.x_max - b.x_min,
+                b.y_max - b.y_min
+            );
+        }
     }
     s
 }
@@ -187,15 +210,17 @@ mod tests {
     #[test]
     fn truth_is_one_based_and_its_text_has_no_braces() {
         let t = Truth {
-            object: "DEB {A}".into(),
-            streak_start_px: [0.0, 1.0],
-            streak_end_px: [9.0, 4.0],
-            label_box_px: Some(BoxPx {
-                x_min: -0.5,
-                y_min: 0.5,
-                x_max: 9.5,
-                y_max: 4.5,
-            }),
+            objects: vec![Object {
+                object: "DEB {A}".into(),
+                streak_start_px: [0.0, 1.0],
+                streak_end_px: [9.0, 4.0],
+                label_box_px: Some(BoxPx {
+                    x_min: -0.5,
+                    y_min: 0.5,
+                    x_max: 9.5,
+                    y_max: 4.5,
+                }),
+            }],
             frame: None,
         };
         let r = truth_regions("img_000000", &t);

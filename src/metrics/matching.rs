@@ -55,6 +55,8 @@ pub struct ImageMatch {
     pub found: Vec<bool>,
     /// Detections with `score >= conf` that took no object.
     pub false_positives: usize,
+    /// Their boxes, in matching order (descending score).
+    pub false_positive_boxes: Vec<[f64; 4]>,
 }
 
 /// Match one image, greedy by score as COCO does: detections with `score >= conf` in descending
@@ -66,7 +68,7 @@ pub fn match_image(im: &ImageEval, conf: f64, iou_threshold: f64) -> ImageMatch 
     let mut dets: Vec<&Detection> = im.detections.iter().filter(|d| d.score >= conf).collect();
     dets.sort_by(|a, b| cmp_desc(a.score, b.score));
     let mut found = vec![false; im.truth.len()];
-    let mut false_positives = 0;
+    let mut false_positive_boxes = Vec::new();
     for d in dets {
         let db = det_box(d);
         let mut best: Option<(usize, f64)> = None;
@@ -81,12 +83,13 @@ pub fn match_image(im: &ImageEval, conf: f64, iou_threshold: f64) -> ImageMatch 
         }
         match best {
             Some((g, _)) => found[g] = true,
-            None => false_positives += 1,
+            None => false_positive_boxes.push(db),
         }
     }
     ImageMatch {
         found,
-        false_positives,
+        false_positives: false_positive_boxes.len(),
+        false_positive_boxes,
     }
 }
 
@@ -137,5 +140,52 @@ mod tests {
         );
         let r = at_threshold(&[im], 0.5, 0.5);
         assert_eq!((r.tp, r.fp), (1, 1));
+    }
+
+    /// The frames of a campaign with several objects per image and empty images (#34): two
+    /// objects in image 1, one in image 2, none in image 3; six detections. By hand, at conf 0.5
+    /// and IoU 0.5: A and C found (IoU 1), B missed (its neighbour's IoU is 25/175), FPs in
+    /// every image: TP 2, FP 3, FN 1. COCO (every score, IoU 1 at every threshold) in score
+    /// order: .9 TP, .85 FP, .8 FP, .7 TP, .6 FP, .3 FP with 3 objects: recall 1/3 at
+    /// precision 1, then 2/3 at 1/2; the 101-point envelope is 1 for the 34 recall points
+    /// 0..0.33 and 1/2 for the 33 points 0.34..0.66: AP = (34 + 16.5) / 101 = 0.5 at every IoU,
+    /// AR 2/3. pycocotools divides by tp + fp + 2.2e-16, hence the 1e-12.
+    #[test]
+    fn several_objects_and_an_empty_image_by_hand() {
+        let (a, b, c) = (
+            [0., 0., 10., 10.],
+            [100., 100., 110., 110.],
+            [0., 0., 20., 20.],
+        );
+        let images = [
+            img(
+                &[(a, 0), (b, 0)],
+                &[(a, 0.9, 0), ([95., 95., 105., 105.], 0.8, 0)],
+            ),
+            img(
+                &[(c, 0)],
+                &[
+                    (c, 0.7, 0),
+                    ([500., 500., 510., 510.], 0.6, 0),
+                    ([300., 0., 310., 10.], 0.3, 0),
+                ],
+            ),
+            img(&[], &[([50., 50., 60., 60.], 0.85, 0)]),
+        ];
+        let r = at_threshold(&images, 0.5, 0.5);
+        assert_eq!((r.tp, r.fp, r.fn_), (2, 3, 1));
+        assert!((r.precision - 0.4).abs() < 1e-15 && (r.recall - 2.0 / 3.0).abs() < 1e-15);
+        let m = match_image(&images[0], 0.5, 0.5);
+        assert_eq!(m.found, [true, false]);
+        assert_eq!(m.false_positive_boxes, [[95., 95., 105., 105.]]);
+        let c = crate::metrics::coco(&images);
+        for (what, v, want) in [
+            ("ap", c.ap, 0.5),
+            ("ap50", c.ap50, 0.5),
+            ("ap75", c.ap75, 0.5),
+            ("ar100", c.ar100, 2.0 / 3.0),
+        ] {
+            assert!((v - want).abs() < 1e-12, "{what} {v}");
+        }
     }
 }

@@ -201,6 +201,19 @@ impl DebrisFlux {
         total
     }
 
+    /// The pixels `draw` may count in, as index ranges of the whole image (rows
+    /// `image_width` long).
+    pub fn rows(&self, image_width: usize) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+        self.spans
+            .iter()
+            .enumerate()
+            .filter(|(_, (first, end))| first < end)
+            .map(move |(j, &(first, end))| {
+                let start = (self.y0 + j) * image_width + self.x0 + first;
+                start..start + (end - first)
+            })
+    }
+
     /// The expected photo-electrons in the image.
     #[cfg(test)]
     pub(super) fn total(&self) -> f64 {

@@ -27,8 +27,8 @@ pub use jitter::Jitter;
 use photons::{Canvas, Tally, trace};
 pub use sources::TracedStar;
 use sources::{Path, Source, for_each_source};
-pub use truth::Truth;
 pub(crate) use truth::iso_utc;
+pub use truth::{FrameTruth, ObjectTruth, Truth};
 
 /// Above this many packets per source the packet weight grows so that no source traces more
 /// (only reached by sources far brighter than a scene allows, e.g. a magnitude -1 star). The
@@ -85,6 +85,15 @@ pub struct Exposure {
     pub adu: Vec<f32>,
     pub truth: Truth,
     pub stars: Vec<TracedStar>,
+    /// The placed objects (`Scene::placed`), in their order; None for a scene without.
+    pub objects: Option<Vec<ObjectExposure>>,
+}
+
+/// One placed object as rendered: its truth (the frame's fields as the image's) and its
+/// noise-free photo-electrons alone, for its label box in any frame.
+pub struct ObjectExposure {
+    pub truth: Truth,
+    pub debris_electrons: Vec<u32>,
 }
 
 /// Where the photons of the sources go: traced one by one (the debris' drawn per pixel, the
@@ -127,7 +136,7 @@ fn singles_only(scene: &Scene, merge_threshold: u64) -> bool {
     most + 12.0 * most.sqrt() + 12.0 < merge_threshold as f64
 }
 
-/// Render a scene for a given jitter path.
+/// Render a scene for a given jitter path (a scene with placed objects: `render_placed`).
 pub fn render_with_jitter(
     sensor: &Sensor,
     settings: &Settings,
@@ -137,11 +146,119 @@ pub fn render_with_jitter(
     photons_rng: &mut PixelRng,
     noise_rng: &mut PixelRng,
 ) -> Exposure {
+    render_placed(
+        sensor,
+        settings,
+        scene,
+        frame,
+        jitter,
+        photons_rng,
+        noise_rng,
+        &|_| unreachable!("a scene with placed objects is rendered with their streams"),
+    )
+}
+
+/// Render a scene whose placed objects (`Scene::placed`), if any, each trace their photons on
+/// their own stream, `object_photons(k)`, after the frame's stars, with the same jitter path.
+/// The pointing's own object is then not rendered.
+#[allow(clippy::too_many_arguments)]
+pub fn render_placed(
+    sensor: &Sensor,
+    settings: &Settings,
+    scene: &Scene,
+    frame: Option<&RealFrame>,
+    jitter: &Jitter,
+    photons_rng: &mut PixelRng,
+    noise_rng: &mut PixelRng,
+    object_photons: &dyn Fn(u64) -> PixelRng,
+) -> Exposure {
+    let (width, height) = (sensor.width_px, sensor.height_px);
+    let unrendered;
+    let own = match &scene.placed {
+        Some(_) => {
+            unrendered = Scene {
+                trajectory: Vec::new(),
+                placed: None,
+                ..scene.clone()
+            };
+            &unrendered
+        }
+        None => scene,
+    };
+    let (mut canvas, traced, debris_flux) = photons(sensor, settings, own, jitter, photons_rng);
+    let objects = scene.placed.as_ref().map(|placed| {
+        placed
+            .iter()
+            .enumerate()
+            .map(|(k, object)| {
+                let rng = &mut object_photons(k as u64);
+                let flux = expected::DebrisFlux::of_scene(sensor, object, jitter);
+                // An object alone, its photons all single: drawn per pixel as `photons` would
+                // (the same draws), and added to the image over the box they can reach, not
+                // over the whole image (two passes of 1M pixels an object).
+                let (debris, total) = if settings.method.is_photon_mapping()
+                    && singles_only(object, settings.merge_threshold)
+                {
+                    let mut debris = vec![0; width * height];
+                    let total = flux.draw(rng, &mut debris, width);
+                    for range in flux.rows(width) {
+                        for (e, &d) in canvas.electrons[range.clone()]
+                            .iter_mut()
+                            .zip(&debris[range])
+                        {
+                            *e = e.saturating_add(d);
+                        }
+                    }
+                    (debris, total)
+                } else {
+                    let (c, _, _) = photons(sensor, settings, object, jitter, rng);
+                    for (e, &d) in canvas.electrons.iter_mut().zip(&c.debris) {
+                        *e = e.saturating_add(d);
+                    }
+                    (c.debris, c.debris_total)
+                };
+                let truth = truth_of(sensor, object, frame, jitter, (&debris, total), &flux, 0);
+                ObjectExposure {
+                    truth,
+                    debris_electrons: debris,
+                }
+            })
+            .collect()
+    });
+    let adu = detector::adu(sensor, &canvas.electrons, scene, frame, noise_rng);
+    let truth = truth_of(
+        sensor,
+        own,
+        frame,
+        jitter,
+        (&canvas.debris, canvas.debris_total),
+        &debris_flux,
+        traced.len(),
+    );
+    Exposure {
+        width,
+        height,
+        electrons: canvas.electrons,
+        debris_electrons: canvas.debris,
+        adu,
+        truth,
+        stars: traced,
+        objects,
+    }
+}
+
+/// The photons of a scene's stars and debris on the detector, the stars traced, and the
+/// debris' expected flux.
+fn photons(
+    sensor: &Sensor,
+    settings: &Settings,
+    scene: &Scene,
+    jitter: &Jitter,
+    photons_rng: &mut PixelRng,
+) -> (Canvas, Vec<TracedStar>, expected::DebrisFlux) {
     let s = sensor;
     let (width, height) = (s.width_px, s.height_px);
     let psf_px = sensor.psf_sigma_px();
-    let t_exp = scene.exposure_s;
-    let jitter_mean = jitter.mean();
     let merge = (settings.merge_threshold, settings.merge_factor);
     let mut photons = match settings.method {
         RenderMethod::PhotonMapping => Photons::Mapped(Tally::new(width, height)),
@@ -187,14 +304,29 @@ pub fn render_with_jitter(
         }
         Photons::Expected(flux) => flux.draw(photons_rng),
     };
+    (canvas, traced, debris_flux)
+}
+
+/// The truth of a scene's debris as rendered (`debris`: its photo-electrons per pixel and in
+/// all; `stars_traced`: the stars of the image).
+fn truth_of(
+    sensor: &Sensor,
+    scene: &Scene,
+    frame: Option<&RealFrame>,
+    jitter: &Jitter,
+    (debris, debris_total): (&[u32], u64),
+    debris_flux: &expected::DebrisFlux,
+    stars_traced: usize,
+) -> Truth {
+    let (width, height) = (sensor.width_px, sensor.height_px);
+    let t_exp = scene.exposure_s;
+    let jitter_mean = jitter.mean();
     let (expected_debris, mag_min, mag_max) = scene
         .trajectory
         .iter()
         .fold((0.0, f64::INFINITY, f64::NEG_INFINITY), |(e, lo, hi), p| {
             (e + p.expected_electrons, lo.min(p.mag), hi.max(p.mag))
         });
-
-    let adu = detector::adu(sensor, &canvas.electrons, scene, frame, noise_rng);
 
     let at = |p: Option<&crate::scene::TrajectorySample>| {
         p.map(|p| {
@@ -225,7 +357,7 @@ pub fn render_with_jitter(
         }
         crate::scene::Pointing::Fixed { .. } => truth::COORDINATES.to_string(),
     };
-    let truth = Truth {
+    Truth {
         coordinates,
         image_index: scene.image_index,
         object: scene.debris_name.clone(),
@@ -238,7 +370,7 @@ pub fn render_with_jitter(
         streak_end_px: last.unwrap_or([f64::NAN; 2]),
         streak_start_wcs_radec_deg: through_wcs(first),
         streak_end_wcs_radec_deg: through_wcs(last),
-        label_box_px: flux_box(&canvas.debris, width, height, LABEL_SHARE),
+        label_box_px: flux_box(debris, width, height, LABEL_SHARE),
         frame: None,
         label_box_final_px: None,
         magnitude: g.magnitude,
@@ -252,13 +384,13 @@ pub fn render_with_jitter(
         moon_angle_deg: g.moon_angle_deg,
         tumble: scene.tumble,
         expected_debris_electrons: expected_debris,
-        rendered_debris_electrons: canvas.debris_total,
+        rendered_debris_electrons: debris_total,
         snr: scene.snr,
         snr_noise_level: scene.snr_noise_level,
         snr_noise_sigma: scene.snr_noise_sigma,
         snr_matched_filter: debris_flux.matched_filter_snr(sensor.gain_e_per_adu, sigma_adu),
         stars_in_cone: scene.stars.len(),
-        stars_traced: traced.len(),
+        stars_traced,
         background_sigma_adu: sigma_adu,
         background_frame: frame.map(|f| f.name.clone()),
         background_frame_sha256: frame.map(|f| f.sha256.clone()),
@@ -266,14 +398,5 @@ pub fn render_with_jitter(
         rejections: scene.rejections.clone(),
         ephemeris: scene.ephemeris,
         collect: scene.collect,
-    };
-    Exposure {
-        width,
-        height,
-        electrons: canvas.electrons,
-        debris_electrons: canvas.debris,
-        adu,
-        truth,
-        stars: traced,
     }
 }

@@ -75,6 +75,123 @@ pub struct Truth {
     pub collect: Option<crate::scene::CollectFrame>,
 }
 
+/// The truth sidecar of an image of a campaign with `[objects]` (#34): the frame's fields of
+/// [`Truth`] and a list of its objects, possibly empty. (Campaigns without `[objects]` keep the
+/// one-object [`Truth`], their bytes unchanged.)
+#[derive(Serialize)]
+pub struct FrameTruth<'a> {
+    pub coordinates: &'a str,
+    pub image_index: u64,
+    pub start_utc: &'a str,
+    pub exposure_s: f64,
+    pub pointing: &'a Pointing,
+    pub jitter_mean_px: [f64; 2],
+    pub frame: &'a Option<Frame>,
+    /// The object the pointing was drawn around (not rendered unless also in `objects`), as
+    /// "NAME (NORAD n)".
+    pub pointing_object: String,
+    pub stars_in_cone: usize,
+    pub stars_traced: usize,
+    pub background_sigma_adu: f64,
+    pub background_frame: &'a Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub background_frame_sha256: &'a Option<String>,
+    /// The pointing draw's attempts and rejections.
+    pub attempts: u32,
+    pub rejections: &'a std::collections::BTreeMap<crate::scene::Rejection, u32>,
+    pub objects: Vec<ObjectTruth<'a>>,
+}
+
+/// One object of a [`FrameTruth`]: the object's fields of [`Truth`] (same meanings), its
+/// place in the campaign's debris list, and its own draws. A placed object has no
+/// ephemeris: its positions are turned into the field (see `scene::place`); its sky
+/// positions are the light curve's and `streak_*_wcs_radec_deg`.
+#[derive(Serialize)]
+pub struct ObjectTruth<'a> {
+    pub object: &'a str,
+    pub norad: u64,
+    pub debris_index: usize,
+    pub streak_start_px: [f64; 2],
+    pub streak_end_px: [f64; 2],
+    pub streak_start_wcs_radec_deg: [f64; 2],
+    pub streak_end_wcs_radec_deg: [f64; 2],
+    pub label_box_px: Option<BoxPx>,
+    pub label_box_final_px: Option<BoxPx>,
+    pub magnitude: f64,
+    pub magnitude_min: f64,
+    pub magnitude_max: f64,
+    pub area_m2: f64,
+    pub range_km: f64,
+    pub phase_angle_deg: f64,
+    pub earth_angle_deg: f64,
+    pub sun_angle_deg: f64,
+    pub moon_angle_deg: f64,
+    pub tumble: Option<crate::scene::Tumble>,
+    pub expected_debris_electrons: f64,
+    pub rendered_debris_electrons: u64,
+    pub snr: f64,
+    pub snr_noise_level: f64,
+    pub snr_noise_sigma: f64,
+    pub snr_matched_filter: f64,
+    pub attempts: u32,
+    pub rejections: &'a std::collections::BTreeMap<crate::scene::Rejection, u32>,
+}
+
+impl<'a> FrameTruth<'a> {
+    /// The frame's truth from the image's own (`image`) and its objects' with their indices
+    /// in the campaign's debris.
+    pub fn new(image: &'a Truth, objects: impl Iterator<Item = (&'a Truth, usize)>) -> Self {
+        FrameTruth {
+            coordinates: &image.coordinates,
+            image_index: image.image_index,
+            start_utc: &image.start_utc,
+            exposure_s: image.exposure_s,
+            pointing: &image.pointing,
+            jitter_mean_px: image.jitter_mean_px,
+            frame: &image.frame,
+            pointing_object: format!("{} (NORAD {})", image.object, image.norad),
+            stars_in_cone: image.stars_in_cone,
+            stars_traced: image.stars_traced,
+            background_sigma_adu: image.background_sigma_adu,
+            background_frame: &image.background_frame,
+            background_frame_sha256: &image.background_frame_sha256,
+            attempts: image.attempts,
+            rejections: &image.rejections,
+            objects: objects
+                .map(|(t, debris_index)| ObjectTruth {
+                    object: &t.object,
+                    norad: t.norad,
+                    debris_index,
+                    streak_start_px: t.streak_start_px,
+                    streak_end_px: t.streak_end_px,
+                    streak_start_wcs_radec_deg: t.streak_start_wcs_radec_deg,
+                    streak_end_wcs_radec_deg: t.streak_end_wcs_radec_deg,
+                    label_box_px: t.label_box_px,
+                    label_box_final_px: t.label_box_final_px,
+                    magnitude: t.magnitude,
+                    magnitude_min: t.magnitude_min,
+                    magnitude_max: t.magnitude_max,
+                    area_m2: t.area_m2,
+                    range_km: t.range_km,
+                    phase_angle_deg: t.phase_angle_deg,
+                    earth_angle_deg: t.earth_angle_deg,
+                    sun_angle_deg: t.sun_angle_deg,
+                    moon_angle_deg: t.moon_angle_deg,
+                    tumble: t.tumble,
+                    expected_debris_electrons: t.expected_debris_electrons,
+                    rendered_debris_electrons: t.rendered_debris_electrons,
+                    snr: t.snr,
+                    snr_noise_level: t.snr_noise_level,
+                    snr_noise_sigma: t.snr_noise_sigma,
+                    snr_matched_filter: t.snr_matched_filter,
+                    attempts: t.attempts,
+                    rejections: &t.rejections,
+                })
+                .collect(),
+        }
+    }
+}
+
 /// The pixel and sky conventions of every truth, written into it so that it says them itself.
 pub const COORDINATES: &str = "pixels (*_px): 0-based, pixel centres at integers: pixel i spans \
 [i - 0.5, i + 0.5), FITS pixel p is at p - 1, row 0 is the first row of the FITS array and the \

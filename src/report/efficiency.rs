@@ -37,18 +37,29 @@ pub struct ObjectFacts {
     pub pixel_snr: f64,
 }
 
+/// One object of a truth sidecar, as far as efficiency needs it.
+#[derive(Deserialize)]
+struct Sidecar {
+    magnitude: f64,
+    snr_matched_filter: f64,
+    #[serde(default)]
+    snr_noise_sigma: Option<f64>,
+    streak_start_px: [f64; 2],
+    streak_end_px: [f64; 2],
+    /// Whether the object has a label in the PNG (`null` when no photon of it landed).
+    #[serde(default)]
+    label_box_final_px: Option<serde_json::Value>,
+}
+
 impl ObjectFacts {
-    /// Read from a truth sidecar (`truth/<stem>.json`).
-    pub fn read(path: &Path) -> anyhow::Result<ObjectFacts> {
+    /// The objects of a truth sidecar (`truth/<stem>.json`) that have a label, in the order of
+    /// the image's label lines: the one object of a sidecar, or each of its `objects` list.
+    pub fn read(path: &Path) -> anyhow::Result<Vec<ObjectFacts>> {
         #[derive(Deserialize)]
-        struct Sidecar {
-            magnitude: f64,
-            snr_matched_filter: f64,
-            #[serde(default)]
-            snr_noise_sigma: Option<f64>,
-            streak_start_px: [f64; 2],
-            streak_end_px: [f64; 2],
+        struct Image {
             pointing: Pointing,
+            #[serde(default)]
+            objects: Option<Vec<Sidecar>>,
         }
         #[derive(Deserialize)]
         struct Pointing {
@@ -56,20 +67,33 @@ impl ObjectFacts {
         }
         let text = std::fs::read_to_string(path)
             .map_err(|e| anyhow::anyhow!("reading {}: {e}", path.display()))?;
-        let s: Sidecar = serde_json::from_str(&text)
-            .map_err(|e| anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display()))?;
-        let [x0, y0] = s.streak_start_px;
-        let [x1, y1] = s.streak_end_px;
-        Ok(ObjectFacts {
-            magnitude: s.magnitude,
-            snr: s.snr_matched_filter,
-            length_px: (x1 - x0).hypot(y1 - y0),
-            trail_angle_deg: s.pointing.trail_angle_deg.map_or(f64::NAN, |t| {
-                let d = ((y1 - y0).atan2(x1 - x0).to_degrees() - t).rem_euclid(180.0);
-                d.min(180.0 - d)
-            }),
-            pixel_snr: s.snr_noise_sigma.unwrap_or(f64::NAN),
-        })
+        let bad = |e: serde_json::Error| {
+            anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display())
+        };
+        let image: Image = serde_json::from_str(&text).map_err(bad)?;
+        let objects = match image.objects {
+            Some(objects) => objects,
+            None => vec![serde_json::from_str::<Sidecar>(&text).map_err(bad)?],
+        };
+        let trails = image.pointing.trail_angle_deg;
+        Ok(objects
+            .into_iter()
+            .filter(|s| s.label_box_final_px.as_ref().is_some_and(|b| !b.is_null()))
+            .map(|s| {
+                let [x0, y0] = s.streak_start_px;
+                let [x1, y1] = s.streak_end_px;
+                ObjectFacts {
+                    magnitude: s.magnitude,
+                    snr: s.snr_matched_filter,
+                    length_px: (x1 - x0).hypot(y1 - y0),
+                    trail_angle_deg: trails.map_or(f64::NAN, |t| {
+                        let d = ((y1 - y0).atan2(x1 - x0).to_degrees() - t).rem_euclid(180.0);
+                        d.min(180.0 - d)
+                    }),
+                    pixel_snr: s.snr_noise_sigma.unwrap_or(f64::NAN),
+                }
+            })
+            .collect())
     }
 }
 
@@ -223,35 +247,59 @@ pub struct Efficiency {
     pub curves: BTreeMap<Quantity, Vec<Bin>>,
 }
 
-/// The efficiency of one detector: `evals` and `facts` per test image, in the same order.
+/// The efficiency of one detector: `evals` per test image and `facts` per object of each
+/// (in the order of its truth boxes). Each object counts in its own bins; a false positive
+/// counts in the bins of the object of its image whose box centre is nearest its own (the
+/// image's object when it has one, as before several objects per image); the false positives
+/// of an image with no object are in no bin (they are in the report's precision).
 pub fn efficiency(
     detector: &str,
     evals: &[ImageEval],
-    facts: &[ObjectFacts],
+    facts: &[Vec<ObjectFacts>],
     conf: f64,
 ) -> Efficiency {
     const IOU: f64 = 0.5;
-    // Per image with an object: its facts, objects found, objects, false positives.
-    let matched: Vec<(ObjectFacts, usize, usize, usize)> = evals
-        .iter()
-        .zip(facts)
-        .filter(|(e, _)| !e.truth.is_empty())
-        .map(|(e, &f)| {
-            let m = match_image(e, conf, IOU);
-            let found = m.found.iter().filter(|&&x| x).count();
-            (f, found, m.found.len(), m.false_positives)
-        })
-        .collect();
+    // Each object with whether it was found, and for each false positive the nearest object.
+    let mut objects: Vec<(ObjectFacts, bool)> = Vec::new();
+    let mut false_positives: Vec<ObjectFacts> = Vec::new();
+    for (e, f) in evals.iter().zip(facts) {
+        assert_eq!(e.truth.len(), f.len(), "one fact per truth box");
+        if e.truth.is_empty() {
+            continue;
+        }
+        let m = match_image(e, conf, IOU);
+        objects.extend(f.iter().copied().zip(m.found.iter().copied()));
+        let centre = |b: &[f64; 4]| ((b[0] + b[2]) / 2.0, (b[1] + b[3]) / 2.0);
+        for d in &m.false_positive_boxes {
+            let (x, y) = centre(d);
+            let distance = |k: usize| {
+                let (tx, ty) = centre(&e.truth[k]);
+                (tx - x).hypot(ty - y)
+            };
+            let nearest = (1..e.truth.len()).fold(0, |best, k| {
+                if distance(k) < distance(best) {
+                    k
+                } else {
+                    best
+                }
+            });
+            false_positives.push(f[nearest]);
+        }
+    }
     let curves: BTreeMap<Quantity, Vec<Bin>> = Quantity::ALL
         .into_iter()
         .map(|q| {
             let mut counts: BTreeMap<i64, (usize, usize, usize)> = BTreeMap::new();
-            for (f, found, objects, fp) in &matched {
+            for (f, found) in &objects {
                 if let Some(k) = q.bin(q.value(f)) {
                     let c = counts.entry(k).or_default();
-                    c.0 += objects;
-                    c.1 += found;
-                    c.2 += fp;
+                    c.0 += 1;
+                    c.1 += usize::from(*found);
+                }
+            }
+            for f in &false_positives {
+                if let Some(k) = q.bin(q.value(f)) {
+                    counts.entry(k).or_default().2 += 1;
                 }
             }
             let bins = counts
@@ -490,6 +538,11 @@ mod tests {
         }
     }
 
+    /// One object per image.
+    fn each(f: &[ObjectFacts]) -> Vec<Vec<ObjectFacts>> {
+        f.iter().map(|&x| vec![x]).collect()
+    }
+
     fn facts(magnitude: f64, snr: f64, length_px: f64) -> ObjectFacts {
         ObjectFacts {
             magnitude,
@@ -516,7 +569,7 @@ mod tests {
             facts(11.2, 9.0, 3.0),
             facts(12.7, 1.5, 200.0),
         ];
-        let e = efficiency("d", &evals, &f, 0.5);
+        let e = efficiency("d", &evals, &each(&f), 0.5);
         let m = &e.curves[&Quantity::Magnitude];
         let got: Vec<_> = m
             .iter()
@@ -600,6 +653,64 @@ mod tests {
         assert!((magnitude - 11.125).abs() < 1e-12, "{magnitude}");
     }
 
+    /// Several objects per image and an empty one (#34), by hand: image 1 shows A (magnitude
+    /// 10.1, found) and B (12.2, missed), with a false positive whose centre (100, 100) is
+    /// nearer B's (105, 105) than A's (5, 5); image 2 shows C (11.3, found) with a false
+    /// positive far from it (its only object: its bin); image 3 shows nothing and has a false
+    /// positive (in no bin). Bins: 10.0-10.5 one object found; 11.0-11.5 one found, one FP;
+    /// 12.0-12.5 one missed, one FP.
+    #[test]
+    fn several_objects_count_in_their_own_bins_and_a_false_positive_in_the_nearest() {
+        let det = |b: [f64; 4], score: f64| Detection {
+            x1: b[0],
+            y1: b[1],
+            x2: b[2],
+            y2: b[3],
+            score,
+            class: 0,
+        };
+        let (a, b, c) = (
+            [0., 0., 10., 10.],
+            [100., 100., 110., 110.],
+            [0., 0., 20., 20.],
+        );
+        let evals = [
+            ImageEval {
+                truth: vec![a, b],
+                truth_class: vec![0, 0],
+                detections: vec![det(a, 0.9), det([95., 95., 105., 105.], 0.8)],
+            },
+            ImageEval {
+                truth: vec![c],
+                truth_class: vec![0],
+                detections: vec![det(c, 0.7), det([500., 500., 510., 510.], 0.6)],
+            },
+            ImageEval {
+                truth: vec![],
+                truth_class: vec![],
+                detections: vec![det([50., 50., 60., 60.], 0.85)],
+            },
+        ];
+        let f = [
+            vec![facts(10.1, 30.0, 40.0), facts(12.2, 3.0, 40.0)],
+            vec![facts(11.3, 9.0, 40.0)],
+            vec![],
+        ];
+        let e = efficiency("d", &evals, &f, 0.5);
+        let got: Vec<_> = e.curves[&Quantity::Magnitude]
+            .iter()
+            .map(|b| (b.lo, b.hi, b.objects, b.found, b.false_positives))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (10.0, 10.5, 1, 1, 0),
+                (11.0, 11.5, 1, 1, 1),
+                (12.0, 12.5, 1, 0, 1)
+            ]
+        );
+    }
+
     #[test]
     fn images_without_an_object_are_left_out() {
         let empty = ImageEval {
@@ -610,7 +721,7 @@ mod tests {
         let e = efficiency(
             "d",
             &[empty, image(true, 0)],
-            &[facts(9.0, 10.0, 10.0), facts(9.2, 10.0, 10.0)],
+            &[vec![], vec![facts(9.2, 10.0, 10.0)]],
             0.5,
         );
         let m = &e.curves[&Quantity::Magnitude];
@@ -629,7 +740,7 @@ mod tests {
             image(true, 0),
             image(true, 0),
         ];
-        let e = efficiency("d", &evals, &f, 0.5);
+        let e = efficiency("d", &evals, &each(&f), 0.5);
         let bins: Vec<(f64, f64, usize, usize)> = e.curves[&Quantity::TrailAngleDeg]
             .iter()
             .map(|b| (b.lo, b.hi, b.objects, b.found))
@@ -639,7 +750,7 @@ mod tests {
             vec![(0.0, 2.0, 2, 1), (2.0, 7.0, 1, 1), (7.0, 90.0, 1, 1)]
         );
         // Fixed pointing: no trails, no angle bins.
-        let e = efficiency("d", &evals, &[facts(10.0, 20.0, 100.0); 4], 0.5);
+        let e = efficiency("d", &evals, &each(&[facts(10.0, 20.0, 100.0); 4]), 0.5);
         assert!(e.curves[&Quantity::TrailAngleDeg].is_empty());
     }
 }
