@@ -84,6 +84,7 @@
 
 mod background;
 mod components;
+mod fit;
 mod lines;
 mod merge;
 mod noise;
