@@ -77,39 +77,72 @@ impl Ctx<'_> {
         std::f64::consts::SQRT_2 * self.p.psf_sigma
     }
 
+    /// Two passes: pieces and ends on the refined segment, then pieces again between the ends
+    /// found and the ends again (a refined segment can reach 20 px beyond a bright streak's
+    /// end, and pieces there hold no streak).
     fn fit(&self, s: &Seg) -> Option<Fit> {
         let (ux, uy) = s.dir();
-        let (nx, ny) = (-uy, ux);
-        let sz = self.z_sigma();
-        let at = |t: f64, v: f64| self.z_at(s.cx + t * ux + v * nx, s.cy + t * uy + v * ny);
         let (lo, hi) = self.t_range(s.cx, s.cy, ux, uy);
         if lo > hi {
             return None;
         }
         let half = 0.5 * s.length;
+        let mut fit = Fit {
+            pieces: Vec::new(),
+            t0: -half,
+            t1: half,
+        };
+        for _ in 0..2 {
+            fit.pieces = self.pieces(s, fit.t0.max(lo), fit.t1.min(hi));
+            if fit.pieces.is_empty() {
+                return None;
+            }
+            let t1 = self.end(s, &fit, 1.0, (lo, hi));
+            let t0 = -self.end(s, &fit, -1.0, (lo, hi));
+            (fit.t0, fit.t1) = (t0, t1);
+            if fit.t1 <= fit.t0 {
+                return None;
+            }
+        }
+        Some(fit)
+    }
 
-        // Centre line and brightness, piece by piece over the refined segment.
-        let n_pieces = ((s.length / PIECE_PX).floor() as usize).max(1);
-        let piece = s.length / n_pieces as f64;
-        let reach = (3.0 * sz).ceil();
+    /// Centre line and brightness, piece by piece over [ta, tb] along the axis: lateral
+    /// offset (centroid of the mean cross-section of z) and brightness (z summed across).
+    /// A piece too faint for a centroid, or far fainter than the streak (beyond its end, or
+    /// a masked star on it), takes its neighbours' offset.
+    fn pieces(&self, s: &Seg, ta: f64, tb: f64) -> Vec<(f64, f64, f64)> {
+        let (ux, uy) = s.dir();
+        let (nx, ny) = (-uy, ux);
+        let sz = self.z_sigma();
+        let at = |t: f64, v: f64| self.z_at(s.cx + t * ux + v * nx, s.cy + t * uy + v * ny);
+        let length = tb - ta;
+        if length <= 0.0 {
+            return Vec::new();
+        }
+        // At least three pieces where they can be 6 px long: a short streak bends with the
+        // jitter too, and one straight piece boxes it a pixel off.
+        let n_pieces = ((length / PIECE_PX).floor() as usize)
+            .max(((length / 6.0).floor() as usize).min(3))
+            .max(1);
+        let piece = length / n_pieces as f64;
+        let reach = (3.0 * sz).ceil() as i64;
+        let offs: Vec<f64> = (-2 * reach..=2 * reach).map(|i| i as f64 * 0.5).collect();
         let mut pieces = Vec::with_capacity(n_pieces);
         for k in 0..n_pieces {
-            let ta = -half + k as f64 * piece;
+            let start = ta + k as f64 * piece;
             let ts: Vec<f64> = (0..piece.round().max(1.0) as usize)
-                .map(|i| ta + i as f64 + 0.5)
-                .filter(|&t| t >= lo && t <= hi)
+                .map(|i| start + i as f64 + 0.5)
                 .collect();
-            if ts.is_empty() {
-                continue;
-            }
-            let profile = |v: f64| ts.iter().map(|&t| at(t, v)).sum::<f64>() / ts.len() as f64;
-            let offs: Vec<f64> = (-(2.0 * reach) as i64..=(2.0 * reach) as i64)
-                .map(|i| i as f64 * 0.5)
+            let prof: Vec<f64> = offs
+                .iter()
+                .map(|&v| ts.iter().map(|&t| at(t, v)).sum::<f64>() / ts.len() as f64)
                 .collect();
-            let prof: Vec<f64> = offs.iter().map(|&v| profile(v)).collect();
-            // Centroid of the positive part within 1.5 sigma of the peak.
-            let (imax, _) = prof.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+            let imax = (0..prof.len())
+                .max_by(|&a, &b| prof[a].total_cmp(&prof[b]))
+                .unwrap_or(0);
             let v0 = offs[imax];
+            // Centroid of the positive part within 1.5 sigma of the peak.
             let (mut sw, mut sv) = (0.0, 0.0);
             for (&v, &p) in offs.iter().zip(&prof) {
                 if (v - v0).abs() <= 1.5 * sz && p > 0.0 {
@@ -118,51 +151,58 @@ impl Ctx<'_> {
                 }
             }
             // The noise sd of a piece's mean: z has unit noise, correlated over about
-            // 2 sqrt(pi) psf sigma along the axis.
+            // 2 sqrt(pi) sigma along the axis.
             let sd = (2.0 * std::f64::consts::PI.sqrt() * sz / ts.len() as f64)
                 .sqrt()
                 .min(1.0);
-            let bright: f64 = offs
-                .iter()
-                .zip(&prof)
-                .filter(|(v, _)| v.abs() <= 2.0 * sz)
-                .map(|(_, &p)| p * 0.5)
-                .sum();
             let off = if prof[imax] > 3.0 * sd && sw > 0.0 {
                 sv / sw
             } else {
                 f64::NAN
             };
-            pieces.push((ta + 0.5 * piece, off, bright));
+            // Summed within 2 sigma of the centre line (of the axis where none is measured):
+            // the refined axis can be tilted by a degree or two.
+            let centre = if off.is_finite() { off } else { 0.0 };
+            let bright: f64 = offs
+                .iter()
+                .zip(&prof)
+                .filter(|(v, _)| (*v - centre).abs() <= 2.0 * sz)
+                .map(|(_, &p)| 0.5 * p)
+                .sum();
+            pieces.push((start + 0.5 * piece, off, bright));
         }
-        if pieces.is_empty() {
-            return None;
-        }
-        // Pieces without a clear centroid take the line's (offset 0), and brightness is kept
-        // positive: a dip (a star masked on the line) is not an end.
         let mut bright: Vec<f64> = pieces.iter().map(|p| p.2).collect();
         let med = super::stats::median_of(&mut bright).max(1e-6);
         for p in &mut pieces {
-            if !p.1.is_finite() {
-                p.1 = 0.0;
+            if p.2 < 0.3 * med {
+                p.1 = f64::NAN;
             }
+            // Kept positive and bounded: a dip is not an end, a star on the line no peak.
             p.2 = p.2.clamp(0.1 * med, 10.0 * med);
         }
-        let mut fit = Fit {
-            pieces,
-            t0: -half,
-            t1: half,
-        };
-        fit.t1 = self.end(s, &fit, 1.0, lo, hi);
-        fit.t0 = -self.end(s, &fit, -1.0, lo, hi);
-        (fit.t1 > fit.t0).then_some(fit)
+        // Offsets missing: the nearest measured one (none measured: the refined axis).
+        let known: Vec<(f64, f64)> = pieces
+            .iter()
+            .filter(|p| p.1.is_finite())
+            .map(|p| (p.0, p.1))
+            .collect();
+        for p in &mut pieces {
+            if !p.1.is_finite() {
+                p.1 = known
+                    .iter()
+                    .min_by(|a, b| (a.0 - p.0).abs().total_cmp(&(b.0 - p.0).abs()))
+                    .map_or(0.0, |k| k.1);
+            }
+        }
+        pieces
     }
 
-    /// The end of the streak on the side `sign` (+1: towards +t), as a distance along `sign`
-    /// from the centre: where the centre-line profile crosses the level seen `HALF_WIDTH`
-    /// sigmas beside the line near that end (see the module docs). An end not reached inside
-    /// the image lies beyond it (the streak leaves the frame).
-    fn end(&self, s: &Seg, fit: &Fit, sign: f64, lo: f64, hi: f64) -> f64 {
+    /// The end of the streak on the side `sign` (+1: towards +t) as a distance from the
+    /// centre along `sign`: where the centre-line profile crosses the level seen `HALF_WIDTH`
+    /// sigmas beside the line near that end (see the module docs), looked for around the
+    /// current end (`fit`). An end not reached inside the image (`lo`..`hi` along the axis)
+    /// lies beyond it: the streak leaves the frame.
+    fn end(&self, s: &Seg, fit: &Fit, sign: f64, (lo, hi): (f64, f64)) -> f64 {
         let (ux, uy) = s.dir();
         let (nx, ny) = (-uy, ux);
         let sz = self.z_sigma();
@@ -173,12 +213,17 @@ impl Ctx<'_> {
                 s.cy + t * uy + (v + off) * ny,
             )
         };
-        let half = 0.5 * s.length;
+        // Distances from the centre along `sign`: this end, the other end, the border.
+        let (near, far) = if sign > 0.0 {
+            (fit.t1, -fit.t0)
+        } else {
+            (-fit.t0, fit.t1)
+        };
         let border = if sign > 0.0 { hi } else { -lo };
-        // The level beside the line, over the inner stretch next to the end.
-        let margin = (3.0 * sz).min(0.25 * s.length);
-        let inner_b = half - margin;
-        let inner_a = (inner_b - SEARCH_IN_PX).max(-half + margin).min(inner_b);
+        // The level beside the line, over the stretch inside this end.
+        let margin = (3.0 * sz).min(0.25 * (near + far));
+        let inner_b = (near - margin).min(border);
+        let inner_a = (inner_b - SEARCH_IN_PX).max(margin - far);
         let vh = HALF_WIDTH * sz;
         let (mut level, mut count) = (0.0, 0.0);
         let mut d = inner_a;
@@ -190,20 +235,16 @@ impl Ctx<'_> {
             }
             d += 1.0;
         }
-        if count == 0.0 {
-            return half;
+        if count == 0.0 || level <= 0.0 {
+            return near;
         }
         let level = level / count;
-        if level <= 0.0 {
-            return half;
-        }
         // Change point: the distance maximising the cumulative excess of the profile over
         // the level, outwards from inside the streak (robust to noise and to dips).
-        let start = (half - SEARCH_IN_PX).max(0.0).min(border);
-        let stop = (half + SEARCH_OUT_PX).min(border);
+        let start = (near - SEARCH_IN_PX).max(0.5 * (near - far)).min(border);
+        let stop = (near + SEARCH_OUT_PX).min(border);
         let (mut acc, mut best, mut best_d) = (0.0, 0.0, start);
-        let mut d = start;
-        let mut last = start;
+        let (mut d, mut last) = (start, start);
         while d <= stop {
             acc += (at(sign * d, 0.0) - level).min(level) * STEP_PX;
             if acc > best {
@@ -222,9 +263,22 @@ impl Ctx<'_> {
 }
 
 impl Fit {
-    /// Lateral offset and brightness at t, linear between the pieces' centres.
+    /// Lateral offset and brightness at t, linear between the pieces' centres; beyond the
+    /// first and last centres the offset goes on along the nearest pair's slope (the refined
+    /// axis may be tilted) and the brightness stays.
     fn at(&self, t: f64) -> (f64, f64) {
         let p = &self.pieces;
+        let n = p.len();
+        let beyond = |a: (f64, f64, f64), b: (f64, f64, f64)| {
+            let slope = (b.1 - a.1) / (b.0 - a.0);
+            (b.1 + slope * (t - b.0), b.2)
+        };
+        if n >= 2 && t <= p[0].0 {
+            return beyond(p[1], p[0]);
+        }
+        if n >= 2 && t >= p[n - 1].0 {
+            return beyond(p[n - 2], p[n - 1]);
+        }
         if t <= p[0].0 {
             return (p[0].1, p[0].2);
         }

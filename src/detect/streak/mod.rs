@@ -98,6 +98,8 @@ mod stats;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
+mod tests_fit;
+#[cfg(test)]
 mod tests_sky;
 mod trails;
 
