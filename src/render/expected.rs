@@ -5,6 +5,7 @@
 //! for a fixed jitter path both renderers have the same distribution (without merging), and
 //! this one does work per pixel the PSF reaches instead of per photon.
 
+use crate::geometry::{BoxPx, flux_box};
 use crate::rng::PixelRng;
 
 use super::{Canvas, Jitter, Path, Source};
@@ -118,17 +119,31 @@ pub struct DebrisFlux {
 
 impl DebrisFlux {
     pub fn of_scene(sensor: &Sensor, scene: &Scene, jitter: &Jitter) -> DebrisFlux {
-        let psf_px = sensor.psf_sigma_px();
-        let (w, h) = (sensor.width_px, sensor.height_px);
         let samples: Vec<(f64, f64, f64)> = scene
             .trajectory
             .iter()
-            .filter(|p| p.expected_electrons > 0.0)
             .map(|p| {
                 let (jx, jy) = jitter.at(p.t_s);
                 (p.expected_electrons, p.x_px + jx, p.y_px + jy)
             })
-            .filter(|(_, x, y)| x.is_finite() && y.is_finite())
+            .collect();
+        DebrisFlux::of_samples(
+            &samples,
+            sensor.psf_sigma_px(),
+            sensor.width_px,
+            sensor.height_px,
+        )
+    }
+
+    /// The expected electrons of point samples `(electrons, x, y)` (pixel centres at
+    /// integers) through a Gaussian PSF of `psf_px` on a `w` x `h` image: what
+    /// [`DebrisFlux::of_scene`] does with the debris' trajectory, and what the streak
+    /// detector does with the streak it fitted, so that both boxes come from one model.
+    pub fn of_samples(samples: &[(f64, f64, f64)], psf_px: f64, w: usize, h: usize) -> DebrisFlux {
+        let samples: Vec<(f64, f64, f64)> = samples
+            .iter()
+            .copied()
+            .filter(|&(e, x, y)| e > 0.0 && x.is_finite() && y.is_finite())
             .collect();
         // The box: the union of every sample's support within the image.
         let (mut lo, mut hi) = ([usize::MAX; 2], [0usize; 2]);
@@ -212,6 +227,19 @@ impl DebrisFlux {
                 let start = (self.y0 + j) * image_width + self.x0 + first;
                 start..start + (end - first)
             })
+    }
+
+    /// The label box of this flux ([`flux_box`] holding `share` of it, as the renderer's
+    /// label), in the image's pixel-centre coordinates; None without flux.
+    pub fn label_box(&self, share: f64) -> Option<BoxPx> {
+        let b = flux_box(&self.mean, self.width, self.spans.len(), share)?;
+        let (dx, dy) = (self.x0 as f64, self.y0 as f64);
+        Some(BoxPx {
+            x_min: b.x_min + dx,
+            y_min: b.y_min + dy,
+            x_max: b.x_max + dx,
+            y_max: b.y_max + dy,
+        })
     }
 
     /// The expected photo-electrons in the image.

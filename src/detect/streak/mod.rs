@@ -66,11 +66,14 @@
 //!    probability that noise alone gives no candidate that significant in an image this size,
 //!    under a Gumbel model calibrated by `confidence_snr` and `confidence_snr_scale`, times
 //!    `1 - exp(-(elongation - 1) / confidence_elongation_scale)` (see `output::confidence`).
-//!    Box: the refined segment padded by `box_pad_along_sigma * psf_sigma_px` along the axis and
-//!    `box_pad_across_sigma * psf_sigma_px` across it (bounding box of that ellipse-capped
-//!    segment), which matches the label convention of the generator (the box holding all but
-//!    0.25 % of the debris flux on each side), in pixel-edge coordinates (pixel `i` spans
-//!    `[i, i + 1]`), clipped to the image. Candidates are sorted by decreasing score, at most
+//!    Box (`fit`): the streak fitted on the refined axis (centre line and brightness piece by
+//!    piece, each end where the centre-line profile crosses the level seen half a PSF width
+//!    beside the line, which the 8-bit stretch does not move), rendered through a Gaussian PSF
+//!    of `psf_sigma_px` by the renderer's code and boxed by the label's rule (the box holding
+//!    99 % of the flux, `geometry::flux_box`); where no fit is possible, the refined segment
+//!    padded by `box_pad_along_sigma * psf_sigma_px` along the axis and
+//!    `box_pad_across_sigma * psf_sigma_px` across it. In pixel-edge coordinates (pixel `i`
+//!    spans `[i, i + 1]`), clipped to the image. Candidates are sorted by decreasing score, at most
 //!    `max_candidates`.
 //!
 //! Orientations (the output `orientation_deg` and the input `star_trail_angle_deg`) are in
@@ -80,13 +83,14 @@
 //! Everything is single-threaded and deterministic: the same input gives the same output.
 //!
 //! One submodule per step: `background` (1), `smooth`, `trails` and `stars` (2), `lines` (3),
-//! `radon` (3b), `components` (4), `refine` and `merge` (5-6), `output` (7); `stats` holds the robust
-//! statistics they share (bilinear sampling is [`crate::imaging::bilinear`]). This file holds
-//! the parameters and the pipeline.
+//! `radon` (3b), `components` (4), `refine` and `merge` (5-6), `output` and `fit` (7);
+//! `stats` holds the robust statistics they share (bilinear sampling is
+//! [`crate::imaging::bilinear`]). This file holds the parameters and the pipeline.
 
 mod background;
 mod components;
 mod explain;
+mod fit;
 mod lines;
 mod merge;
 mod noise;
@@ -99,6 +103,8 @@ mod stars;
 mod stats;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_fit;
 #[cfg(test)]
 mod tests_sky;
 mod trails;
@@ -181,9 +187,11 @@ pub struct StreakParams {
     /// candidate's segment are ignored, and what remains must still reach `min_length_px` and
     /// `min_snr` (default 10.0 px). Drops duplicates and the off-axis echoes of bright streaks.
     pub duplicate_distance_px: f64,
-    /// Box padding along the streak axis beyond the ends, in PSF sigmas (default 1.0).
+    /// Box padding along the streak axis beyond the ends, in PSF sigmas, of a streak that
+    /// cannot be fitted (default 1.0; fitted streaks are boxed by the label's rule).
     pub box_pad_along_sigma: f64,
-    /// Box padding across the streak axis, in PSF sigmas (default 3.0).
+    /// Box padding across the streak axis, in PSF sigmas, of a streak that cannot be fitted
+    /// (default 3.0).
     pub box_pad_across_sigma: f64,
     /// The SNR at which a 1024 x 1024 image's candidate has confidence 0.5: where noise alone
     /// gives a candidate that strong in half of such images (default 9.0).

@@ -2,6 +2,7 @@
 
 use super::refine::{Ctx, Seg};
 use super::{Candidate, Detection, Sanitized};
+use crate::geometry::BoxPx;
 
 /// Confidence in [0, 1): the probability that noise alone gives no candidate as significant
 /// in an image of `area_px` pixels, under a Gumbel model of the most significant noise candidate
@@ -33,11 +34,19 @@ impl Ctx<'_> {
         let ex = ((along * ux).powi(2) + (across * uy).powi(2)).sqrt();
         let ey = ((along * uy).powi(2) + (across * ux).powi(2)).sqrt();
         let (w, h) = (self.w as f64, self.h as f64);
+        // The fitted streak's label box (`fit`); the padded segment where it cannot be fitted.
+        let padded = BoxPx {
+            x_min: (a.0.min(b.0) - ex + 0.5).clamp(0.0, w),
+            y_min: (a.1.min(b.1) - ey + 0.5).clamp(0.0, h),
+            x_max: (a.0.max(b.0) + ex + 0.5).clamp(0.0, w),
+            y_max: (a.1.max(b.1) + ey + 0.5).clamp(0.0, h),
+        };
+        let boxed = self.fitted_box(s).unwrap_or(padded);
         let detection = Detection {
-            x1: (a.0.min(b.0) - ex + 0.5).clamp(0.0, w),
-            y1: (a.1.min(b.1) - ey + 0.5).clamp(0.0, h),
-            x2: (a.0.max(b.0) + ex + 0.5).clamp(0.0, w),
-            y2: (a.1.max(b.1) + ey + 0.5).clamp(0.0, h),
+            x1: boxed.x_min,
+            y1: boxed.y_min,
+            x2: boxed.x_max,
+            y2: boxed.y_max,
             score,
             class: p.class,
         };

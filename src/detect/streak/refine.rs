@@ -81,7 +81,7 @@ pub(super) fn point_segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)
 
 impl Ctx<'_> {
     /// z at (x, y), bilinear between pixel centres.
-    fn z_at(&self, x: f64, y: f64) -> f64 {
+    pub(super) fn z_at(&self, x: f64, y: f64) -> f64 {
         bilinear(self.z, self.w, self.h, x, y) as f64
     }
 
@@ -115,7 +115,7 @@ impl Ctx<'_> {
     }
 
     /// Range of t for which (cx, cy) + t (ux, uy) lies inside the pixel-centre rectangle.
-    fn t_range(&self, cx: f64, cy: f64, ux: f64, uy: f64) -> (f64, f64) {
+    pub(super) fn t_range(&self, cx: f64, cy: f64, ux: f64, uy: f64) -> (f64, f64) {
         let mut lo = f64::NEG_INFINITY;
         let mut hi = f64::INFINITY;
         for (c, u, max) in [(cx, ux, (self.w - 1) as f64), (cy, uy, (self.h - 1) as f64)] {
