@@ -50,6 +50,7 @@ fn main() -> anyhow::Result<()> {
         let truth_path = run.join("truth").join(format!("{stem}.json"));
         let truth: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&truth_path)?)?;
+        eprintln!("IMG {stem}");
         let img = image::open(png)?.to_luma8();
         let (w, h) = (img.width() as usize, img.height() as usize);
         let pixels = img.into_raw();
@@ -79,6 +80,7 @@ fn main() -> anyhow::Result<()> {
             detect_streaks_among_stars(&pixels, w, h, &params, trail_png, Some(&stars))
         };
         ms.push(t.elapsed().as_secs_f64() * 1e3);
+        eprintln!("TIME {stem} {:.0}", ms[ms.len() - 1]);
         let mut text = String::new();
         for c in &cands {
             let d = &c.detection;

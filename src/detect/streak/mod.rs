@@ -479,23 +479,38 @@ pub fn detect_streaks_among_stars(
             .to_degrees();
         angle_diff_deg(c.orientation_deg, trail) <= p.trail_tol + slack
     };
-    let first: Vec<(Point, Point)> = found
-        .iter()
-        .map(|c| ((c.ends[0][0], c.ends[0][1]), (c.ends[1][0], c.ends[1][1])))
-        .collect();
-    let new_one = |c: &Candidate| {
-        let mid = (
-            0.5 * (c.ends[0][0] + c.ends[1][0]),
-            0.5 * (c.ends[0][1] + c.ends[1][1]),
-        );
-        first
-            .iter()
-            .all(|&(a, b)| refine::point_segment_distance(mid, a, b) > p.dup_dist)
-    };
-    found.extend(second.into_iter().filter(|c| near_trail(c) && new_one(c)));
+    found.extend(second.into_iter().filter(near_trail));
+    // One streak, one box: a candidate lying mostly along a longer one (the same streak from
+    // both passes, or a piece of it) is dropped, whatever its score.
+    found.sort_by(|a, b| b.length_px.total_cmp(&a.length_px));
+    let mut kept: Vec<Candidate> = Vec::new();
+    for c in found {
+        if !kept.iter().any(|k| lies_along(&c, k, p.dup_dist)) {
+            kept.push(c);
+        }
+    }
+    found = kept;
     found.sort_by(|a, b| b.detection.score.total_cmp(&a.detection.score));
     found.truncate(p.max_candidates);
     found
+}
+
+/// Whether half of `c`'s axis lies within `dist` of `other`'s segment.
+fn lies_along(c: &Candidate, other: &Candidate, dist: f64) -> bool {
+    let [a, b] = c.ends;
+    let (o0, o1) = (
+        (other.ends[0][0], other.ends[0][1]),
+        (other.ends[1][0], other.ends[1][1]),
+    );
+    let n = c.length_px.ceil().max(1.0) as usize;
+    let near = (0..=n)
+        .filter(|&k| {
+            let f = k as f64 / n as f64;
+            let q = (a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]));
+            refine::point_segment_distance(q, o0, o1) <= dist
+        })
+        .count();
+    2 * near > n
 }
 
 /// The detector's pipeline, angle-only.
