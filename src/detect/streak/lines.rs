@@ -24,7 +24,7 @@ pub(super) fn line_filter(
     let mut best = vec![f32::NEG_INFINITY; w * h];
     let mut best_t = vec![f32::NEG_INFINITY; w * h];
     let mut accs: Vec<Vec<f32>> = vec![Vec::new(); p.half_lengths.len()];
-    for j in 0..n {
+    for j in (0..n).filter(|&j| p.uses(j)) {
         let (x_major, t) = slope(j, n);
         let model = model_sd(j, p);
         let inv: Vec<f32> = model

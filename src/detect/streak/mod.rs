@@ -425,7 +425,7 @@ pub fn detect_streaks(
     params: &StreakParams,
     star_trail_angle_deg: Option<f64>,
 ) -> Vec<Candidate> {
-    detect(pixels, width, height, params, star_trail_angle_deg, None).0
+    detect(pixels, width, height, params, star_trail_angle_deg).0
 }
 
 /// [`detect_streaks`], and every refined segment that did not become a candidate, with why
@@ -437,7 +437,7 @@ pub fn detect_streaks_explained(
     params: &StreakParams,
     star_trail_angle_deg: Option<f64>,
 ) -> (Vec<Candidate>, Vec<Dropped>) {
-    detect(pixels, width, height, params, star_trail_angle_deg, None)
+    detect(pixels, width, height, params, star_trail_angle_deg)
 }
 
 /// [`detect_streaks`] knowing the catalogued stars' predicted trails in the image (`stars`,
@@ -458,50 +458,95 @@ pub fn detect_streaks_among_stars(
     stars: Option<&[StarTrail]>,
 ) -> Vec<Candidate> {
     let trail = star_trail_angle_deg.filter(|a| a.is_finite());
-    let mut found = detect(pixels, width, height, params, star_trail_angle_deg, None).0;
     let (Some(stars), Some(trail)) = (stars, trail) else {
-        return found;
+        return detect(pixels, width, height, params, star_trail_angle_deg).0;
     };
+    assert_eq!(
+        pixels.len(),
+        width * height,
+        "pixels.len() must be width * height"
+    );
+    if width < 2 || height < 2 {
+        return Vec::new();
+    }
     let p = Sanitized::new(params);
+    // Both passes start from the same background and unit-noise map.
+    let (bg, z) = unit_noise_map(pixels, width, height, &p);
+    let mut found = detect_on(
+        pixels,
+        width,
+        height,
+        &p,
+        bg.clone(),
+        z.clone(),
+        Some(trail),
+        None,
+    )
+    .0;
+    // The second pass keeps only candidates along the trails, so it searches only there.
+    let along = Sanitized {
+        along: Some(trail),
+        ..p.clone()
+    };
+    let second = detect_on(
+        pixels,
+        width,
+        height,
+        &along,
+        bg,
+        z,
+        Some(trail),
+        Some(stars),
+    )
+    .0;
     let near_trail = |c: &Candidate| {
         let slack = (4.0 * p.psf_sigma / c.length_px.max(1.0))
             .atan()
             .to_degrees();
         angle_diff_deg(c.orientation_deg, trail) <= p.trail_tol + slack
     };
-    let first: Vec<(Point, Point)> = found
-        .iter()
-        .map(|c| ((c.ends[0][0], c.ends[0][1]), (c.ends[1][0], c.ends[1][1])))
-        .collect();
-    let new_one = |c: &Candidate| {
-        let mid = (
-            0.5 * (c.ends[0][0] + c.ends[1][0]),
-            0.5 * (c.ends[0][1] + c.ends[1][1]),
-        );
-        first
-            .iter()
-            .all(|&(a, b)| refine::point_segment_distance(mid, a, b) > p.dup_dist)
-    };
-    found.extend(
-        detect(pixels, width, height, params, Some(trail), Some(stars))
-            .0
-            .into_iter()
-            .filter(|c| near_trail(c) && new_one(c)),
-    );
+    found.extend(second.into_iter().filter(near_trail));
+    // One streak, one box: a candidate lying mostly along a longer one (the same streak from
+    // both passes, or a piece of it) is dropped, whatever its score.
+    found.sort_by(|a, b| b.length_px.total_cmp(&a.length_px));
+    let mut kept: Vec<Candidate> = Vec::new();
+    for c in found {
+        if !kept.iter().any(|k| lies_along(&c, k, p.dup_dist)) {
+            kept.push(c);
+        }
+    }
+    found = kept;
     found.sort_by(|a, b| b.detection.score.total_cmp(&a.detection.score));
     found.truncate(p.max_candidates);
     found
 }
 
-/// The detector's pipeline; with `stars`, the star-aware variant of its second pass. Returns
-/// the candidates and the segments dropped on the way, with why.
+/// Whether half of `c`'s axis lies within `dist` of `other`'s segment.
+fn lies_along(c: &Candidate, other: &Candidate, dist: f64) -> bool {
+    let [a, b] = c.ends;
+    let (o0, o1) = (
+        (other.ends[0][0], other.ends[0][1]),
+        (other.ends[1][0], other.ends[1][1]),
+    );
+    let n = c.length_px.ceil().max(1.0) as usize;
+    let near = (0..=n)
+        .filter(|&k| {
+            let f = k as f64 / n as f64;
+            let q = (a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]));
+            refine::point_segment_distance(q, o0, o1) <= dist
+        })
+        .count();
+    2 * near > n
+}
+
+/// The detector's pipeline, angle-only: the candidates and the segments dropped on the way,
+/// with why.
 fn detect(
     pixels: &[u8],
     width: usize,
     height: usize,
     params: &StreakParams,
     star_trail_angle_deg: Option<f64>,
-    stars: Option<&[StarTrail]>,
 ) -> (Vec<Candidate>, Vec<Dropped>) {
     assert_eq!(
         pixels.len(),
@@ -512,10 +557,14 @@ fn detect(
         return (Vec::new(), Vec::new());
     }
     let p = Sanitized::new(params);
-    let (w, h) = (width, height);
+    let (bg, z) = unit_noise_map(pixels, width, height, &p);
+    detect_on(pixels, width, height, &p, bg, z, star_trail_angle_deg, None)
+}
 
+/// Steps 1-2 up to the trails: the background and the smoothed map in unit noise.
+fn unit_noise_map(pixels: &[u8], w: usize, h: usize, p: &Sanitized) -> (Vec<f32>, Vec<f32>) {
     // 1. Background and noise.
-    let (bg, sigma) = background(pixels, w, h, &p);
+    let (bg, sigma) = background(pixels, w, h, p);
     let q: Vec<f32> = pixels
         .iter()
         .zip(bg.iter().zip(sigma.iter()))
@@ -540,14 +589,30 @@ fn detect(
     // raised their false boxes at confidence 0.5 from 63 to 100 in 100 fixed-pointing images).
     let centre = z_med.max(0.0) as f32;
     z.iter_mut().for_each(|v| *v = (*v - centre) * inv_kappa);
+    (bg, z)
+}
+
+/// The pipeline from the unit-noise map `z` (and the background `bg`) of [`unit_noise_map`] on;
+/// with `stars`, the star-aware variant of [`detect_streaks_among_stars`]' second pass.
+#[allow(clippy::too_many_arguments)]
+fn detect_on(
+    pixels: &[u8],
+    w: usize,
+    h: usize,
+    p: &Sanitized,
+    bg: Vec<f32>,
+    mut z: Vec<f32>,
+    star_trail_angle_deg: Option<f64>,
+    stars: Option<&[StarTrail]>,
+) -> (Vec<Candidate>, Vec<Dropped>) {
     // The map before any trail is subtracted: what the star-aware test compares levels on.
-    let sky = stars.map(|t| (sky::Sky::new(t, &z, w, h, &p), z.clone()));
+    let sky = stars.map(|t| (sky::Sky::new(t, &z, w, h, p), z.clone()));
     if let Some((sky, _)) = &sky {
         sky.subtract(&mut z, w, h);
     } else if let Some(a) = star_trail_angle_deg.filter(|a| a.is_finite()) {
-        remove_trails(&mut z, w, h, a.to_radians(), &p);
+        remove_trails(&mut z, w, h, a.to_radians(), p);
     }
-    mask_stars(&mut z, w, h, &p);
+    mask_stars(&mut z, w, h, p);
     let clip = p.clip as f32;
     let mut zc: Vec<f32> = z.iter().map(|&v| v.clamp(-clip, clip)).collect();
     // The line filter sums zc, so zc must have zero mean, not only zero median: a real
@@ -561,19 +626,19 @@ fn detect(
 
     // 3. Oriented line filter, in units of its measured noise.
     let noise = if p.calibrate_noise {
-        LineNoise::measure(&zc, w, h, &p)
+        LineNoise::measure(&zc, w, h, p)
     } else {
-        LineNoise::white(&p)
+        LineNoise::white(p)
     };
-    let (best, arg) = line_filter(&zc, w, h, &p, &noise);
+    let (best, arg) = line_filter(&zc, w, h, p, &noise);
 
     // 4. Components, of the local filters and of the long-line stage (3b).
     let kmax = p.half_lengths.iter().copied().max().unwrap_or(10) as f64 * 2.0 + 1.0;
-    let local: Vec<(components::Component, f64)> = components(&best, &arg, w, h, &p)
+    let local: Vec<(components::Component, f64)> = components(&best, &arg, w, h, p)
         .into_iter()
         .map(|c| (c, kmax))
         .collect();
-    let long = long_line_components(&zc, w, h, &p);
+    let long = long_line_components(&zc, w, h, p);
 
     // 5-6. Refinement, rejection, merging.
     let ctx = Ctx {
@@ -582,7 +647,7 @@ fn detect(
         pixels,
         bg: &bg,
         z: &z,
-        p: &p,
+        p,
         noise: &noise,
     };
     let trail = star_trail_angle_deg.filter(|a| a.is_finite());
@@ -680,7 +745,7 @@ fn detect(
         match failed {
             Some(r) => dropped.push(Dropped::of_seg(&s, seeds, r)),
             None => {
-                let score = confidence(s.snr, s.elongation, (w * h) as f64, &p);
+                let score = confidence(s.snr, s.elongation, (w * h) as f64, p);
                 cands.push((s, seeds, score));
             }
         }
@@ -750,6 +815,9 @@ struct Sanitized {
     class: u32,
     max_candidates: usize,
     calibrate_noise: bool,
+    /// The star-aware pass: the trails' direction (degrees), whose neighbourhood alone the
+    /// line filters search (see [`Sanitized::uses`]); `None`: every orientation.
+    along: Option<f64>,
 }
 
 impl Sanitized {
@@ -800,6 +868,16 @@ impl Sanitized {
             class: p.class,
             max_candidates: p.max_candidates,
             calibrate_noise: p.calibrate_noise,
+            along: None,
         }
+    }
+
+    /// Whether the line filters use orientation `j` of `n_angles`: every one, or in the
+    /// star-aware pass (`along`) those within `star_trail_tolerance_deg` and one filter step
+    /// of the trails, the only candidates that pass keeps.
+    fn uses(&self, j: usize) -> bool {
+        let step = 180.0 / self.n_angles as f64;
+        self.along
+            .is_none_or(|a| angle_diff_deg(j as f64 * step, a) <= self.trail_tol + step)
     }
 }

@@ -69,6 +69,11 @@ impl LineNoise {
         let mut ratio = Vec::with_capacity(p.n_angles * lengths.len());
         let mut sums = vec![0f64; centres.len()];
         for j in 0..p.n_angles {
+            if !p.uses(j) {
+                // A filter the pass does not run.
+                ratio.extend(p.half_lengths.iter().map(|_| 1.0));
+                continue;
+            }
             let (x_major, t) = slope(j, p.n_angles);
             // The same digital line as `lines`: one step along the major axis, the minor
             // offset rounded.

@@ -117,7 +117,12 @@ fn fitted_boxes_match_the_rendered_labels() {
         eprintln!("length {length} angle {angle} mag {mag} (SNR {snr:.0}): IoU {iou:.3}");
         // A short streak's box is small (30 x 20 px), so one pixel on each side costs more
         // than 0.1 of IoU: there each side within one pixel of the label's is the claim.
-        let sides = [d.x1 - label[0], d.y1 - label[1], d.x2 - label[2], d.y2 - label[3]];
+        let sides = [
+            d.x1 - label[0],
+            d.y1 - label[1],
+            d.x2 - label[2],
+            d.y2 - label[3],
+        ];
         assert!(
             iou >= 0.9 || sides.iter().all(|s| s.abs() <= 1.0),
             "length {length} angle {angle} mag {mag} (SNR {snr:.0}): IoU {iou:.3}, label \

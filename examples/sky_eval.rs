@@ -1,0 +1,168 @@
+//! Re-run the streak detector of `soig run`'s detect stage on a finished survey run's test
+//! images, one thread, without rendering again: the star-trail prediction and
+//! `detect_streaks_among_stars`, timed per image. Writes YOLO-format predictions (for
+//! `soig eval`) and prints recall at confidence 0.5 and IoU 0.5 by angle to the star trails
+//! (0-2, 2-7, 7-90 degrees), the false positives at that confidence, and the median time.
+//!
+//! ```sh
+//! cargo run --release --example sky_eval -- CAMPAIGN RUN_DIR PRED_DIR [--set k=v]...
+//! soig eval --labels RUN_DIR/labels/test --predictions PRED_DIR --images RUN_DIR/images/test
+//! ```
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use soig::campaign::Campaign;
+use soig::detect::streak::detect_streaks_among_stars;
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut sets = Vec::new();
+    let mut pos = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        if a == "--set" {
+            sets.push(it.next().expect("--set k=v").clone());
+        } else {
+            pos.push(a.clone());
+        }
+    }
+    let [campaign, run, out] = &pos[..] else {
+        anyhow::bail!("usage: sky_eval CAMPAIGN RUN_DIR PRED_DIR [--set k=v]...");
+    };
+    let campaign = Campaign::load_with_overrides(Path::new(campaign), &sets)?;
+    let x = soig::Experiment::new(&campaign);
+    let inputs = soig::experiment::inputs(&campaign)?;
+    let params = campaign.resolved.detect.streak.clone();
+    let run = PathBuf::from(run);
+    let out = PathBuf::from(out);
+    std::fs::create_dir_all(&out)?;
+    let mut pngs: Vec<PathBuf> = std::fs::read_dir(run.join("images/test"))?
+        .map(|e| e.map(|e| e.path()))
+        .collect::<Result<_, _>>()?;
+    pngs.sort();
+    let (mut found, mut total) = ([0usize; 3], [0usize; 3]);
+    let (mut fp, mut tp) = (0usize, 0usize);
+    let mut ms = Vec::new();
+    for png in &pngs {
+        let stem = png.file_stem().unwrap().to_string_lossy().into_owned();
+        let index: u64 = stem.trim_start_matches("img_").parse()?;
+        let truth_path = run.join("truth").join(format!("{stem}.json"));
+        let truth: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&truth_path)?)?;
+        eprintln!("IMG {stem}");
+        let img = image::open(png)?.to_luma8();
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let pixels = img.into_raw();
+        let frame_kind = truth["frame"]["kind"]
+            .as_str()
+            .unwrap_or("original")
+            .to_string();
+        let trail = truth["pointing"]["trail_angle_deg"].as_f64();
+        // As the run's detect stage: a rotated frame has its trails along x.
+        let trail_png = trail.map(|t| if frame_kind == "rotated" { 0.0 } else { t });
+        let t = Instant::now();
+        let stars = soig::star_trails::of_image(&x, &inputs, index, &truth_path)?;
+        if let Some(dir) = std::env::var_os("SKY_EVAL_DUMP") {
+            let t: Vec<(Vec<(f64, f64)>, f64)> = stars
+                .iter()
+                .map(|s| (s.nodes.clone(), s.electrons))
+                .collect();
+            std::fs::write(
+                Path::new(&dir).join(format!("{stem}.json")),
+                serde_json::to_string(&t)?,
+            )?;
+        }
+        // SKY_EVAL_PLAIN=1: the angle-only detector, for comparison.
+        let cands = if std::env::var_os("SKY_EVAL_PLAIN").is_some() {
+            soig::detect::streak::detect_streaks(&pixels, w, h, &params, trail_png)
+        } else {
+            detect_streaks_among_stars(&pixels, w, h, &params, trail_png, Some(&stars))
+        };
+        ms.push(t.elapsed().as_secs_f64() * 1e3);
+        eprintln!("TIME {stem} {:.0}", ms[ms.len() - 1]);
+        let mut text = String::new();
+        for c in &cands {
+            let d = &c.detection;
+            text += &format!(
+                "0 {:.6} {:.6} {:.6} {:.6} {:.6}\n",
+                0.5 * (d.x1 + d.x2) / w as f64,
+                0.5 * (d.y1 + d.y2) / h as f64,
+                (d.x2 - d.x1) / w as f64,
+                (d.y2 - d.y1) / h as f64,
+                d.score
+            );
+        }
+        std::fs::write(out.join(format!("{stem}.txt")), text)?;
+        // The label box and the streak's angle to the trails (as the report bins it).
+        let b = &truth["label_box_final_px"];
+        let label = [
+            b["x_min"].as_f64().unwrap(),
+            b["y_min"].as_f64().unwrap(),
+            b["x_max"].as_f64().unwrap(),
+            b["y_max"].as_f64().unwrap(),
+        ];
+        let s0 = &truth["streak_start_px"];
+        let s1 = &truth["streak_end_px"];
+        let (dx, dy) = (
+            s1[0].as_f64().unwrap() - s0[0].as_f64().unwrap(),
+            s1[1].as_f64().unwrap() - s0[1].as_f64().unwrap(),
+        );
+        let d = (dy.atan2(dx).to_degrees() - trail.unwrap_or(0.0)).rem_euclid(180.0);
+        let angle = d.min(180.0 - d);
+        let band = if angle < 2.0 {
+            0
+        } else if angle < 7.0 {
+            1
+        } else {
+            2
+        };
+        total[band] += 1;
+        let mut matched = false;
+        for c in cands.iter().filter(|c| c.detection.score >= 0.5) {
+            let d = &c.detection;
+            let iou = iou(&label, &[d.x1, d.y1, d.x2, d.y2]);
+            if iou >= 0.5 && !matched {
+                matched = true;
+                tp += 1;
+            } else {
+                fp += 1;
+                eprintln!(
+                    "FP {stem} band {band} score {:.3} iou {iou:.2} len {:.0} orient {:.1} ends {:?}",
+                    d.score, c.length_px, c.orientation_deg, c.ends
+                );
+            }
+        }
+        if matched {
+            found[band] += 1;
+        } else {
+            eprintln!(
+                "MISS {stem} band {band} angle {angle:.2} snr {:.1}",
+                truth["snr_matched_filter"]
+            );
+        }
+    }
+    ms.sort_by(f64::total_cmp);
+    println!(
+        "images {}  recall 0-2: {}/{}  2-7: {}/{}  7-90: {}/{}  TP {tp} FP {fp}  P@0.5 {:.3}  median {:.1} ms  mean {:.1} ms  max {:.1} ms",
+        pngs.len(),
+        found[0],
+        total[0],
+        found[1],
+        total[1],
+        found[2],
+        total[2],
+        tp as f64 / (tp + fp).max(1) as f64,
+        ms[ms.len() / 2],
+        ms.iter().sum::<f64>() / ms.len() as f64,
+        ms[ms.len() - 1]
+    );
+    Ok(())
+}
+
+fn iou(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+    let ix = (a[2].min(b[2]) - a[0].max(b[0])).max(0.0);
+    let iy = (a[3].min(b[3]) - a[1].max(b[1])).max(0.0);
+    let i = ix * iy;
+    i / ((a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - i)
+}
