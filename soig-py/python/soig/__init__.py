@@ -16,7 +16,7 @@ import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Optional, Sequence, Tuple, Union
+from typing import Any, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -46,9 +46,12 @@ class Image:
     clean: int32 (height, width), noise-free photo-electrons: `fits/img_NNNNNN_clean.fits`.
     png: uint8 (rows, cols), the enhanced image in its final frame (None without an
         `enhance` stage): the pixels of `images/.../img_NNNNNN.png`.
-    label: the YOLO label line of the PNG ("" when no debris photon landed; None without
-        an `enhance` stage), as in `labels/.../img_NNNNNN.txt`.
-    label_box: the label box (x1, y1, x2, y2) in the PNG's pixel-edge coordinates, or None.
+    label: the YOLO label file's text of the PNG, one line per labelled object ("" for an
+        empty frame or when no debris photon landed; None without an `enhance` stage), as in
+        `labels/.../img_NNNNNN.txt`.
+    label_box: the first label box (x1, y1, x2, y2) in the PNG's pixel-edge coordinates (the
+        one object of a campaign without `[objects]`), or None.
+    label_boxes: every label box, in the label file's order (None without an `enhance` stage).
     truth: the truth record, as in `truth/img_NNNNNN.json`.
     header: the FITS header keywords (WCS and provenance) of both FITS, but BUNIT.
     """
@@ -59,6 +62,7 @@ class Image:
     png: Optional[np.ndarray]
     label: Optional[str]
     label_box: Optional[Tuple[float, float, float, float]]
+    label_boxes: Optional[List[Tuple[float, float, float, float]]]
     truth: dict
     header: dict
 
