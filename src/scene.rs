@@ -921,6 +921,7 @@ fn try_place(
             tumble,
             pointing: &frame.pointing,
             mid_tan: &mid_tan,
+            shadowed: false,
         },
     )?;
     let (snr, snr_noise_level, snr_noise_sigma) = gate_snr(
@@ -1025,6 +1026,8 @@ struct Shot<'a> {
     tumble: Option<Tumble>,
     pointing: &'a Pointing,
     mid_tan: &'a Tan,
+    /// In the Earth's shadow (a later frame of a collect): the object sends no light.
+    shadowed: bool,
 }
 
 /// The trajectory of one object, cut in samples at the centres of equal time slices, sampled
@@ -1042,6 +1045,7 @@ fn trajectory(
         tumble,
         pointing,
         mid_tan,
+        shadowed,
     } = *shot;
     let sample = |n: usize| -> Result<Vec<TrajectorySample>, Rejection> {
         let dt = exposure_s / n as f64;
@@ -1060,7 +1064,7 @@ fn trajectory(
                         * (std::f64::consts::TAU * t_s / tb.period_s + tb.phase_rad).sin();
                 mag -= 2.5 * factor.log10();
             }
-            let expected_electrons = if mag.is_finite() {
+            let expected_electrons = if mag.is_finite() && !shadowed {
                 photon_rate(mag, sensor.zero_point_mag) * dt
             } else {
                 0.0
@@ -1330,69 +1334,24 @@ fn try_draw(
         return Err(Rejection::BrightStar);
     }
 
-    // The trajectory, cut in samples at the centres of equal time slices.
     let mid_tan = sensor.projection(ra_p, dec_p);
     let track = sighting
         .track(start, exposure_s)
         .ok_or(Rejection::PropagationFailed)?;
-    let sample = |n: usize| -> Result<Vec<TrajectorySample>, Rejection> {
-        let dt = exposure_s / n as f64;
-        let mut trajectory = Vec::with_capacity(n);
-        for k in 0..n {
-            let t_s = (k as f64 + 0.5) * dt;
-            let sight = track.at(t_s);
-            let (o, d) = (sight.observer_km, sight.debris_km);
-            let los = sub(d, o);
-            let (ra_deg, dec_deg) = radec_deg(sight.direction);
-            let phase = angle_deg(sub(sun, d), sub(o, d)).to_radians();
-            let mut mag = debris_magnitude(area_m2, spec.albedo, phase, norm(los));
-            if let Some(tb) = tumble {
-                let factor = 1.0
-                    + tb.amplitude
-                        * (std::f64::consts::TAU * t_s / tb.period_s + tb.phase_rad).sin();
-                mag -= 2.5 * factor.log10();
-            }
-            let expected_electrons = if mag.is_finite() && !shadowed {
-                photon_rate(mag, sensor.zero_point_mag) * dt
-            } else {
-                0.0
-            };
-            let (ra_cam, dec_cam) = match &pointing {
-                Pointing::Fixed { .. } => (ra_deg, dec_deg),
-                Pointing::Survey(track) => track.to_mid_frame(t_s, ra_deg, dec_deg),
-                Pointing::Track(track) => track.to_mid_frame(t_s, ra_deg, dec_deg),
-            };
-            let (x_px, y_px) = mid_tan
-                .pixel(ra_cam, dec_cam)
-                .unwrap_or((f64::NAN, f64::NAN));
-            trajectory.push(TrajectorySample {
-                t_s,
-                ra_deg,
-                dec_deg,
-                mag,
-                expected_electrons,
-                x_px,
-                y_px,
-            });
-        }
-        Ok(trajectory)
-    };
-    let n = spec.trajectory_samples;
-    let mut trajectory = sample(n)?;
-    // Samples farther apart in the image than two PSF sigmas render a row of dots, not a
-    // streak (a 600 s exposure of LEO debris with 2000 samples: one dot per 128 px; 0.7% of the
-    // quickstart draws: 4-8 px). Such a trajectory is sampled again, finer by the factor that
-    // brings the spacing to two sigmas; beyond MAX_TRAJECTORY_SAMPLES the draw is rejected.
-    let psf_px = sensor.psf_sigma_px();
-    let spacing = max_sample_spacing_px(sensor, &trajectory);
-    if spacing > MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px {
-        let factor = (spacing / (MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px)).ceil() as usize;
-        let finer = n.saturating_mul(factor);
-        if finer > MAX_TRAJECTORY_SAMPLES {
-            return Err(Rejection::TooFast);
-        }
-        trajectory = sample(finer)?;
-    }
+    let trajectory = trajectory(
+        spec,
+        sensor,
+        &|t_s| track.at(t_s),
+        &Shot {
+            exposure_s,
+            sun,
+            area_m2,
+            tumble,
+            pointing: &pointing,
+            mid_tan: &mid_tan,
+            shadowed,
+        },
+    )?;
 
     let frame = inputs.frame(background);
     let snr_noise_level = expected_snr(
