@@ -22,8 +22,25 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 
+# About 6 GB of disk at the peak (the two base images, the build stage's target/, the image);
+# say so up front rather than fail half-way with ENOSPC.
+free_kb=$(df -Pk /tmp /var/lib 2>/dev/null | awk 'NR>1 {print $4}' | sort -n | head -1)
+if [ "${free_kb:-0}" -lt $((6 * 1024 * 1024)) ]; then
+  echo "container-test: needs about 6 GB free in /tmp and /var/lib/containers; has $((free_kb / 1024)) MB" >&2
+  exit 1
+fi
+
 work=$(mktemp -d /tmp/soig-container.XXXXXX)
-trap 'rm -rf "$work"' EXIT
+images="localhost/soig:ci localhost/soig-ci/rust:1.95-bookworm localhost/soig-ci/debian:bookworm-slim"
+# Whatever happens, leave no tree, image or build layer behind (a failed build's layers are
+# gigabytes that the next run would not reuse).
+cleanup() {
+  rm -rf "$work"
+  # shellcheck disable=SC2086
+  podman rmi -f $images >/dev/null 2>&1 || true
+  podman image prune -f >/dev/null 2>&1 || true
+}
+trap cleanup EXIT
 # podman's defaults ask for more open files and processes than this machine lets root raise
 # (no CAP_SYS_RESOURCE), and crun refuses its hybrid cgroups; runc with limits below the hard
 # ones runs.
@@ -60,7 +77,8 @@ case "$(rustc --version)" in
   *) echo "container-test: the Containerfile builds with Rust 1.95; this machine has $(rustc --version)" >&2; exit 1 ;;
 esac
 mkdir -p "$work/rust/usr/local/rust"
-cp -a "$sysroot"/. "$work/rust/usr/local/rust/"
+# The toolchain without its HTML docs (800 MB that a build never reads).
+tar -C "$sysroot" --exclude=./share/doc -c . | tar -C "$work/rust/usr/local/rust" -x
 tar -C "$work/rust" -c . | podman import -q \
   --change "ENV PATH=/usr/local/rust/bin:/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin" \
   --change "ENV CARGO_HTTP_CAINFO=$bundle" \
@@ -68,7 +86,7 @@ tar -C "$work/rust" -c . | podman import -q \
 rm -rf "$work/slim" "$work/rust"
 
 echo "container-test: podman build (cargo build --release inside; several minutes)"
-podman build -q -t localhost/soig:ci -f Containerfile \
+podman build -q --force-rm -t localhost/soig:ci -f Containerfile \
   --build-arg RUST_IMAGE=localhost/soig-ci/rust:1.95-bookworm \
   --build-arg BASE_IMAGE=localhost/soig-ci/debian:bookworm-slim . >"$work/build.log" 2>&1 \
   || { tail -40 "$work/build.log"; exit 1; }
@@ -79,7 +97,6 @@ podman run --rm localhost/soig:ci | grep -q "Usage: soig" \
 digest=$(podman run --rm -v "$root":/data:ro localhost/soig:ci sh -c \
   'soig run campaigns/quickstart.toml --out /tmp/q --quiet >/dev/null && soig verify /tmp/q' \
   | sed -n 's/.*digest //p')
-podman rmi -f localhost/soig:ci localhost/soig-ci/rust:1.95-bookworm localhost/soig-ci/debian:bookworm-slim >/dev/null
 if [ "$digest" != "$pinned" ]; then
   echo "container-test: the image's quickstart digest is '$digest', pinned $pinned" >&2
   exit 1
