@@ -80,7 +80,7 @@ const WCS_KEYS: [&str; 20] = [
 ];
 
 /// The keywords of an exposure's timing and photometry (`soig detect --catalog`).
-const EXPOSURE_KEYS: [&str; 4] = ["DATE-OBS", "MJD-OBS", "EXPTIME", "MAGZERO"];
+const EXPOSURE_KEYS: [&str; 5] = ["DATE-OBS", "MJD-OBS", "EXPTIME", "EXPOSURE", "MAGZERO"];
 
 /// Every keyword read from a FITS header: sections, WCS, the alternate WCS of the exposure's
 /// start and end (`sky::motion`), timing and zero point.

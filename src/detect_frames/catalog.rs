@@ -4,7 +4,7 @@
 //!
 //! - Where the sky lies: the primary TAN WCS (at mid-exposure in soig's FITS).
 //! - When: `DATE-OBS` (else `MJD-OBS`), the start of the exposure, moves the catalogue's stars
-//!   to the frame's epoch by their proper motions; `EXPTIME`, its length.
+//!   to the frame's epoch by their proper motions; `EXPTIME` (else `EXPOSURE`), its length.
 //! - How the camera moved over the exposure: the WCS at its start and end (alternate WCS `S`
 //!   and `E`, `sky::motion`), which soig writes for survey and track images. A header without
 //!   them is taken as fixed on the sky (sidereal tracking): every star is a point at its WCS
@@ -95,13 +95,16 @@ impl FrameSky {
                 "{file}: --catalog needs the exposure's start (header keyword DATE-OBS or MJD-OBS) to move the catalogue's stars to it"
             ),
         };
-        let exposure_s = number("EXPTIME")?.ok_or_else(|| {
-            anyhow::anyhow!(
-                "{file}: --catalog needs the exposure time: header keyword EXPTIME is missing"
-            )
-        })?;
+        // EXPTIME, else EXPOSURE (NEOSSat's, and older FITS writers').
+        let (key, exposure_s) = match (number("EXPTIME")?, number("EXPOSURE")?) {
+            (Some(t), _) => ("EXPTIME", t),
+            (None, Some(t)) => ("EXPOSURE", t),
+            (None, None) => bail!(
+                "{file}: --catalog needs the exposure time: header keywords EXPTIME and EXPOSURE are missing"
+            ),
+        };
         if exposure_s < 0.0 {
-            bail!("{file}: header keyword EXPTIME = {exposure_s} is negative");
+            bail!("{file}: header keyword {key} = {exposure_s} is negative");
         }
         let motion = ExposureMotion::from_header(|k| card(k), &wcs)
             .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
