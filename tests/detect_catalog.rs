@@ -276,6 +276,9 @@ fn star_aware_detection_on_soig_fits_keeps_the_debris_and_drops_the_trails() {
                 continue;
             }
             assert_eq!((debris, other), (1, 0), "image {index}: {frame}");
+            let recorded = &found["settings"]["catalog"];
+            assert_eq!(recorded["file"], cat.display().to_string());
+            assert_eq!(recorded["sha256"].as_str().unwrap().len(), 64);
             let used = &frame["catalog"];
             assert!(used["trails_on_frame"].as_u64().unwrap() > 10, "{used}");
             let want = truth["pointing"]["trail_angle_deg"].as_f64().unwrap();

@@ -60,7 +60,7 @@ impl FrameSky {
     /// used on it.
     pub fn of(frame: &Frame) -> anyhow::Result<FrameSky> {
         let file = frame.path.display();
-        if frame.header.is_empty() {
+        if matches!(frame.pixels, crate::frames::RegionPixels::Gray(_)) {
             bail!(
                 "{file}: --catalog needs the frame's WCS and exposure time, and a PNG has none: \
                  give the FITS frame instead"

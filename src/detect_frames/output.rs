@@ -68,7 +68,7 @@ pub(super) fn write_frame(
 pub(super) fn finish(dir: &Path, frames: &[FrameResult], opts: &Options) -> anyhow::Result<String> {
     let ran = detectors(opts);
     std::fs::write(dir.join("detections.csv"), csv(frames))?;
-    let settings = serde_json::json!({
+    let mut settings = serde_json::json!({
         "command": "detect",
         "detectors": ran,
         "model": opts.model.as_ref().map(|m| m.display().to_string()),
@@ -89,6 +89,14 @@ pub(super) fn finish(dir: &Path, frames: &[FrameResult], opts: &Options) -> anyh
         "star_trail_angle_deg": opts.star_trail_angle_deg,
         "inputs": frames.iter().map(|f| serde_json::json!({"file": f.file, "sha256": f.sha256})).collect::<Vec<_>>(),
     });
+    // Only with --catalog, so that the settings (and digest) of every other run stay as they were.
+    if let Some(c) = &opts.catalog {
+        settings["catalog"] = serde_json::json!({
+            "file": c.display().to_string(),
+            "sha256": crate::hash::sha256_file(c)?.0,
+            "epoch_jyear": opts.catalog_epoch_jyear,
+        });
+    }
     let json = serde_json::json!({
         "tool": "soig",
         "version": env!("CARGO_PKG_VERSION"),
