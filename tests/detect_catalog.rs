@@ -24,20 +24,20 @@ fn ok(o: Output) -> Output {
     o
 }
 
-/// Survey images of 512 px (0.7 arcsec/px), rendered only (FITS and truth).
-fn campaign() -> CampaignToml {
+/// Images of 512 px (0.7 arcsec/px) in pointing `mode`, rendered only (FITS and truth).
+fn campaign(mode: &str) -> CampaignToml {
     CampaignToml::new("catalog", 11, 4)
         .top("stages = [\"render\"]\n")
         .debris(&tle_object(37476))
         .debris(&tle_object(40989))
         .tables(
-            "[pointing]\nmode = \"survey\"\n[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n",
+            &format!("[pointing]\nmode = \"{mode}\"\n[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n"),
         )
 }
 
 /// Render the campaign into `dir`/run; returns the campaign file and the loaded campaign.
-fn render(dir: &Path) -> (PathBuf, Campaign) {
-    let toml = campaign().write(&dir.join("catalog.toml"));
+fn render(dir: &Path, mode: &str) -> (PathBuf, Campaign) {
+    let toml = campaign(mode).write(&dir.join("catalog.toml"));
     ok(soig(&[
         "run",
         toml.to_str().unwrap(),
@@ -65,28 +65,31 @@ fn write_catalog(c: &Campaign, index: u64, path: &Path) {
     std::fs::write(path, csv).unwrap();
 }
 
-/// The trails predicted from the FITS header and the catalogue are those `soig run` predicts
-/// from the campaign (`render::trails`), star by star: the same stars, the same time nodes,
-/// each node within 1e-3 px (the header's 15 significant digits and the CSV's 10 decimals
-/// leave under 1e-5 px; a wrong turn direction or time would move the ends by tens of
-/// pixels), and the same expected electrons to 1e-9 (MAGZERO and the same exposure share).
-#[test]
-fn predicts_the_trails_soig_run_predicts_from_the_header_alone() {
+/// The largest distance, in pixels, between the on-frame trail nodes predicted from the FITS
+/// header and a catalogue of the campaign's stars, and those `soig run` predicts from the
+/// campaign (`render::trails`), over the four images of pointing `mode` (track: each node's
+/// distance from the other's path, as their time grids differ). Checks on the way that both
+/// have the same stars on the frame with the same number of nodes there (but track), the same
+/// expected electrons to 1e-9 where both expose a star alike (MAGZERO and the same exposure
+/// share; the CSV's 10 decimals of a magnitude leave 1e-10), and whether the header says the
+/// camera moved.
+fn prediction_gap_px(mode: &str) -> f64 {
     let tmp = tempfile::tempdir().unwrap();
-    let (_, c) = render(tmp.path());
+    let (_, c) = render(tmp.path(), mode);
     let x = Experiment::new(&c);
     let inputs = experiment::inputs(&c).unwrap();
     let psf = x.sensor.psf_sigma_px();
-    let mut compared = 0;
+    let (mut compared, mut gap) = (0, 0.0f64);
     for index in 0..4u64 {
         let cat = tmp.path().join(format!("stars{index}.csv"));
         write_catalog(&c, index, &cat);
         let fits = tmp.path().join(format!("run/fits/img_{index:06}.fits"));
         let frame = Frame::read(&fits).unwrap();
         let sky = FrameSky::of(&frame).unwrap();
-        assert!(
+        assert_eq!(
             sky.motion.is_some(),
-            "a survey FITS says how the camera moved"
+            mode != "fixed",
+            "{mode}: the camera's motion"
         );
         let catalog = soig::sky::stars::StarCatalog::from_csv_path(&cat, 2016.0).unwrap();
         let mine = sky.predict(&catalog, frame.region, psf);
@@ -107,22 +110,48 @@ fn predicts_the_trails_soig_run_predicts_from_the_header_alone() {
         let same_star =
             |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).abs() < 1e-9 && (a.1 - b.1).abs() < 1e-9;
         let visible = |nodes: &[[f64; 2]]| !on_frame(nodes).is_empty();
-        assert_eq!(
+        let (ours, run) = (
             mine.iter().filter(|m| visible(&m.nodes)).count(),
             theirs.iter().filter(|t| visible(&t.nodes)).count(),
-            "image {index}: stars on the frame"
         );
-        assert!(theirs.len() > 10, "image {index}: {} stars", theirs.len());
+        if mode == "track" {
+            // A star passing just outside the margin may be traced by one and not the other.
+            assert!(
+                ours.abs_diff(run) <= 2,
+                "image {index}: stars {ours} against {run}"
+            );
+        } else {
+            assert_eq!(ours, run, "image {index}: stars on the frame");
+        }
+        assert!(theirs.len() >= 3, "image {index}: {} stars", theirs.len());
         for t in theirs.iter().filter(|t| visible(&t.nodes)) {
-            let m = mine
+            let Some(m) = mine
                 .iter()
                 .find(|m| same_star((m.ra_deg, m.dec_deg), (t.ra_deg, t.dec_deg)))
-                .unwrap_or_else(|| panic!("image {index}: no prediction for {t:?}"));
+            else {
+                assert_eq!(mode, "track", "image {index}: no prediction for {t:?}");
+                continue;
+            };
             let (a, b) = (on_frame(&m.nodes), on_frame(&t.nodes));
+            if mode == "track" {
+                // Its time grid follows the debris' path, the header's the boresight's: the
+                // nodes differ, the paths must not. Each node's distance from the other path.
+                let to_path = |q: [f64; 2], path: &[[f64; 2]]| {
+                    path.windows(2)
+                        .map(|w| to_segment(q, w[0], w[1]))
+                        .fold(f64::INFINITY, f64::min)
+                };
+                for q in &a {
+                    gap = gap.max(to_path(*q, &t.nodes));
+                }
+                for q in &b {
+                    gap = gap.max(to_path(*q, &m.nodes));
+                }
+                continue;
+            }
             assert_eq!(a.len(), b.len(), "image {index}: nodes of {m:?}");
             for (a, b) in a.iter().zip(&b) {
-                let d = (a[0] - b[0]).hypot(a[1] - b[1]);
-                assert!(d < 1e-3, "image {index}: node {a:?} against {b:?}");
+                gap = gap.max((a[0] - b[0]).hypot(a[1] - b[1]));
             }
             if m.nodes.len() == t.nodes.len() {
                 let e = m.electrons.expect("soig's FITS has MAGZERO");
@@ -135,7 +164,33 @@ fn predicts_the_trails_soig_run_predicts_from_the_header_alone() {
             }
         }
     }
-    assert!(compared > 40, "{compared} trails compared");
+    assert!(
+        mode == "track" || compared > 20,
+        "{mode}: {compared} trails compared"
+    );
+    gap
+}
+
+/// Survey and fixed pointing: the header gives `soig run`'s prediction node for node, to
+/// 1e-3 px (the header's 15 significant digits and the CSV's 10 decimals of a degree leave
+/// under 1e-5 px; a wrong turn direction or time moves a trail's ends by tens of pixels).
+#[test]
+fn predicts_the_trails_soig_run_predicts_from_the_header_alone() {
+    for mode in ["survey", "fixed"] {
+        let gap = prediction_gap_px(mode);
+        assert!(gap < 1e-3, "{mode}: nodes {gap} px apart");
+    }
+}
+
+/// Track pointing: between the start, mid-exposure and end WCS the header's constant-rate turn
+/// only approximates the camera following the debris; measured: 0.28 px at most from the
+/// renderer's paths (and one star of 449 at an image's edge that only the run predicts). 0.5 px
+/// bounds it, a third of a PSF sigma (1.4 px here), well inside the reach within which the
+/// star-aware pass takes a line for a star's.
+#[test]
+fn track_pointing_is_approximated_between_its_three_wcs() {
+    let gap = prediction_gap_px("track");
+    assert!(gap < 0.5, "track: paths {gap} px apart");
 }
 
 /// Errors: a PNG, a FITS without a WCS, a catalogue with a bad value; each names the file
@@ -143,7 +198,7 @@ fn predicts_the_trails_soig_run_predicts_from_the_header_alone() {
 #[test]
 fn bad_catalogue_inputs_fail_naming_the_file() {
     let tmp = tempfile::tempdir().unwrap();
-    let (_, c) = render(tmp.path());
+    let (_, c) = render(tmp.path(), "survey");
     let cat = tmp.path().join("stars.csv");
     write_catalog(&c, 0, &cat);
     let fits = tmp.path().join("run/fits/img_000000.fits");
@@ -226,7 +281,7 @@ fn to_segment(q: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
 #[test]
 fn star_aware_detection_on_soig_fits_keeps_the_debris_and_drops_the_trails() {
     let tmp = tempfile::tempdir().unwrap();
-    let (toml, c) = render(tmp.path());
+    let (toml, c) = render(tmp.path(), "survey");
     let mut trails_without = 0;
     for index in 0..4u64 {
         let cat = tmp.path().join(format!("stars{index}.csv"));
