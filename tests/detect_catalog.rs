@@ -350,3 +350,62 @@ fn star_aware_detection_on_soig_fits_keeps_the_debris_and_drops_the_trails() {
         "{trails_without} trails marked without the catalogue"
     );
 }
+
+/// The WCS at the exposure's start and end are standard alternate WCS: astropy
+/// (`WCS(header, key="S")`, the project's .venv) reads them as soig does, to 1e-9 degrees
+/// (0.005 milli-pixel here; the cards hold 15 significant digits). Without astropy the test
+/// says so and passes, unless SOIG_REQUIRE_ONNXRUNTIME is set (scripts/test.sh), when it fails.
+#[test]
+fn astropy_reads_the_start_and_end_wcs_as_soig_does() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let python = root.join(".venv/bin/python3");
+    let has_astropy = std::process::Command::new(&python)
+        .args(["-c", "import astropy"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has_astropy {
+        assert!(
+            std::env::var_os("SOIG_REQUIRE_ONNXRUNTIME").is_none(),
+            "no astropy in .venv: run scripts/setup.sh"
+        );
+        eprintln!("skipped: no astropy in .venv (scripts/setup.sh installs it)");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    render(tmp.path(), "survey");
+    let fits = tmp.path().join("run/fits/img_000000.fits");
+    let pixels = [[0.0, 0.0], [511.0, 0.0], [0.0, 511.0], [255.5, 300.25]];
+    let script = r#"
+import json, sys
+from astropy.io import fits
+from astropy.wcs import WCS
+h = fits.getheader(sys.argv[1])
+pixels = json.loads(sys.argv[2])
+print(json.dumps({k: WCS(h, key=k).all_pix2world(pixels, 0).tolist() for k in "SE"}))
+"#;
+    let o = std::process::Command::new(&python)
+        .args(["-c", script])
+        .arg(&fits)
+        .arg(serde_json::to_string(&pixels).unwrap())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let theirs: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let frame = Frame::read(&fits).unwrap();
+    for key in ["S", "E"] {
+        let wcs = soig::sky::wcs::TanWcs::from_header(|k| {
+            frame.header.get(&format!("{k}{key}")).cloned()
+        })
+        .unwrap()
+        .expect("a survey FITS has the alternate WCS");
+        for (p, t) in pixels.iter().zip(theirs[key].as_array().unwrap()) {
+            let (ra, dec) = wcs.sky(p[0], p[1]);
+            let (tra, tdec) = (t[0].as_f64().unwrap(), t[1].as_f64().unwrap());
+            let dra = ((ra - tra + 180.0).rem_euclid(360.0) - 180.0) * dec.to_radians().cos();
+            assert!(
+                dra.abs() < 1e-9 && (dec - tdec).abs() < 1e-9,
+                "WCS {key} at {p:?}: soig ({ra}, {dec}), astropy ({tra}, {tdec})"
+            );
+        }
+    }
+}
