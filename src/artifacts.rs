@@ -425,5 +425,12 @@ pub fn provenance_cards(
             "debris magnitude at mid-exposure (Eq. 6)",
         );
     }
+    // A moving camera's WCS at the exposure's start and end (alternates S and E), so that a
+    // reader of the FITS alone can place the stars over the exposure (`soig detect --catalog`).
+    cards.extend(crate::sky::motion::cards(
+        &scene.pointing,
+        &scene.projection(sensor).shifted(jx, jy),
+        scene.exposure_s,
+    ));
     cards
 }

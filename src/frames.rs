@@ -65,6 +65,10 @@ pub struct Frame {
     pub wcs: Option<TanWcs>,
     /// ...and why not, when the header has a WCS that cannot be applied.
     pub wcs_problem: Option<String>,
+    /// The header cards read (`HEADER_KEYS`: sections, WCS, the alternate WCS of the
+    /// exposure's start and end, its timing, zero point): keyword -> value as text. Empty for
+    /// a PNG.
+    pub header: HashMap<String, String>,
 }
 
 /// Header keywords read besides the WCS.
@@ -74,6 +78,24 @@ const WCS_KEYS: [&str; 20] = [
     "CDELT2", "CD1_1", "CD1_2", "CD2_1", "CD2_2", "PC1_1", "PC1_2", "PC2_1", "PC2_2", "PV2_1",
     "A_ORDER",
 ];
+
+/// The keywords of an exposure's timing and photometry (`soig detect --catalog`).
+const EXPOSURE_KEYS: [&str; 5] = ["DATE-OBS", "MJD-OBS", "EXPTIME", "EXPOSURE", "MAGZERO"];
+
+/// Every keyword read from a FITS header: sections, WCS, the alternate WCS of the exposure's
+/// start and end (`sky::motion`), timing and zero point.
+fn header_keys() -> Vec<String> {
+    let mut keys: Vec<String> = SECTION_KEYS
+        .iter()
+        .chain(WCS_KEYS.iter())
+        .chain(EXPOSURE_KEYS.iter())
+        .map(|k| k.to_string())
+        .collect();
+    for letter in [crate::sky::motion::START, crate::sky::motion::END] {
+        keys.extend(WCS_KEYS.iter().map(|k| format!("{k}{letter}")));
+    }
+    keys
+}
 
 impl Frame {
     /// Read a FITS or PNG frame, told apart by their first bytes, not by the file name.
@@ -153,6 +175,7 @@ fn read_png(path: &Path) -> Result<Frame, String> {
         pixels: RegionPixels::Gray(img.into_raw()),
         wcs: None,
         wcs_problem: None,
+        header: HashMap::new(),
     })
 }
 
@@ -180,9 +203,9 @@ fn read_fits(path: &Path) -> Result<Frame, String> {
     let (hdu, height, width) = found.ok_or_else(|| "no HDU holds a 2-D image".to_string())?;
     check_pixels(width as u64, height as u64)?;
     let mut header = HashMap::new();
-    for key in SECTION_KEYS.iter().chain(WCS_KEYS.iter()) {
-        if let Ok(v) = hdu.read_key::<String>(&mut f, key) {
-            header.insert(*key, v);
+    for key in header_keys() {
+        if let Ok(v) = hdu.read_key::<String>(&mut f, &key) {
+            header.insert(key, v);
         }
     }
     let values: Vec<f32> = hdu
@@ -190,7 +213,7 @@ fn read_fits(path: &Path) -> Result<Frame, String> {
         .map_err(|e| format!("cannot read its image ({e})"))?;
     let (region, region_keyword) = match SECTION_KEYS.iter().find_map(|k| {
         header
-            .get(k)
+            .get(*k)
             .filter(|v| !v.trim().is_empty())
             .map(|v| (*k, v))
     }) {
@@ -234,6 +257,7 @@ fn read_fits(path: &Path) -> Result<Frame, String> {
         pixels: RegionPixels::Values(pixels),
         wcs,
         wcs_problem,
+        header,
     })
 }
 

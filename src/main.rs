@@ -250,6 +250,15 @@ enum Command {
         /// stdout and as each frame's `dropped` in detections.json.
         #[arg(long)]
         explain: bool,
+        /// A star catalogue CSV (Gaia archive, VizieR or plain ra,dec[,pmra,pmdec],mag columns,
+        /// as `stars.source = "catalog"`): the streak detector predicts every star's trail from
+        /// the FITS header (WCS, DATE-OBS, EXPTIME, the WCS at the exposure's start and end)
+        /// and drops only the lines that catalogued stars explain.
+        #[arg(long, value_name = "FILE.csv")]
+        catalog: Option<PathBuf>,
+        /// Julian year of the catalogue's positions.
+        #[arg(long, default_value_t = soig::detect_frames::GAIA_DR3_EPOCH)]
+        catalog_epoch: f64,
     },
     /// The paper's FITS -> PNG conversion (square root for fixed pointing, log stretch, CLAHE,
     /// gamma, 8-bit PNG) of any FITS, soig's or a real frame's sky region: OUT/<stem>.png per
@@ -751,6 +760,8 @@ fn main() -> ExitCode {
             star_trail_angle_deg,
             conf,
             explain,
+            catalog,
+            catalog_epoch,
         } => user_errors(|| {
             use soig::detect_frames::{Optics, Options, Which};
             let campaign = campaign.map(|c| Campaign::load(&c)).transpose()?;
@@ -767,6 +778,8 @@ fn main() -> ExitCode {
             };
             opts.star_trail_angle_deg = star_trail_angle_deg;
             opts.explain = explain;
+            opts.catalog = catalog;
+            opts.catalog_epoch_jyear = catalog_epoch;
             if let Some(path) = streak {
                 opts.streak = soig::detect_frames::streak_params_file(&path)?;
             }

@@ -11,6 +11,7 @@
 //! xyxy: pixel `i` spans `[i, i + 1]`; FITS pixel `p` is centred at `p - 0.5`), and through
 //! the frame's TAN WCS, when it has one, on the sky. `output` writes the files.
 
+pub mod catalog;
 mod output;
 
 use std::path::{Path, PathBuf};
@@ -19,10 +20,15 @@ use anyhow::{Context, bail};
 
 use crate::campaign::{Campaign, Detect};
 use crate::detect::Detection;
-use crate::detect::streak::{Dropped, StreakParams, detect_streaks_explained};
+use crate::detect::streak::{
+    Dropped, StreakParams, detect_streaks_among_stars, detect_streaks_explained,
+};
 use crate::detect::yolo::{YoloDetector, YoloParams};
 use crate::enhance::{self, Gray8};
 use crate::frames::{Frame, RegionPixels};
+
+/// Epoch of Gaia DR3's positions, the default of `--catalog-epoch`.
+pub const GAIA_DR3_EPOCH: f64 = 2016.0;
 
 /// FWHM of a Gaussian over its sigma, 2 sqrt(2 ln 2).
 const FWHM_PER_SIGMA: f64 = 2.354_820_045_030_949;
@@ -77,6 +83,10 @@ pub struct Options {
     pub campaign: Option<PathBuf>,
     /// Record why the streak detector dropped each segment it refined (`--explain`).
     pub explain: bool,
+    /// A star catalogue CSV for the star-aware streak detector (`--catalog`, module
+    /// `catalog`), and the Julian year of its positions.
+    pub catalog: Option<PathBuf>,
+    pub catalog_epoch_jyear: f64,
 }
 
 impl Options {
@@ -98,6 +108,8 @@ impl Options {
             star_trail_angle_deg: None,
             campaign: campaign.map(|c| c.source.clone()),
             explain: false,
+            catalog: None,
+            catalog_epoch_jyear: GAIA_DR3_EPOCH,
         }
     }
 }
@@ -162,6 +174,27 @@ pub struct FrameResult {
     /// (ends shifted into the file's pixel grid as the detections').
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub dropped: Vec<Dropped>,
+    /// With `--catalog`: what the star-aware detector knew of the frame's sky.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub catalog: Option<CatalogUse>,
+}
+
+/// What `--catalog` gave the streak detector on one frame.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CatalogUse {
+    /// Exposure start (UTC) and length, from the header.
+    pub start_utc: String,
+    pub exposure_s: f64,
+    /// How the camera moved over the exposure, and where that came from.
+    pub pointing: &'static str,
+    pub drift_deg: f64,
+    /// Catalogued stars that can put light on the frame, and those whose trail lies on it.
+    pub stars_near: usize,
+    pub trails_on_frame: usize,
+    /// The star-trail direction the detector used (degrees from +x towards +y), and where it
+    /// came from; None: the stars do not move (the plain detector runs).
+    pub trail_angle_deg: Option<f64>,
+    pub trail_angle_source: &'static str,
 }
 
 /// The outcome of `soig detect`.
@@ -180,6 +213,15 @@ pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options) -> anyhow::Result<Sum
         bail!("no input frame given");
     }
     opts.optics.check()?;
+    if opts.catalog.is_some() && opts.explain {
+        bail!(
+            "--explain does not explain the star-aware pass that --catalog runs: give one or the other"
+        );
+    }
+    let catalog = match &opts.catalog {
+        Some(path) => Some(catalog::read(path, opts.catalog_epoch_jyear)?),
+        None => None,
+    };
     let mut yolo = match (opts.which, &opts.model) {
         (Which::Streak, _) => None,
         (Which::Yolo | Which::All, Some(m)) => Some(
@@ -199,14 +241,20 @@ pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options) -> anyhow::Result<Sum
         }
     }
     let mut keep = crate::output::input_folders(inputs);
-    keep.extend(opts.model.iter().chain(&opts.campaign).cloned());
+    keep.extend(
+        opts.model
+            .iter()
+            .chain(&opts.campaign)
+            .chain(&opts.catalog)
+            .cloned(),
+    );
     let keep_refs: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
     let mut results = Vec::with_capacity(inputs.len());
     let digest = crate::output::write_replacing(out, &keep_refs, |dir| {
         output::prepare(dir, opts)?;
         for p in inputs {
             let frame = Frame::read(p)?;
-            let (result, enhanced) = detect_frame(&frame, opts, yolo.as_mut())?;
+            let (result, enhanced) = detect_frame(&frame, opts, yolo.as_mut(), catalog.as_ref())?;
             output::write_frame(dir, &result, &enhanced, opts)?;
             results.push(result);
         }
@@ -225,6 +273,7 @@ fn detect_frame(
     frame: &Frame,
     opts: &Options,
     yolo: Option<&mut YoloDetector>,
+    stars: Option<&crate::sky::stars::StarCatalog>,
 ) -> anyhow::Result<(FrameResult, Gray8)> {
     let (rw, rh) = (frame.region.width(), frame.region.height());
     let (enhanced, non_finite, pedestal, format) = match &frame.pixels {
@@ -274,17 +323,60 @@ fn detect_frame(
             "the streak detector's psf_sigma_px (not the frame's optics: give --psf-fwhm-px)",
         ),
     };
+    let psf_sigma_px = psf_fwhm_px / FWHM_PER_SIGMA;
+    // The catalogued stars' trails on the detector's image (the frame's sky region).
+    let sky = match stars {
+        Some(cat) => {
+            let facts = catalog::FrameSky::of(frame)?;
+            let predicted = facts.predict(cat, frame.region, psf_sigma_px);
+            let trails = catalog::in_region(&predicted, frame.region);
+            // A trail shorter than the PSF's width is a star that does not move.
+            let from_trails = catalog::trail_angle_deg(&trails, 2.0 * psf_fwhm_px);
+            let (angle, source) = match (opts.star_trail_angle_deg, from_trails) {
+                (Some(a), _) => (Some(a), "--star-trail-angle-deg"),
+                (None, Some(a)) => (Some(a), "the predicted trails"),
+                (None, None) => (None, "none: the predicted stars do not move"),
+            };
+            let use_ = CatalogUse {
+                start_utc: crate::render::iso_utc(facts.start),
+                exposure_s: facts.exposure_s,
+                pointing: if facts.motion.is_some() {
+                    "moving: the WCS at the exposure's start and end (alternate WCS S and E)"
+                } else {
+                    "fixed on the sky: the header has no WCS at the exposure's start and end"
+                },
+                drift_deg: facts.motion.as_ref().map_or(0.0, |m| m.drift_deg()),
+                stars_near: predicted.len(),
+                trails_on_frame: trails.len(),
+                trail_angle_deg: angle,
+                trail_angle_source: source,
+            };
+            Some((trails, angle, use_))
+        }
+        None => None,
+    };
     let mut found = Vec::new();
     let mut dropped = Vec::new();
     let (ox, oy) = (frame.region.x0 as f64, frame.region.y0 as f64);
     let shift = |d: &Detection| [d.x1 + ox, d.y1 + oy, d.x2 + ox, d.y2 + oy];
     if opts.which != Which::Yolo {
         let params = StreakParams {
-            psf_sigma_px: psf_fwhm_px / FWHM_PER_SIGMA,
+            psf_sigma_px,
             ..opts.streak.clone()
         };
-        let (cands, why) =
-            detect_streaks_explained(&enhanced.pixels, rw, rh, &params, opts.star_trail_angle_deg);
+        let (cands, why) = match &sky {
+            Some((trails, angle, _)) => (
+                detect_streaks_among_stars(&enhanced.pixels, rw, rh, &params, *angle, Some(trails)),
+                Vec::new(),
+            ),
+            None => detect_streaks_explained(
+                &enhanced.pixels,
+                rw,
+                rh,
+                &params,
+                opts.star_trail_angle_deg,
+            ),
+        };
         if opts.explain {
             dropped = why;
             for d in &mut dropped {
@@ -347,6 +439,7 @@ fn detect_frame(
         pedestal,
         detections: found,
         dropped,
+        catalog: sky.map(|s| s.2),
     };
     Ok((result, enhanced))
 }

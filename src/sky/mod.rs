@@ -5,6 +5,7 @@ pub mod apparent;
 pub mod debris_sizes;
 pub mod ephemeris;
 pub mod frames;
+pub mod motion;
 pub mod orbit;
 pub mod photometry;
 pub mod projection;
