@@ -34,11 +34,12 @@ work=$(mktemp -d /tmp/soig-container.XXXXXX)
 images="localhost/soig:ci localhost/soig-ci/rust:1.95-bookworm localhost/soig-ci/debian:bookworm-slim"
 # Whatever happens, leave no tree, image or build layer behind (a failed build's layers are
 # gigabytes that the next run would not reuse).
+# (The tree last: podman reads its configuration from it.)
 cleanup() {
-  rm -rf "$work"
   # shellcheck disable=SC2086
   podman rmi -f $images >/dev/null 2>&1 || true
   podman image prune -f >/dev/null 2>&1 || true
+  rm -rf "$work"
 }
 trap cleanup EXIT
 # podman's defaults ask for more open files and processes than this machine lets root raise

@@ -402,12 +402,9 @@ fn target_track(
     let (ra1, dec1) = track.radec_at(exposure_s);
     track.boresight_radec_start_deg = [ra0, dec0];
     track.boresight_radec_end_deg = [ra1, dec1];
-    let tan = sensor.projection(boresight.0, boresight.1);
-    let (ra0, dec0) = track.to_mid_frame(0.0, boresight.0, boresight.1);
-    let (ra1, dec1) = track.to_mid_frame(exposure_s, boresight.0, boresight.1);
-    let (x0, y0) = tan.standard(ra0, dec0)?;
-    let (x1, y1) = tan.standard(ra1, dec1)?;
-    track.trail_angle_deg = (y1 - y0).atan2(x1 - x0).to_degrees();
+    track.trail_angle_deg = trail_angle_deg(sensor, boresight, exposure_s, &|t_s, ra, dec| {
+        track.to_mid_frame(t_s, ra, dec)
+    })?;
     Some(track)
 }
 
@@ -906,7 +903,7 @@ fn try_place(
     let turn = Turn::between(unit(sight.direction), radec_unit(ra_t, dec_t));
     let sight = turn.apply(sight);
     let sun = sun_position_km(mid);
-    let geometry = visibility(spec, sensor, &sight, sun, mid, area_m2)?;
+    let (geometry, _) = visibility(spec, sensor, &sight, (sun, mid), area_m2, true)?;
     let track = sighting
         .track(start, exposure_s)
         .ok_or(Rejection::PropagationFailed)?;
@@ -930,6 +927,7 @@ fn try_place(
         &trajectory,
         exposure_s,
         inputs.frame(frame.background),
+        true,
     )?;
     let debris = &inputs.debris[debris_index];
     Ok(Scene {
@@ -971,51 +969,55 @@ fn draw_tumble(spec: &Spec, rng: &mut ChaCha12Rng) -> Option<Tumble> {
     })
 }
 
-/// Visibility of the debris at mid-exposure (paper 3.2.2) and its geometry then.
+/// Visibility of the debris at mid-exposure (paper 3.2.2), its geometry then, and whether it
+/// is in the Earth's shadow. Ungated (a later frame of a collect, which the gate does not
+/// judge), every check passes and a shadowed object sends no light.
 fn visibility(
     spec: &Spec,
     sensor: &Sensor,
     sight: &Sight,
-    sun: Vec3,
-    mid: Epoch,
+    (sun, mid): (Vec3, Epoch),
     area_m2: f64,
-) -> Result<Geometry, Rejection> {
+    gated: bool,
+) -> Result<(Geometry, bool), Rejection> {
     let (obs, deb) = (sight.observer_km, sight.debris_km);
     let los = sub(deb, obs);
     let moon = moon_position_km(mid);
     let v = &spec.gate;
     let earth_angle_deg = angle_deg(los, sub([0.0; 3], obs));
-    if earth_angle_deg <= v.earth_min_deg {
+    if gated && earth_angle_deg <= v.earth_min_deg {
         return Err(Rejection::EarthAngle);
     }
     let sun_angle_deg = angle_deg(los, sub(sun, obs));
-    if sun_angle_deg <= v.sun_min_deg {
+    if gated && sun_angle_deg <= v.sun_min_deg {
         return Err(Rejection::SunAngle);
     }
     let moon_angle_deg = angle_deg(los, sub(moon, obs));
-    if moon_angle_deg <= v.moon_min_deg {
+    if gated && moon_angle_deg <= v.moon_min_deg {
         return Err(Rejection::MoonAngle);
     }
-    if segment_hits_sphere(obs, deb, EARTH_RADIUS_KM + v.earth_clearance_km) {
+    if gated && segment_hits_sphere(obs, deb, EARTH_RADIUS_KM + v.earth_clearance_km) {
         return Err(Rejection::ThroughEarth);
     }
-    if segment_hits_sphere(deb, sun, EARTH_RADIUS_KM) {
+    let shadowed = segment_hits_sphere(deb, sun, EARTH_RADIUS_KM);
+    if gated && shadowed {
         return Err(Rejection::EarthShadow);
     }
     let phase_angle_deg = angle_deg(sub(sun, deb), sub(obs, deb));
     let range_km = norm(los);
     let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km);
-    if magnitude.is_nan() || magnitude > sensor.mag_limit {
+    if gated && (magnitude.is_nan() || magnitude > sensor.mag_limit) {
         return Err(Rejection::TooFaint);
     }
-    Ok(Geometry {
+    let geometry = Geometry {
         range_km,
         phase_angle_deg,
         earth_angle_deg,
         sun_angle_deg,
         moon_angle_deg,
         magnitude,
-    })
+    };
+    Ok((geometry, shadowed))
 }
 
 /// What the trajectory of one object needs of its frame and draw.
@@ -1108,13 +1110,15 @@ fn trajectory(
     Ok(trajectory)
 }
 
-/// The signal-to-noise gate (paper 3.2.6): (the judged ratio, by level, by sigma).
+/// The signal-to-noise gate (paper 3.2.6): (the judged ratio, by level, by sigma). Ungated (a
+/// later frame of a collect), the ratios are computed and not judged.
 fn gate_snr(
     spec: &Spec,
     sensor: &Sensor,
     trajectory: &[TrajectorySample],
     exposure_s: f64,
     frame: Option<&RealFrame>,
+    gated: bool,
 ) -> Result<(f64, f64, f64), Rejection> {
     let snr_noise_level = expected_snr(
         sensor,
@@ -1130,7 +1134,7 @@ fn gate_snr(
         SnrDefinition::NoiseLevel => snr_noise_level,
         SnrDefinition::NoiseSigma => snr_noise_sigma,
     };
-    if snr < spec.gate.snr_min {
+    if gated && snr < spec.gate.snr_min {
         return Err(Rejection::LowSnr);
     }
     Ok((snr, snr_noise_level, snr_noise_sigma))
@@ -1178,15 +1182,7 @@ fn draw_values(spec: &Spec, inputs: &Inputs, on_frame: bool, rng: &mut ChaCha12R
         }
         _ => None,
     };
-    let tumble = spec.tumble.map(|r| Tumble {
-        period_s: if r.period_max_s > r.period_min_s {
-            rng.random_range(r.period_min_s..=r.period_max_s)
-        } else {
-            r.period_min_s
-        },
-        amplitude: rng.random_range(0.0..=r.amplitude_max),
-        phase_rad: rng.random_range(0.0..std::f64::consts::TAU),
-    });
+    let tumble = draw_tumble(spec, rng);
     Draws {
         exposure_s,
         start,
@@ -1234,38 +1230,10 @@ fn try_draw(
         spec.apparent_positions,
     );
     let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
-    let (obs, deb) = (sight.observer_km, sight.debris_km);
-    let los = sub(deb, obs);
     let sun = sun_position_km(mid);
-    let moon = moon_position_km(mid);
-    let v = &spec.gate;
-    // A later frame of a collect is not judged (`gated` false).
-    let earth_angle_deg = angle_deg(los, sub([0.0; 3], obs));
-    if gated && earth_angle_deg <= v.earth_min_deg {
-        return Err(Rejection::EarthAngle);
-    }
-    let sun_angle_deg = angle_deg(los, sub(sun, obs));
-    if gated && sun_angle_deg <= v.sun_min_deg {
-        return Err(Rejection::SunAngle);
-    }
-    let moon_angle_deg = angle_deg(los, sub(moon, obs));
-    if gated && moon_angle_deg <= v.moon_min_deg {
-        return Err(Rejection::MoonAngle);
-    }
-    if gated && segment_hits_sphere(obs, deb, EARTH_RADIUS_KM + v.earth_clearance_km) {
-        return Err(Rejection::ThroughEarth);
-    }
-    // In a later frame the object may have entered the shadow: it then sends no light.
-    let shadowed = segment_hits_sphere(deb, sun, EARTH_RADIUS_KM);
-    if gated && shadowed {
-        return Err(Rejection::EarthShadow);
-    }
-    let phase_angle_deg = angle_deg(sub(sun, deb), sub(obs, deb));
-    let range_km = norm(los);
-    let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km);
-    if gated && (magnitude.is_nan() || magnitude > sensor.mag_limit) {
-        return Err(Rejection::TooFaint);
-    }
+    // A later frame of a collect is not judged (`gated` false); in it the object may have
+    // entered the shadow, and then sends no light.
+    let (geometry, shadowed) = visibility(spec, sensor, &sight, (sun, mid), area_m2, gated)?;
 
     // Pointing: the debris at mid-exposure lands at a random place in the field.
     let (ra_mid, dec_mid) = radec_deg(sight.direction);
@@ -1330,7 +1298,7 @@ fn try_draw(
     let field = inputs
         .stars
         .stars_in_cone(ra_p, dec_p, cone, sensor.mag_limit, mid);
-    if gated && field.iter().any(|s| s.mag < v.brightest_star_mag) {
+    if gated && field.iter().any(|s| s.mag < spec.gate.brightest_star_mag) {
         return Err(Rejection::BrightStar);
     }
 
@@ -1353,24 +1321,14 @@ fn try_draw(
         },
     )?;
 
-    let frame = inputs.frame(background);
-    let snr_noise_level = expected_snr(
+    let (snr, snr_noise_level, snr_noise_sigma) = gate_snr(
+        spec,
         sensor,
         &trajectory,
-        sensor.noise_level_adu(exposure_s, frame),
-    );
-    let snr_noise_sigma = expected_snr(
-        sensor,
-        &trajectory,
-        sensor.background_sigma_adu(exposure_s, frame),
-    );
-    let snr = match v.snr_definition {
-        SnrDefinition::NoiseLevel => snr_noise_level,
-        SnrDefinition::NoiseSigma => snr_noise_sigma,
-    };
-    if gated && snr < v.snr_min {
-        return Err(Rejection::LowSnr);
-    }
+        exposure_s,
+        inputs.frame(background),
+        gated,
+    )?;
 
     let ephemeris = sighting.ephemeris(start, exposure_s);
     let debris = &inputs.debris[debris_index];
@@ -1384,14 +1342,7 @@ fn try_draw(
         pointing,
         area_m2,
         tumble,
-        geometry: Geometry {
-            range_km,
-            phase_angle_deg,
-            earth_angle_deg,
-            sun_angle_deg,
-            moon_angle_deg,
-            magnitude,
-        },
+        geometry,
         ephemeris,
         trajectory,
         stars: field,
@@ -1491,14 +1442,27 @@ fn survey_track(
         drift_deg: rate_deg_s * exposure_s * sin_from_axis,
         trail_angle_deg: 0.0,
     };
-    // Eq. 13 with atan2: how a star at the centre moves across the image.
+    track.trail_angle_deg = trail_angle_deg(sensor, boresight, exposure_s, &|t_s, ra, dec| {
+        track.to_mid_frame(t_s, ra, dec)
+    })?;
+    Some(track)
+}
+
+/// Eq. 13 with atan2: how a star at the mid-exposure boresight moves across the image, from
+/// the start to the end of the exposure, given how the pointing maps a direction at time t
+/// into the mid-exposure camera frame.
+fn trail_angle_deg(
+    sensor: &Sensor,
+    boresight: (f64, f64),
+    exposure_s: f64,
+    to_mid_frame: &dyn Fn(f64, f64, f64) -> (f64, f64),
+) -> Option<f64> {
     let tan = sensor.projection(boresight.0, boresight.1);
-    let (ra0, dec0) = track.to_mid_frame(0.0, boresight.0, boresight.1);
-    let (ra1, dec1) = track.to_mid_frame(exposure_s, boresight.0, boresight.1);
+    let (ra0, dec0) = to_mid_frame(0.0, boresight.0, boresight.1);
+    let (ra1, dec1) = to_mid_frame(exposure_s, boresight.0, boresight.1);
     let (x0, y0) = tan.standard(ra0, dec0)?;
     let (x1, y1) = tan.standard(ra1, dec1)?;
-    track.trail_angle_deg = (y1 - y0).atan2(x1 - x0).to_degrees();
-    Some(track)
+    Some((y1 - y0).atan2(x1 - x0).to_degrees())
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@ use soig::scene::{CollectFrame, Pointing};
 use soig::sky::{angle_deg, radec_unit};
 
 mod common;
-use common::{CampaignToml, digest, rendered, soig, tle_object};
+use common::{CampaignToml, rendered, run_on_threads, soig, tle_object};
 
 /// `collects` collects of `frames` frames 10 s apart, 256 px at the paper's pixel scale, in
 /// pointing `mode`, a LEO and a GEO object.
@@ -102,22 +102,11 @@ fn a_collect_run_keeps_collects_whole_and_replays() {
         "[artifacts]\nfits = true\n[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n",
     )
     .write(&tmp.path().join("collect.toml"));
-    let run = |threads: &str, out: &Path| {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
-            .args([
-                "run",
-                file.to_str().unwrap(),
-                "--quiet",
-                "--out",
-                out.to_str().unwrap(),
-            ])
-            .env("RAYON_NUM_THREADS", threads)
-            .output()
-            .unwrap();
-        digest(&o)
-    };
     let (one, two) = (tmp.path().join("one"), tmp.path().join("two"));
-    assert_eq!(run("1", &one), run("2", &two));
+    assert_eq!(
+        run_on_threads(&file, &one, "1"),
+        run_on_threads(&file, &two, "2")
+    );
     let v = soig(&["verify", one.to_str().unwrap()]);
     assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
 

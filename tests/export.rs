@@ -11,55 +11,11 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{CampaignToml, ELEMENTS_40649, digest, soig, tle_object};
+use common::{
+    CampaignToml, ELEMENTS_40649, assert_coco_agrees_with_soig_eval, assert_coco_bbox_is_label_box,
+    digest, export_readers, export_readers_python, json, soig, tle_object,
+};
 use serde_json::Value;
-
-fn python() -> Option<PathBuf> {
-    let py = Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python3");
-    let ok = std::process::Command::new(&py)
-        .args(["-c", "import pycocotools.cocoeval, regions"])
-        .status()
-        .is_ok_and(|s| s.success());
-    match (
-        ok,
-        std::env::var_os("SOIG_REQUIRE_EXPORT_READERS").is_some(),
-    ) {
-        (true, _) => Some(py),
-        (false, true) => panic!(
-            "{} lacks pycocotools or regions: run scripts/setup.sh",
-            py.display()
-        ),
-        (false, false) => {
-            eprintln!(
-                "skipping: {} lacks pycocotools or regions (scripts/setup.sh)",
-                py.display()
-            );
-            None
-        }
-    }
-}
-
-fn readers(py: &Path, args: &[&str]) -> Value {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/reference/export_readers.py");
-    let out = std::process::Command::new(py)
-        .arg(script)
-        .args(args)
-        .output()
-        .expect("python runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
-}
-
-fn json(path: &Path) -> Value {
-    serde_json::from_slice(
-        &std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
-    )
-    .unwrap()
-}
 
 /// A run of 16 fixed-pointing images in the padded frame (so the DS9 boxes are mapped back
 /// from the PNG), split 50/25/25, detected by the streak detector, with both exports.
@@ -150,26 +106,7 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
             let mine: Vec<&Value> = anns.iter().filter(|a| a["image_id"] == id).collect();
             assert_eq!(mine.len(), labels.lines().count(), "{stem}");
             let truth = json(&out.join(format!("truth/{stem}.json")));
-            let b = &truth["label_box_final_px"];
-            let edge = |k: &str| b[k].as_f64().unwrap() + 0.5;
-            let want = [
-                edge("x_min"),
-                edge("y_min"),
-                edge("x_max") - edge("x_min"),
-                edge("y_max") - edge("y_min"),
-            ];
-            let got: Vec<f64> = mine[0]["bbox"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|v| v.as_f64().unwrap())
-                .collect();
-            for k in 0..4 {
-                assert!(
-                    (got[k] - want[k]).abs() < 1.1e-3,
-                    "{stem}: bbox {got:?}, truth {want:?}"
-                );
-            }
+            let got = assert_coco_bbox_is_label_box(mine[0], &truth["label_box_final_px"], &stem);
             // serde_json's default float parser may miss the written value by an ulp.
             let area = mine[0]["area"].as_f64().unwrap();
             assert!(
@@ -180,44 +117,12 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
     }
     assert_eq!(images, 16);
 
-    let Some(py) = python() else { return };
-    // pycocotools on the COCO files, soig eval on the text files: the same figures. soig's
-    // COCO metric repeats pycocotools' (and numpy's) arithmetic step for step (src/metrics/),
-    // and the boxes are the same floats, so the figures are equal to the last bit.
-    let coco = readers(
-        &py,
-        &[
-            "coco",
-            export.join("coco/test.json").to_str().unwrap(),
-            export.join("coco/detections_streak.json").to_str().unwrap(),
-        ],
-    );
-    let o = soig(&[
-        "eval",
-        "--mode",
-        "coco",
-        "--json",
-        "--labels",
-        out.join("labels/test").to_str().unwrap(),
-        "--predictions",
-        out.join("report/predictions/streak").to_str().unwrap(),
-        "--images",
-        out.join("images/test").to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let soig_eval: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let Some(py) = export_readers_python() else {
+        return;
+    };
+    // pycocotools on the COCO files, soig eval on the text files: the same figures.
+    let coco = assert_coco_agrees_with_soig_eval(&py, &export, &out);
     assert_eq!(coco["categories"], serde_json::json!(["debris"]));
-    assert!(
-        coco["ap50"].as_f64().unwrap() > 0.0,
-        "a test set the detector finds nothing in tests nothing: {coco}"
-    );
-    for k in ["ap", "ap50", "ap75", "ar100"] {
-        assert_eq!(
-            coco[k].as_f64(),
-            soig_eval[k].as_f64(),
-            "{k}: pycocotools {coco}, soig {soig_eval}"
-        );
-    }
 
     // astropy-regions reads the truth back (0-based pixels, as soig's), and each detection's
     // polygon is its COCO box moved from the PNG's padded frame to the FITS pixels. The files
@@ -241,7 +146,7 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
         .collect();
     let mut args = vec!["regions"];
     args.extend(files.iter().map(String::as_str));
-    let read = readers(&py, &args);
+    let read = export_readers(&py, &args);
     let dets = json(&export.join("coco/detections_streak.json"));
     let close = |a: &[f64], b: &[f64]| {
         a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < tol)

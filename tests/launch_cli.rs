@@ -3,28 +3,28 @@
 //! see are warned about.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn soig(cwd: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_soig"))
-        .current_dir(cwd)
-        .args(args)
-        .output()
-        .expect("soig runs")
+mod common;
+use common::soig_in;
+
+/// `soig slurm campaigns/quickstart.toml --shards 2 ARGS --scripts SCRIPTS` from the
+/// repository root.
+fn slurm(args: &[&str], scripts: &Path) -> Output {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut all = vec!["slurm", "campaigns/quickstart.toml", "--shards", "2"];
+    all.extend_from_slice(args);
+    all.extend(["--scripts", scripts.to_str().unwrap()]);
+    soig_in(root, &all)
 }
 
 #[test]
 fn slurm_resources_reach_every_job() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = tempfile::tempdir().unwrap();
     let scripts = dir.path().join("jobs");
-    let o = soig(
-        root,
+    let out = dir.path().join("out");
+    let o = slurm(
         &[
-            "slurm",
-            "campaigns/quickstart.toml",
-            "--shards",
-            "2",
             "--partition",
             "p",
             "--account",
@@ -37,10 +37,9 @@ fn slurm_resources_reach_every_job() {
             "4",
             "--sbatch=--qos=high",
             "--out",
-            dir.path().join("out").to_str().unwrap(),
-            "--scripts",
-            scripts.to_str().unwrap(),
+            out.to_str().unwrap(),
         ],
+        &scripts,
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for f in ["array.sbatch", "merge.sbatch"] {
@@ -57,22 +56,9 @@ fn slurm_resources_reach_every_job() {
 
 #[test]
 fn a_malformed_slurm_time_is_refused_before_writing() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = tempfile::tempdir().unwrap();
     let scripts = dir.path().join("jobs");
-    let o = soig(
-        root,
-        &[
-            "slurm",
-            "campaigns/quickstart.toml",
-            "--shards",
-            "2",
-            "--time",
-            "2h",
-            "--scripts",
-            scripts.to_str().unwrap(),
-        ],
-    );
+    let o = slurm(&["--time", "2h"], &scripts);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--time \"2h\""), "{err}");
@@ -86,7 +72,7 @@ fn k8s_warns_of_paths_outside_the_volume() {
     let jobs = dir.path().join("jobs");
     let jobs = jobs.to_str().unwrap();
     // Relative paths within the volume's root (here the repository): no warning.
-    let o = soig(
+    let o = soig_in(
         root,
         &[
             "k8s",
@@ -101,7 +87,7 @@ fn k8s_warns_of_paths_outside_the_volume() {
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
-    let o = soig(
+    let o = soig_in(
         &root.join("campaigns"),
         &[
             "k8s",
@@ -120,7 +106,7 @@ fn k8s_warns_of_paths_outside_the_volume() {
         err.contains("warning: the output path /scratch/q is absolute"),
         "{err}"
     );
-    let o = soig(
+    let o = soig_in(
         root,
         &[
             "k8s",

@@ -1,15 +1,13 @@
 //! Track pointing (issue #34): the sensor follows the image's debris object, which stays a
 //! point on its pixel while the stars trail against its apparent motion.
 
-use std::path::Path;
-
 use soig::campaign::Campaign;
 use soig::experiment::Experiment;
 use soig::scene::Pointing;
 use soig::sky::{angle_deg, radec_unit};
 
 mod common;
-use common::{CampaignToml, digest, rendered, soig, tle_object};
+use common::{CampaignToml, digest, rendered, run_on_threads, soig, tle_object};
 
 /// Track images of 512 px at the paper's pixel scale (0.7"), a LEO and a GEO object;
 /// `extra` adds tables.
@@ -153,22 +151,11 @@ fn track_campaign_runs_verifies_and_is_thread_independent() {
     let file = track("")
         .tables("[artifacts]\nnoise_free_fits = true\n")
         .write(&tmp.path().join("track.toml"));
-    let run = |threads: &str, out: &Path| {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
-            .args([
-                "run",
-                file.to_str().unwrap(),
-                "--quiet",
-                "--out",
-                out.to_str().unwrap(),
-            ])
-            .env("RAYON_NUM_THREADS", threads)
-            .output()
-            .unwrap();
-        digest(&o)
-    };
     let (one, two) = (tmp.path().join("one"), tmp.path().join("two"));
-    assert_eq!(run("1", &one), run("2", &two));
+    assert_eq!(
+        run_on_threads(&file, &one, "1"),
+        run_on_threads(&file, &two, "2")
+    );
     let v = soig(&["verify", one.to_str().unwrap()]);
     assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
     let fits = std::fs::read(one.join("fits").join("img_000000.fits")).unwrap();

@@ -20,6 +20,129 @@ pub fn soig(args: &[&str]) -> Output {
         .expect("soig runs")
 }
 
+/// Run the `soig` binary under test from directory `cwd`.
+pub fn soig_in(cwd: &Path, args: &[&str]) -> Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
+        .current_dir(cwd)
+        .args(args)
+        .output()
+        .expect("soig runs")
+}
+
+/// `soig run CAMPAIGN --out OUT --quiet` on `threads` rayon threads, which must succeed; its
+/// digest.
+pub fn run_on_threads(campaign: &Path, out: &Path, threads: &str) -> String {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
+        .env("RAYON_NUM_THREADS", threads)
+        .args([
+            "run",
+            campaign.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .output()
+        .expect("soig runs");
+    digest(&o)
+}
+
+/// A JSON file, parsed; panics naming the file.
+pub fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(
+        &std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The project's Python with the export readers (pycocotools, regions: `scripts/setup.sh`).
+/// Without them the test says why and passes, unless SOIG_REQUIRE_EXPORT_READERS is set
+/// (scripts/test.sh sets it): then it fails.
+pub fn export_readers_python() -> Option<PathBuf> {
+    let py = repo(".venv/bin/python3");
+    let ok = std::process::Command::new(&py)
+        .args(["-c", "import pycocotools.cocoeval, regions"])
+        .status()
+        .is_ok_and(|s| s.success());
+    match (
+        ok,
+        std::env::var_os("SOIG_REQUIRE_EXPORT_READERS").is_some(),
+    ) {
+        (true, _) => Some(py),
+        (false, true) => panic!(
+            "{} lacks pycocotools or regions: run scripts/setup.sh",
+            py.display()
+        ),
+        (false, false) => {
+            eprintln!(
+                "skipping: {} lacks pycocotools or regions (scripts/setup.sh)",
+                py.display()
+            );
+            None
+        }
+    }
+}
+
+/// tests/reference/export_readers.py with these arguments: what the libraries read, as JSON.
+pub fn export_readers(py: &Path, args: &[&str]) -> serde_json::Value {
+    let out = std::process::Command::new(py)
+        .arg(repo("tests/reference/export_readers.py"))
+        .args(args)
+        .output()
+        .expect("python runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// pycocotools on the COCO export of run `out` (in `export`: its test split and the streak
+/// detector's detections) and `soig eval --mode coco` on the run's text files give the same
+/// AP, AP50, AP75 and AR100, to the last bit: soig's COCO metric repeats pycocotools' (and
+/// numpy's) arithmetic step for step (src/metrics/), on the same floats. Returns
+/// pycocotools' figures.
+pub fn assert_coco_agrees_with_soig_eval(
+    py: &Path,
+    export: &Path,
+    out: &Path,
+) -> serde_json::Value {
+    let coco = export_readers(
+        py,
+        &[
+            "coco",
+            export.join("coco/test.json").to_str().unwrap(),
+            export.join("coco/detections_streak.json").to_str().unwrap(),
+        ],
+    );
+    let o = soig(&[
+        "eval",
+        "--mode",
+        "coco",
+        "--json",
+        "--labels",
+        out.join("labels/test").to_str().unwrap(),
+        "--predictions",
+        out.join("report/predictions/streak").to_str().unwrap(),
+        "--images",
+        out.join("images/test").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let soig_eval: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(
+        coco["ap50"].as_f64().unwrap() > 0.0,
+        "a test set the detector finds nothing in tests nothing: {coco}"
+    );
+    for k in ["ap", "ap50", "ap75", "ar100"] {
+        assert_eq!(
+            coco[k].as_f64(),
+            soig_eval[k].as_f64(),
+            "{k}: pycocotools {coco}, soig {soig_eval}"
+        );
+    }
+    coco
+}
+
 fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
@@ -175,4 +298,34 @@ pub fn differing_files(a: &Path, b: &Path) -> Vec<String> {
     names.dedup();
     names.retain(|n| fa.get(n) != fb.get(n));
     names
+}
+
+/// A COCO annotation's bbox is the truth's label box in the final frame (pixel centres at
+/// integers there, so its edges are +0.5), as written: to a thousandth of a pixel (1e-3, and
+/// a tenth of it for the float noise of the subtraction). Returns the bbox.
+pub fn assert_coco_bbox_is_label_box(
+    annotation: &serde_json::Value,
+    label_box_final_px: &serde_json::Value,
+    stem: &str,
+) -> Vec<f64> {
+    let edge = |k: &str| label_box_final_px[k].as_f64().unwrap() + 0.5;
+    let want = [
+        edge("x_min"),
+        edge("y_min"),
+        edge("x_max") - edge("x_min"),
+        edge("y_max") - edge("y_min"),
+    ];
+    let got: Vec<f64> = annotation["bbox"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    for k in 0..4 {
+        assert!(
+            (got[k] - want[k]).abs() < 1.1e-3,
+            "{stem}: bbox {got:?}, truth {want:?}"
+        );
+    }
+    got
 }
