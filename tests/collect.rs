@@ -8,7 +8,10 @@ use soig::scene::{CollectFrame, Pointing};
 use soig::sky::{angle_deg, radec_unit};
 
 mod common;
-use common::{CampaignToml, json, rendered, run_on_threads, soig, tle_object};
+use common::{
+    CampaignToml, assert_coco_agrees_with_labels_and_truth, json, rendered, run_on_threads, soig,
+    tle_object,
+};
 
 /// `collects` collects of `frames` frames 10 s apart, 256 px at the paper's pixel scale, in
 /// pointing `mode`, a LEO and a GEO object.
@@ -99,7 +102,7 @@ fn a_collect_run_keeps_collects_whole_and_replays() {
         "track",
         6,
         5,
-        "[artifacts]\nfits = true\n[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n",
+        "[artifacts]\nfits = true\ncoco = true\n[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n",
     )
     .write(&tmp.path().join("collect.toml"));
     let (one, two) = (tmp.path().join("one"), tmp.path().join("two"));
@@ -151,6 +154,8 @@ fn a_collect_run_keeps_collects_whole_and_replays() {
     }
     // Both subsets hold collects (3 of 6 each).
     assert_eq!(subsets.len(), 2, "{subsets:?}");
+    // Labels, truths and COCO agree; the tracked object shows in most frames.
+    assert!(assert_coco_agrees_with_labels_and_truth(&one) > 0);
 }
 
 #[test]
@@ -179,7 +184,8 @@ fn several_objects_keep_their_track_ids_over_a_collect() {
         "fixed",
         n as u32,
         frames as u32,
-        "[objects]\nper_frame = { min = 2, max = 3 }\nempty_share = 0.0\n",
+        "[objects]\nper_frame = { min = 2, max = 3 }\nempty_share = 0.0\n\
+         [artifacts]\ncoco = true\n[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n",
     )
     .write(&tmp.path().join("objects.toml"));
     let (one, two) = (tmp.path().join("one"), tmp.path().join("two"));
@@ -257,4 +263,6 @@ fn several_objects_keep_their_track_ids_over_a_collect() {
         assert_eq!(m["objects"], serde_json::Value::from(listed), "{m}");
     }
     assert!(followed > 0, "no object followed over its collect");
+    // Labels, truths and COCO agree; the objects show in their first frames at least.
+    assert!(assert_coco_agrees_with_labels_and_truth(&one) >= 2 * n as usize);
 }

@@ -329,3 +329,40 @@ pub fn assert_coco_bbox_is_label_box(
     }
     got
 }
+
+/// The COCO export of run `out` (`artifacts.coco`, in `out/export/coco`) against its label files
+/// and truth sidecars, image by image: one annotation per label line and per labelled object
+/// of the truth (the image's own, or each of `objects` with `[objects]`), each bbox its label
+/// box (`assert_coco_bbox_is_label_box`). Returns the number of annotations.
+pub fn assert_coco_agrees_with_labels_and_truth(out: &Path) -> usize {
+    let mut annotations = 0;
+    for split in ["train", "val", "test"] {
+        let path = out.join(format!("export/coco/{split}.json"));
+        if !path.exists() {
+            continue;
+        }
+        let coco = json(&path);
+        let anns = coco["annotations"].as_array().unwrap();
+        for im in coco["images"].as_array().unwrap() {
+            let id = im["id"].as_u64().unwrap();
+            let stem = format!("img_{id:06}");
+            let labels =
+                std::fs::read_to_string(out.join(format!("labels/{split}/{stem}.txt"))).unwrap();
+            let truth = json(&out.join(format!("truth/{stem}.json")));
+            let boxes: Vec<&serde_json::Value> = match truth["objects"].as_array() {
+                Some(objects) => objects.iter().map(|o| &o["label_box_final_px"]).collect(),
+                None => vec![&truth["label_box_final_px"]],
+            };
+            let boxes: Vec<_> = boxes.into_iter().filter(|b| !b.is_null()).collect();
+            let mine: Vec<&serde_json::Value> =
+                anns.iter().filter(|a| a["image_id"] == id).collect();
+            assert_eq!(labels.lines().count(), boxes.len(), "{stem}");
+            assert_eq!(mine.len(), boxes.len(), "{stem}");
+            for (a, b) in mine.iter().zip(boxes) {
+                assert_coco_bbox_is_label_box(a, b, &stem);
+            }
+            annotations += mine.len();
+        }
+    }
+    annotations
+}
