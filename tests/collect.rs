@@ -9,8 +9,8 @@ use soig::sky::{angle_deg, radec_unit};
 
 mod common;
 use common::{
-    CampaignToml, assert_coco_agrees_with_labels_and_truth, json, rendered, run_on_threads, soig,
-    tle_object,
+    CampaignToml, assert_coco_agrees_with_labels_and_truth, json, rendered,
+    run_on_one_and_two_threads_and_verify, tle_object,
 };
 
 /// `collects` collects of `frames` frames 10 s apart, 256 px at the paper's pixel scale, in
@@ -105,13 +105,7 @@ fn a_collect_run_keeps_collects_whole_and_replays() {
         "[artifacts]\nfits = true\ncoco = true\n[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n",
     )
     .write(&tmp.path().join("collect.toml"));
-    let (one, two) = (tmp.path().join("one"), tmp.path().join("two"));
-    assert_eq!(
-        run_on_threads(&file, &one, "1"),
-        run_on_threads(&file, &two, "2")
-    );
-    let v = soig(&["verify", one.to_str().unwrap()]);
-    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+    let one = run_on_one_and_two_threads_and_verify(&file, tmp.path());
 
     let mut subsets = std::collections::BTreeSet::new();
     for c in 0..6u64 {
@@ -188,13 +182,7 @@ fn several_objects_keep_their_track_ids_over_a_collect() {
          [artifacts]\ncoco = true\n[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n",
     )
     .write(&tmp.path().join("objects.toml"));
-    let (one, two) = (tmp.path().join("one"), tmp.path().join("two"));
-    assert_eq!(
-        run_on_threads(&file, &one, "1"),
-        run_on_threads(&file, &two, "2")
-    );
-    let v = soig(&["verify", one.to_str().unwrap()]);
-    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+    let one = run_on_one_and_two_threads_and_verify(&file, tmp.path());
 
     let mut ids = std::collections::BTreeSet::new();
     let mut followed = 0;

@@ -153,13 +153,7 @@ impl DebrisMap {
     /// the box of the whole image's map, to the bit (the zeros around change no sum).
     pub fn label_box(&self, share: f64) -> Option<BoxPx> {
         let b = flux_box(&self.counts, self.width, self.height, share)?;
-        let (dx, dy) = (self.x0 as f64, self.y0 as f64);
-        Some(BoxPx {
-            x_min: b.x_min + dx,
-            y_min: b.y_min + dy,
-            x_max: b.x_max + dx,
-            y_max: b.y_max + dy,
-        })
+        Some(b.shifted(self.x0 as f64, self.y0 as f64))
     }
 
     /// Each row of the box: its pixels' range in a whole image (rows `image_width` long) and
@@ -331,13 +325,7 @@ impl DebrisFlux {
     /// label), in the image's pixel-centre coordinates; None without flux.
     pub fn label_box(&self, share: f64) -> Option<BoxPx> {
         let b = flux_box(&self.mean, self.width, self.spans.len(), share)?;
-        let (dx, dy) = (self.x0 as f64, self.y0 as f64);
-        Some(BoxPx {
-            x_min: b.x_min + dx,
-            y_min: b.y_min + dy,
-            x_max: b.x_max + dx,
-            y_max: b.y_max + dy,
-        })
+        Some(b.shifted(self.x0 as f64, self.y0 as f64))
     }
 
     /// The expected photo-electrons in the image.

@@ -46,6 +46,20 @@ pub fn run_on_threads(campaign: &Path, out: &Path, threads: &str) -> String {
     digest(&o)
 }
 
+/// Run `campaign` into `dir/one` on one thread and `dir/two` on two: the same digest, and
+/// `soig verify` accepts the first. Returns `dir/one`.
+pub fn run_on_one_and_two_threads_and_verify(campaign: &Path, dir: &Path) -> PathBuf {
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    assert_eq!(
+        run_on_threads(campaign, &one, "1"),
+        run_on_threads(campaign, &two, "2"),
+        "the digest depends on the thread count"
+    );
+    let v = soig(&["verify", one.to_str().unwrap()]);
+    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+    one
+}
+
 /// A JSON file, parsed; panics naming the file.
 pub fn json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(
