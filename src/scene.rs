@@ -936,6 +936,7 @@ fn try_place(
         placement,
         tumble,
     } = *draws;
+    // The first frame is judged; a later one (another scene) follows it.
     let gated = std::ptr::eq(first, at);
     let mid_of = |s: &Scene| s.start + Duration::from_seconds(s.exposure_s / 2.0);
     let sighting_at = |mid: Epoch| {
