@@ -384,11 +384,14 @@ pub fn provenance_cards(
             Card::Int(k.frames as i64),
             "frames in the collect",
         );
-        push(
-            "TRACKID",
-            Card::Int(k.track_id as i64),
-            "object id across the collect",
-        );
+        // With [objects] each object has its own track id (in the truth), not the pointing's.
+        if scene.placed.is_none() {
+            push(
+                "TRACKID",
+                Card::Int(k.track_id as i64),
+                "object id across the collect",
+            );
+        }
     }
     if let Some(f) = &t.frame {
         push(

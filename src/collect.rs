@@ -9,16 +9,23 @@ use serde::{Deserialize, Serialize};
 
 use crate::artifacts::{dataset_paths, stem};
 use crate::dataset::Subset;
-use crate::scene::CollectFrame;
 
 /// One collect's manifest.
 #[derive(Debug, Serialize, Deserialize)]
 pub struct CollectManifest {
     pub collect: u64,
-    /// The object's id over the collect's frames (the truths' `collect.track_id`).
-    pub track_id: u64,
-    pub object: String,
-    pub norad: u64,
+    /// The object's id over the collect's frames (the truths' `collect.track_id`); with
+    /// `[objects]`, `objects` instead.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub track_id: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub object: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub norad: Option<u64>,
+    /// With `[objects]`: the collect's objects, the same in each of its frames (each truth's
+    /// `objects[].track_id`), in their order.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub objects: Option<Vec<Track>>,
     /// The split subset of every frame (a collect is never split), when there is a dataset.
     pub subset: Option<String>,
     /// In time order.
@@ -38,14 +45,32 @@ pub struct FrameEntry {
     pub png: Option<String>,
 }
 
-/// What the manifest reads of a truth sidecar.
+/// One object of a collect with `[objects]`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Track {
+    pub track_id: u64,
+    pub object: String,
+    pub norad: u64,
+}
+
+/// What the manifest reads of a truth sidecar: an image's (one object), or a frame's with
+/// `[objects]`.
 #[derive(Deserialize)]
 struct Sidecar {
-    object: String,
-    norad: u64,
+    object: Option<String>,
+    norad: Option<u64>,
     start_utc: String,
     exposure_s: f64,
-    collect: Option<CollectFrame>,
+    collect: Option<Place>,
+    objects: Option<Vec<Track>>,
+}
+
+/// A truth's place in its collect (with one object per image, its track id too).
+#[derive(Deserialize)]
+struct Place {
+    collect: u64,
+    frame: u64,
+    track_id: Option<u64>,
 }
 
 /// Write the manifests of the collects of images `indices` in `dir`, from their truths;
@@ -78,6 +103,7 @@ pub fn write_manifests(
                 track_id: k.track_id,
                 object: t.object.clone(),
                 norad: t.norad,
+                objects: t.objects.clone(),
                 subset: subset(i).map(|s| s.name().to_string()),
                 frames: Vec::new(),
             });

@@ -249,6 +249,16 @@ pub struct BoxPx {
 }
 
 impl BoxPx {
+    /// The box moved by (dx, dy) pixels: from a sub-image's coordinates to the image's.
+    pub fn shifted(self, dx: f64, dy: f64) -> BoxPx {
+        BoxPx {
+            x_min: self.x_min + dx,
+            y_min: self.y_min + dy,
+            x_max: self.x_max + dx,
+            y_max: self.y_max + dy,
+        }
+    }
+
     /// The YOLO line `0 xc yc w h`, normalised by the image size.
     pub fn yolo_line(&self, width: usize, height: usize) -> String {
         let (w, h) = (width as f64, height as f64);

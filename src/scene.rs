@@ -5,7 +5,8 @@
 //! object keeps its share of the images, and the accepted scene is a pure function of (scene
 //! spec, sensor, inputs, seed, image index). With `Spec::objects` (several objects per frame,
 //! or none) that scene only points the sensor, and each of the frame's objects is drawn and
-//! placed in the field on its own streams (`place`). The campaign file is never seen here: the
+//! placed in the field on its own streams (`place`; in a collect, the collect's streams, judged
+//! on its first frame and followed through the others). The campaign file is never seen here: the
 //! config layer (`experiment`) builds the values.
 
 use std::collections::BTreeMap;
@@ -172,9 +173,10 @@ pub struct ObjectCount {
 }
 
 impl ObjectCount {
-    /// The number of objects of image `image`, from its own stream.
-    pub fn draw(&self, seed: u64, image: u64) -> u32 {
-        let rng = &mut stream(seed, image, Purpose::ObjectCount);
+    /// The number of objects of collect `collect` (an image, without `[collect]`), from its
+    /// own stream.
+    pub fn draw(&self, seed: u64, collect: u64) -> u32 {
+        let rng = &mut stream(seed, collect, Purpose::ObjectCount);
         if rng.random::<f64>() < self.empty_share {
             return 0;
         }
@@ -732,15 +734,15 @@ pub fn draw(
         let d = draw_values(spec, inputs, on_frame, rng);
         match try_draw(spec, sensor, inputs, image, debris_index, &d, Plan::First) {
             Ok(first) => {
-                let mut scene = if frame == 0 {
-                    first
+                let later = if frame == 0 {
+                    None
                 } else {
-                    let later = Plan::Later {
+                    let plan = Plan::Later {
                         frame,
                         first: &first,
                     };
-                    match try_draw(spec, sensor, inputs, image, debris_index, &d, later) {
-                        Ok(s) => s,
+                    match try_draw(spec, sensor, inputs, image, debris_index, &d, plan) {
+                        Ok(s) => Some(s),
                         // The collect was accepted by its first frame: no retry here.
                         Err(reason) => {
                             *rejections.entry(reason).or_default() += 1;
@@ -748,6 +750,17 @@ pub fn draw(
                         }
                     }
                 };
+                // A collect's objects: drawn and judged on its first frame, then followed
+                // into this one.
+                let placed = match spec.objects {
+                    Some(count) => Some(
+                        (0..count.draw(seed, collect) as u64)
+                            .map(|k| place(spec, sensor, inputs, seed, (&first, later.as_ref()), k))
+                            .collect::<Result<Vec<_>, _>>()?,
+                    ),
+                    None => None,
+                };
+                let mut scene = later.unwrap_or(first);
                 scene.attempts = attempt;
                 scene.rejections = rejections;
                 if frames > 1 {
@@ -758,13 +771,7 @@ pub fn draw(
                         track_id: collect,
                     });
                 }
-                if let Some(count) = spec.objects {
-                    let n = count.draw(seed, image);
-                    let placed = (0..n as u64)
-                        .map(|k| place(spec, sensor, inputs, seed, &scene, k))
-                        .collect::<Result<Vec<_>, _>>()?;
-                    scene.placed = Some(placed);
-                }
+                scene.placed = placed;
                 return Ok(scene);
             }
             Err(reason) => *rejections.entry(reason).or_default() += 1,
@@ -807,32 +814,75 @@ impl NoScene {
 /// placement fraction of the field (a catalogued object is rarely in another's field; this
 /// puts it there with its own kinematics). It then meets the checks of the pointing's own
 /// object there: Earth, Sun and Moon angles, line of sight, shadow, magnitude limit and
-/// signal to noise (the bright-star check is the frame's).
+/// signal to noise (the bright-star check is the frame's). In a collect (`first` and a
+/// `later` frame) the object is the one its first frame accepted (the collect's stream),
+/// turned by the same rotation and rendered at the later frame's time unjudged, as the
+/// pointing's own object is; it keeps its track id (`object_track_id`).
 fn place(
     spec: &Spec,
     sensor: &Sensor,
     inputs: &Inputs,
     seed: u64,
-    frame: &Scene,
+    (first, later): (&Scene, Option<&Scene>),
     k: u64,
 ) -> Result<Scene, NoScene> {
-    let image = frame.image_index;
-    let rng = &mut object_stream(seed, image, k, Purpose::ObjectScene);
+    let image = later.unwrap_or(first).image_index;
+    let frames = spec.collect_frames.max(1);
+    let (collect, frame) = (image / frames, image % frames);
+    let rng = &mut object_stream(seed, collect, k, Purpose::ObjectScene);
     let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
     let max = spec.gate.max_attempts;
     let mut debris_index = 0;
     for attempt in 1..=max {
         debris_index = pick_debris(spec, inputs.debris.len(), rng);
-        match try_place(spec, sensor, inputs, frame, debris_index, rng) {
-            Ok(mut scene) => {
+        let draws = PlaceDraws {
+            area_m2: spec.area.draw(rng),
+            placement: (
+                rng.random_range(-1.0..1.0) * spec.placement_fraction,
+                rng.random_range(-1.0..1.0) * spec.placement_fraction,
+            ),
+            tumble: draw_tumble(spec, rng),
+        };
+        let shot = |at: &Scene| try_place(spec, sensor, inputs, (first, at), debris_index, &draws);
+        match shot(first) {
+            Ok(judged) => {
+                // A later frame of a collect follows the object accepted on its first, unjudged.
+                let mut scene = match later {
+                    None => judged,
+                    Some(at) => shot(at).map_err(|reason| {
+                        rejections.insert(reason, 1);
+                        NoScene::of(inputs, image, debris_index, attempt, rejections.clone())
+                    })?,
+                };
                 scene.attempts = attempt;
                 scene.rejections = rejections;
+                if frames > 1 {
+                    scene.collect = Some(CollectFrame {
+                        collect,
+                        frame,
+                        frames,
+                        track_id: object_track_id(collect, k),
+                    });
+                }
                 return Ok(scene);
             }
             Err(reason) => *rejections.entry(reason).or_default() += 1,
         }
     }
     Err(NoScene::of(inputs, image, debris_index, max, rejections))
+}
+
+/// The track id of object `k` of a collect with `[objects]`: unique in the campaign, the same
+/// in every frame of the collect.
+pub fn object_track_id(collect: u64, k: u64) -> u64 {
+    collect * crate::campaign::MAX_OBJECTS_PER_FRAME as u64 + k
+}
+
+/// A placed object's own draws, in its stream's order after its debris.
+struct PlaceDraws {
+    area_m2: f64,
+    placement: (f64, f64),
+    tumble: Option<Tumble>,
 }
 
 /// A rigid turn about the observer (`place`): the debris' place relative to the observer, and
@@ -870,40 +920,57 @@ impl Turn {
     }
 }
 
+/// Object `debris_index` with `draws` in frame `at` of its collect (the first, judged, or a
+/// later one, not judged): turned about the observer so that at the first frame's
+/// mid-exposure it lies at its placement, and moving on from there with its own motion.
 fn try_place(
     spec: &Spec,
     sensor: &Sensor,
     inputs: &Inputs,
-    frame: &Scene,
+    (first, at): (&Scene, &Scene),
     debris_index: usize,
-    rng: &mut ChaCha12Rng,
+    draws: &PlaceDraws,
 ) -> Result<Scene, Rejection> {
-    let (start, exposure_s) = (frame.start, frame.exposure_s);
-    let mid = start + Duration::from_seconds(exposure_s / 2.0);
-    let area_m2 = spec.area.draw(rng);
-    let placement = (
-        rng.random_range(-1.0..1.0) * spec.placement_fraction,
-        rng.random_range(-1.0..1.0) * spec.placement_fraction,
-    );
-    let tumble = draw_tumble(spec, rng);
-    let sighting = Sighting::new(
-        &inputs.observer.propagator,
-        &inputs.debris[debris_index].propagator,
-        mid,
-        spec.apparent_positions,
-    );
-    let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
-    let mid_tan = frame.projection(sensor);
-    let (ra_t, dec_t) = mid_tan.sky(
-        mid_tan.cx + placement.0 * sensor.width_px as f64 / 2.0,
-        mid_tan.cy + placement.1 * sensor.height_px as f64 / 2.0,
+    let PlaceDraws {
+        area_m2,
+        placement,
+        tumble,
+    } = *draws;
+    // The first frame is judged; a later one (another scene) follows it.
+    let gated = std::ptr::eq(first, at);
+    let mid_of = |s: &Scene| s.start + Duration::from_seconds(s.exposure_s / 2.0);
+    let sighting_at = |mid: Epoch| {
+        Sighting::new(
+            &inputs.observer.propagator,
+            &inputs.debris[debris_index].propagator,
+            mid,
+            spec.apparent_positions,
+        )
+    };
+    let first_mid = mid_of(first);
+    let first_sighting = sighting_at(first_mid);
+    let sight = first_sighting
+        .at(first_mid)
+        .ok_or(Rejection::PropagationFailed)?;
+    let first_tan = first.projection(sensor);
+    let (ra_t, dec_t) = first_tan.sky(
+        first_tan.cx + placement.0 * sensor.width_px as f64 / 2.0,
+        first_tan.cy + placement.1 * sensor.height_px as f64 / 2.0,
     );
     // The camera's mid-exposure frame is the sky's in fixed pointing, and survey pointing is
     // at its mid-exposure attitude then: the place is the same direction in both.
     let turn = Turn::between(unit(sight.direction), radec_unit(ra_t, dec_t));
+    let (start, exposure_s, mid) = (at.start, at.exposure_s, mid_of(at));
+    let (sighting, sight) = if gated {
+        (first_sighting, sight)
+    } else {
+        let sighting = sighting_at(mid);
+        let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
+        (sighting, sight)
+    };
     let sight = turn.apply(sight);
     let sun = sun_position_km(mid);
-    let (geometry, _) = visibility(spec, sensor, &sight, (sun, mid), area_m2, true)?;
+    let (geometry, shadowed) = visibility(spec, sensor, &sight, (sun, mid), area_m2, gated)?;
     let track = sighting
         .track(start, exposure_s)
         .ok_or(Rejection::PropagationFailed)?;
@@ -916,9 +983,9 @@ fn try_place(
             sun,
             area_m2,
             tumble,
-            pointing: &frame.pointing,
-            mid_tan: &mid_tan,
-            shadowed: false,
+            pointing: &at.pointing,
+            mid_tan: &at.projection(sensor),
+            shadowed,
         },
     )?;
     let (snr, snr_noise_level, snr_noise_sigma) = gate_snr(
@@ -926,18 +993,18 @@ fn try_place(
         sensor,
         &trajectory,
         exposure_s,
-        inputs.frame(frame.background),
-        true,
+        inputs.frame(at.background),
+        gated,
     )?;
     let debris = &inputs.debris[debris_index];
     Ok(Scene {
-        image_index: frame.image_index,
+        image_index: at.image_index,
         debris_index,
         debris_name: debris.name.clone(),
         norad: debris.norad,
         start,
         exposure_s,
-        pointing: frame.pointing.clone(),
+        pointing: at.pointing.clone(),
         area_m2,
         tumble,
         geometry,
@@ -945,7 +1012,7 @@ fn try_place(
         ephemeris: None,
         trajectory,
         stars: Vec::new(),
-        background: frame.background,
+        background: at.background,
         snr,
         snr_noise_level,
         snr_noise_sigma,

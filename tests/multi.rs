@@ -184,7 +184,6 @@ fn object_counts_are_checked_and_the_committed_campaign_loads() {
         ("per_frame = { min = 3, max = 1 }", "objects.per_frame.max"),
         ("per_frame = 101", "objects.per_frame"),
         ("per_frame = 2\nempty_share = 1.5", "objects.empty_share"),
-        ("per_frame = 2\n[collect]\nframes = 2", "objects"),
     ] {
         let e = CampaignToml::new("bad", 1, 2)
             .debris(ELEMENTS_40649)

@@ -7,7 +7,10 @@ use soig::scene::Pointing;
 use soig::sky::{angle_deg, radec_unit};
 
 mod common;
-use common::{CampaignToml, digest, rendered, run_on_threads, soig, tle_object};
+use common::{
+    CampaignToml, assert_coco_agrees_with_labels_and_truth, digest, rendered,
+    run_on_one_and_two_threads_and_verify, soig, tle_object,
+};
 
 /// Track images of 512 px at the paper's pixel scale (0.7"), a LEO and a GEO object;
 /// `extra` adds tables.
@@ -149,15 +152,9 @@ fn star_trails_match_the_tracking_rate() {
 fn track_campaign_runs_verifies_and_is_thread_independent() {
     let tmp = tempfile::tempdir().unwrap();
     let file = track("")
-        .tables("[artifacts]\nnoise_free_fits = true\n")
+        .tables("[artifacts]\nnoise_free_fits = true\ncoco = true\n")
         .write(&tmp.path().join("track.toml"));
-    let (one, two) = (tmp.path().join("one"), tmp.path().join("two"));
-    assert_eq!(
-        run_on_threads(&file, &one, "1"),
-        run_on_threads(&file, &two, "2")
-    );
-    let v = soig(&["verify", one.to_str().unwrap()]);
-    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+    let one = run_on_one_and_two_threads_and_verify(&file, tmp.path());
     let fits = std::fs::read(one.join("fits").join("img_000000.fits")).unwrap();
     let header = String::from_utf8_lossy(&fits[..2880 * 4]);
     assert!(header.contains("POINTING= 'track"), "no POINTING card");
@@ -167,6 +164,8 @@ fn track_campaign_runs_verifies_and_is_thread_independent() {
             .unwrap();
     assert_eq!(truth["pointing"]["mode"], "track");
     assert!(truth["pointing"]["boresight_radec_start_deg"][1].is_number());
+    // Labels, truths and COCO agree: every tracked object is in its field.
+    assert!(assert_coco_agrees_with_labels_and_truth(&one) > 0);
 }
 
 /// The classical detector on track images: the star trails are not debris. It gets their

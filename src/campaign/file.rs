@@ -213,6 +213,8 @@ impl CampaignFile {
 /// frames share its draw (object, first start, exposure, placement, background, light curve)
 /// and its pointing plan (fixed: one direction; survey: the observer's attitude running on;
 /// track: the object followed), frame k starting `k * (exposure + gap_s)` after the first.
+/// With `[objects]` the collect's objects too: drawn and judged on its first frame, each
+/// followed through the others with its own motion and its own track id.
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Collect {

@@ -21,6 +21,7 @@ use hifitime::Epoch;
 pub use file::*;
 pub use noise::{Noise, PhysicalNoise};
 pub use resolve::{MAX_SURVEY_DRIFT_DEG, parse_epoch};
+pub use validate::MAX_OBJECTS_PER_FRAME;
 
 pub use crate::geometry::FrameKind;
 pub use crate::render::RenderMethod;

@@ -96,13 +96,6 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
             "objects.empty_share",
             "must be in [0, 1]",
         )?;
-        // A collect links its one object across frames by a track id; several objects per
-        // frame would need one per object, which is not built.
-        check(
-            c.collect.as_ref().is_none_or(|k| k.frames == 1),
-            "objects",
-            "cannot be combined with [collect] frames > 1 (a collect's track id follows one object)",
-        )?;
     }
     let e = &c.exposure;
     check(

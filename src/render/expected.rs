@@ -103,6 +103,86 @@ pub fn expected_flux(sensor: &Sensor, scene: &Scene, jitter: &Jitter) -> Flux {
 /// of a quickstart streak, so the per-pixel draw lands what tracing lands.
 const DEBRIS_SUPPORT_SIGMA: f64 = 7.0;
 
+/// One object's noise-free photo-electrons within a box of the image (zero outside it): what
+/// its label box and its warp into another frame need, without a whole image per object.
+pub struct DebrisMap {
+    pub x0: usize,
+    pub y0: usize,
+    pub width: usize,
+    pub height: usize,
+    pub counts: Vec<u32>,
+}
+
+impl DebrisMap {
+    /// The box of a whole image's map that holds every lit pixel.
+    pub fn crop(image: &[u32], image_width: usize) -> DebrisMap {
+        let lit_rows: Vec<(usize, usize, usize)> = image
+            .chunks_exact(image_width.max(1))
+            .enumerate()
+            .filter_map(|(j, row)| {
+                let first = row.iter().position(|&v| v > 0)?;
+                Some((j, first, row.iter().rposition(|&v| v > 0).unwrap_or(first)))
+            })
+            .collect();
+        let (Some(top), Some(bottom)) = (lit_rows.first(), lit_rows.last()) else {
+            return DebrisMap {
+                x0: 0,
+                y0: 0,
+                width: 0,
+                height: 0,
+                counts: Vec::new(),
+            };
+        };
+        let x0 = lit_rows.iter().map(|r| r.1).min().unwrap_or(0);
+        let x1 = lit_rows.iter().map(|r| r.2).max().unwrap_or(0);
+        let (y0, width, height) = (top.0, x1 - x0 + 1, bottom.0 - top.0 + 1);
+        let counts = (y0..y0 + height)
+            .flat_map(|j| &image[j * image_width + x0..j * image_width + x0 + width])
+            .copied()
+            .collect();
+        DebrisMap {
+            x0,
+            y0,
+            width,
+            height,
+            counts,
+        }
+    }
+
+    /// The label box ([`flux_box`] holding `share`) in the image's pixel-centre coordinates:
+    /// the box of the whole image's map, to the bit (the zeros around change no sum).
+    pub fn label_box(&self, share: f64) -> Option<BoxPx> {
+        let b = flux_box(&self.counts, self.width, self.height, share)?;
+        Some(b.shifted(self.x0 as f64, self.y0 as f64))
+    }
+
+    /// Each row of the box: its pixels' range in a whole image (rows `image_width` long) and
+    /// in `counts`.
+    pub fn rows(
+        &self,
+        image_width: usize,
+    ) -> impl Iterator<Item = (std::ops::Range<usize>, std::ops::Range<usize>)> + '_ {
+        (0..self.height).map(move |j| {
+            let start = (self.y0 + j) * image_width + self.x0;
+            (
+                start..start + self.width,
+                j * self.width..(j + 1) * self.width,
+            )
+        })
+    }
+
+    /// The whole image's map, as floats (for a warp into another frame).
+    pub fn to_image(&self, image_width: usize, image_height: usize) -> Vec<f32> {
+        let mut image = vec![0.0f32; image_width * image_height];
+        for (to, from) in self.rows(image_width) {
+            for (t, &c) in image[to].iter_mut().zip(&self.counts[from]) {
+                *t = c as f32;
+            }
+        }
+        image
+    }
+}
+
 /// The debris' expected photo-electrons per pixel on the box its PSF reaches: each trajectory
 /// sample's photons at its jittered position (all arrive at the sample's time), the PSF
 /// integrated over each pixel. No node merging: it is exact up to the 7-sigma support and
@@ -200,13 +280,38 @@ impl DebrisFlux {
     /// distribution of tracing every photon singly, at the cost of the pixels the streak
     /// reaches instead of its photons (0.85 million normal pairs per quickstart image).
     pub fn draw(&self, rng: &mut PixelRng, counts: &mut [u32], image_width: usize) -> u64 {
+        self.draw_at(rng, counts, image_width, (self.x0, self.y0))
+    }
+
+    /// `draw` into a map of the flux's own box (`DebrisMap`): the same draws in the same
+    /// order, without a whole image of zeros around them.
+    pub fn draw_own_box(&self, rng: &mut PixelRng) -> (DebrisMap, u64) {
+        let mut map = DebrisMap {
+            x0: self.x0,
+            y0: self.y0,
+            width: self.width,
+            height: self.spans.len(),
+            counts: vec![0; self.width * self.spans.len()],
+        };
+        let total = self.draw_at(rng, &mut map.counts, self.width, (0, 0));
+        (map, total)
+    }
+
+    /// `draw` into `counts`, rows `stride` long, the box's corner at `origin`.
+    fn draw_at(
+        &self,
+        rng: &mut PixelRng,
+        counts: &mut [u32],
+        stride: usize,
+        origin: (usize, usize),
+    ) -> u64 {
         let mut total = 0u64;
         for (j, &(first, end)) in self.spans.iter().enumerate() {
             if first >= end {
                 continue;
             }
             let row = &self.mean[j * self.width + first..j * self.width + end];
-            let start = (self.y0 + j) * image_width + self.x0 + first;
+            let start = (origin.1 + j) * stride + origin.0 + first;
             for (c, &m) in counts[start..start + row.len()].iter_mut().zip(row) {
                 let n = poisson(rng, m);
                 *c = c.saturating_add(n.min(u32::MAX as u64) as u32);
@@ -216,30 +321,11 @@ impl DebrisFlux {
         total
     }
 
-    /// The pixels `draw` may count in, as index ranges of the whole image (rows
-    /// `image_width` long).
-    pub fn rows(&self, image_width: usize) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
-        self.spans
-            .iter()
-            .enumerate()
-            .filter(|(_, (first, end))| first < end)
-            .map(move |(j, &(first, end))| {
-                let start = (self.y0 + j) * image_width + self.x0 + first;
-                start..start + (end - first)
-            })
-    }
-
     /// The label box of this flux ([`flux_box`] holding `share` of it, as the renderer's
     /// label), in the image's pixel-centre coordinates; None without flux.
     pub fn label_box(&self, share: f64) -> Option<BoxPx> {
         let b = flux_box(&self.mean, self.width, self.spans.len(), share)?;
-        let (dx, dy) = (self.x0 as f64, self.y0 as f64);
-        Some(BoxPx {
-            x_min: b.x_min + dx,
-            y_min: b.y_min + dy,
-            x_max: b.x_max + dx,
-            y_max: b.y_max + dy,
-        })
+        Some(b.shifted(self.x0 as f64, self.y0 as f64))
     }
 
     /// The expected photo-electrons in the image.

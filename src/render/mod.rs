@@ -8,7 +8,7 @@ use crate::rng::PixelRng;
 use serde::Serialize;
 
 use crate::background::RealFrame;
-use crate::geometry::{LABEL_SHARE, flux_box};
+use crate::geometry::{BoxPx, LABEL_SHARE, flux_box};
 use crate::rng::poisson;
 use crate::scene::Scene;
 use crate::sensor::Sensor;
@@ -93,7 +93,7 @@ pub struct Exposure {
 /// noise-free photo-electrons alone, for its label box in any frame.
 pub struct ObjectExposure {
     pub truth: Truth,
-    pub debris_electrons: Vec<u32>,
+    pub debris: expected::DebrisMap,
 }
 
 /// Where the photons of the sources go: traced one by one (the debris' drawn per pixel, the
@@ -194,44 +194,39 @@ pub fn render_placed(
                 let rng = &mut object_photons(k as u64);
                 let flux = expected::DebrisFlux::of_scene(sensor, object, jitter);
                 // An object alone, its photons all single: drawn per pixel as `photons` would
-                // (the same draws), and added to the image over the box they can reach, not
-                // over the whole image (two passes of 1M pixels an object).
+                // (the same draws) into a map of the box they can reach, and added to the
+                // image there: no whole image of zeros to fill, add and search an object.
                 let (debris, total) = if settings.method.is_photon_mapping()
                     && singles_only(object, settings.merge_threshold)
                 {
-                    let mut debris = vec![0; width * height];
-                    let total = flux.draw(rng, &mut debris, width);
-                    for range in flux.rows(width) {
-                        for (e, &d) in canvas.electrons[range.clone()]
-                            .iter_mut()
-                            .zip(&debris[range])
-                        {
-                            *e = e.saturating_add(d);
-                        }
-                    }
-                    (debris, total)
+                    flux.draw_own_box(rng)
                 } else {
                     let (c, _, _) = photons(sensor, settings, object, jitter, rng);
-                    for (e, &d) in canvas.electrons.iter_mut().zip(&c.debris) {
+                    (expected::DebrisMap::crop(&c.debris, width), c.debris_total)
+                };
+                for (to, from) in debris.rows(width) {
+                    for (e, &d) in canvas.electrons[to].iter_mut().zip(&debris.counts[from]) {
                         *e = e.saturating_add(d);
                     }
-                    (c.debris, c.debris_total)
-                };
-                let truth = truth_of(sensor, object, frame, jitter, (&debris, total), &flux, 0);
-                ObjectExposure {
-                    truth,
-                    debris_electrons: debris,
                 }
+                let label_box = debris.label_box(LABEL_SHARE);
+                let truth = truth_of(sensor, object, frame, jitter, (label_box, total), &flux, 0);
+                ObjectExposure { truth, debris }
             })
             .collect()
     });
     let adu = detector::adu(sensor, &canvas.electrons, scene, frame, noise_rng);
+    // With placed objects the pointing's own object is not rendered: no photon, no box.
+    let label_box = match scene.placed {
+        Some(_) => None,
+        None => flux_box(&canvas.debris, width, height, LABEL_SHARE),
+    };
     let truth = truth_of(
         sensor,
         own,
         frame,
         jitter,
-        (&canvas.debris, canvas.debris_total),
+        (label_box, canvas.debris_total),
         &debris_flux,
         traced.len(),
     );
@@ -307,18 +302,17 @@ fn photons(
     (canvas, traced, debris_flux)
 }
 
-/// The truth of a scene's debris as rendered (`debris`: its photo-electrons per pixel and in
-/// all; `stars_traced`: the stars of the image).
+/// The truth of a scene's debris as rendered (its label box and photo-electrons in all;
+/// `stars_traced`: the stars of the image).
 fn truth_of(
     sensor: &Sensor,
     scene: &Scene,
     frame: Option<&RealFrame>,
     jitter: &Jitter,
-    (debris, debris_total): (&[u32], u64),
+    (label_box_px, debris_total): (Option<BoxPx>, u64),
     debris_flux: &expected::DebrisFlux,
     stars_traced: usize,
 ) -> Truth {
-    let (width, height) = (sensor.width_px, sensor.height_px);
     let t_exp = scene.exposure_s;
     let jitter_mean = jitter.mean();
     let (expected_debris, mag_min, mag_max) = scene
@@ -370,7 +364,7 @@ fn truth_of(
         streak_end_px: last.unwrap_or([f64::NAN; 2]),
         streak_start_wcs_radec_deg: through_wcs(first),
         streak_end_wcs_radec_deg: through_wcs(last),
-        label_box_px: flux_box(debris, width, height, LABEL_SHARE),
+        label_box_px,
         frame: None,
         label_box_final_px: None,
         magnitude: g.magnitude,

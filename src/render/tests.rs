@@ -531,3 +531,44 @@ fn noise_level_is_the_mean_the_detector_adds() {
     // The paper's 5 s level: 200 ADU of background plus 2.5 of bias.
     assert!((c.sensor.noise_level_adu(5.0, None) - 202.5).abs() < 1e-12);
 }
+
+#[test]
+fn an_objects_own_box_holds_the_whole_image_draws_and_label() {
+    // A placed object is drawn into its flux's own box (`DebrisFlux::draw_own_box`), not a
+    // whole image: the same draws from the same stream, the same total, the same pixels once
+    // put back, and the same label box to the bit as `flux_box` of the whole image's map;
+    // `DebrisMap::crop` of that whole map gives the box of its lit pixels, and the same label.
+    let c = fixture(2e-4);
+    let s = scene(&c, vec![], 14.5, 2.0);
+    let jitter = Jitter::of_scene(
+        &c.sensor,
+        &c.render,
+        &s,
+        &mut pixel_stream(5, 0, PixelPurpose::Photons),
+    );
+    let flux = expected::DebrisFlux::of_scene(&c.sensor, &s, &jitter);
+    let (w, h) = (c.sensor.width_px, c.sensor.height_px);
+    let mut whole = vec![0u32; w * h];
+    let total = flux.draw(
+        &mut pixel_stream(5, 0, PixelPurpose::Photons),
+        &mut whole,
+        w,
+    );
+    let (own, own_total) = flux.draw_own_box(&mut pixel_stream(5, 0, PixelPurpose::Photons));
+    assert!(total > 0);
+    assert_eq!(own_total, total);
+    assert!(own.width < w && own.height < h, "the box is not the image");
+    let back: Vec<u32> = own.to_image(w, h).iter().map(|&v| v as u32).collect();
+    assert_eq!(back, whole);
+    let label = flux_box(&whole, w, h, LABEL_SHARE);
+    assert!(label.is_some());
+    assert_eq!(own.label_box(LABEL_SHARE), label);
+    let cropped = expected::DebrisMap::crop(&whole, w);
+    assert_eq!(cropped.counts.iter().map(|&v| v as u64).sum::<u64>(), total);
+    assert_eq!(cropped.label_box(LABEL_SHARE), label);
+    assert!(
+        expected::DebrisMap::crop(&vec![0; w * h], w)
+            .label_box(LABEL_SHARE)
+            .is_none()
+    );
+}

@@ -99,7 +99,19 @@ pub struct FrameTruth<'a> {
     /// The pointing draw's attempts and rejections.
     pub attempts: u32,
     pub rejections: &'a std::collections::BTreeMap<crate::scene::Rejection, u32>,
+    /// The image's place in its multi-frame collect; each object has its own `track_id`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collect: Option<CollectPlace>,
     pub objects: Vec<ObjectTruth<'a>>,
+}
+
+/// A frame's place in its collect (a [`crate::scene::CollectFrame`] without the pointing
+/// object's track id: with `[objects]` each object has its own).
+#[derive(Serialize)]
+pub struct CollectPlace {
+    pub collect: u64,
+    pub frame: u64,
+    pub frames: u64,
 }
 
 /// One object of a [`FrameTruth`]: the object's fields of [`Truth`] (same meanings), its
@@ -111,6 +123,10 @@ pub struct ObjectTruth<'a> {
     pub object: &'a str,
     pub norad: u64,
     pub debris_index: usize,
+    /// In a multi-frame collect: the object's id, the same in every frame of the collect
+    /// (`scene::object_track_id`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub track_id: Option<u64>,
     pub streak_start_px: [f64; 2],
     pub streak_end_px: [f64; 2],
     pub streak_start_wcs_radec_deg: [f64; 2],
@@ -157,11 +173,17 @@ impl<'a> FrameTruth<'a> {
             background_frame_sha256: &image.background_frame_sha256,
             attempts: image.attempts,
             rejections: &image.rejections,
+            collect: image.collect.map(|k| CollectPlace {
+                collect: k.collect,
+                frame: k.frame,
+                frames: k.frames,
+            }),
             objects: objects
                 .map(|(t, debris_index)| ObjectTruth {
                     object: &t.object,
                     norad: t.norad,
                     debris_index,
+                    track_id: t.collect.map(|k| k.track_id),
                     streak_start_px: t.streak_start_px,
                     streak_end_px: t.streak_end_px,
                     streak_start_wcs_radec_deg: t.streak_start_wcs_radec_deg,

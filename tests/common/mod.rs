@@ -46,6 +46,20 @@ pub fn run_on_threads(campaign: &Path, out: &Path, threads: &str) -> String {
     digest(&o)
 }
 
+/// Run `campaign` into `dir/one` on one thread and `dir/two` on two: the same digest, and
+/// `soig verify` accepts the first. Returns `dir/one`.
+pub fn run_on_one_and_two_threads_and_verify(campaign: &Path, dir: &Path) -> PathBuf {
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    assert_eq!(
+        run_on_threads(campaign, &one, "1"),
+        run_on_threads(campaign, &two, "2"),
+        "the digest depends on the thread count"
+    );
+    let v = soig(&["verify", one.to_str().unwrap()]);
+    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+    one
+}
+
 /// A JSON file, parsed; panics naming the file.
 pub fn json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(
@@ -328,4 +342,41 @@ pub fn assert_coco_bbox_is_label_box(
         );
     }
     got
+}
+
+/// The COCO export of run `out` (`artifacts.coco`, in `out/export/coco`) against its label files
+/// and truth sidecars, image by image: one annotation per label line and per labelled object
+/// of the truth (the image's own, or each of `objects` with `[objects]`), each bbox its label
+/// box (`assert_coco_bbox_is_label_box`). Returns the number of annotations.
+pub fn assert_coco_agrees_with_labels_and_truth(out: &Path) -> usize {
+    let mut annotations = 0;
+    for split in ["train", "val", "test"] {
+        let path = out.join(format!("export/coco/{split}.json"));
+        if !path.exists() {
+            continue;
+        }
+        let coco = json(&path);
+        let anns = coco["annotations"].as_array().unwrap();
+        for im in coco["images"].as_array().unwrap() {
+            let id = im["id"].as_u64().unwrap();
+            let stem = format!("img_{id:06}");
+            let labels =
+                std::fs::read_to_string(out.join(format!("labels/{split}/{stem}.txt"))).unwrap();
+            let truth = json(&out.join(format!("truth/{stem}.json")));
+            let boxes: Vec<&serde_json::Value> = match truth["objects"].as_array() {
+                Some(objects) => objects.iter().map(|o| &o["label_box_final_px"]).collect(),
+                None => vec![&truth["label_box_final_px"]],
+            };
+            let boxes: Vec<_> = boxes.into_iter().filter(|b| !b.is_null()).collect();
+            let mine: Vec<&serde_json::Value> =
+                anns.iter().filter(|a| a["image_id"] == id).collect();
+            assert_eq!(labels.lines().count(), boxes.len(), "{stem}");
+            assert_eq!(mine.len(), boxes.len(), "{stem}");
+            for (a, b) in mine.iter().zip(boxes) {
+                assert_coco_bbox_is_label_box(a, b, &stem);
+            }
+            annotations += mine.len();
+        }
+    }
+    annotations
 }
