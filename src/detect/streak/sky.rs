@@ -114,11 +114,13 @@ impl Sky {
     /// `SHOWS_SIGMA`) from the map: at each lateral offset out to its reach, the median of the
     /// map along the whole trail at that offset. A debris streak crossing the trail, or running
     /// beside or along part of it, covers too little of it to move a median and keeps its
-    /// light. Returns how many trails were subtracted.
-    pub(super) fn subtract(&self, z: &mut [f32], w: usize, h: usize) -> usize {
+    /// light. Returns which pixels lie within the reach of a subtracted trail: there a streak
+    /// crossing it shows less than elsewhere (the 8-bit stretch compresses light added to a
+    /// bright trail), which is no gap in the streak.
+    pub(super) fn subtract(&self, z: &mut [f32], w: usize, h: usize) -> Vec<bool> {
         let source = z.to_vec();
         let mut stamp = vec![usize::MAX; w * h];
-        let mut done = 0;
+        let mut under = vec![false; w * h];
         for (id, t) in self.trails.iter().enumerate() {
             if t.nodes.len() < 2 || t.samples.len() < 8 {
                 continue;
@@ -128,7 +130,6 @@ impl Sky {
             if vals[vals.len() / 4] < SHOWS_SIGMA {
                 continue;
             }
-            done += 1;
             let (a, b) = (t.nodes[0], t.nodes[t.nodes.len() - 1]);
             let len = (b.0 - a.0).hypot(b.1 - a.1).max(1e-9);
             let (ux, uy) = ((b.0 - a.0) / len, (b.1 - a.1) / len);
@@ -163,13 +164,14 @@ impl Sky {
                     if k < 0.0 || k > (2 * r) as f64 {
                         continue;
                     }
+                    under[i] |= off.abs() <= t.reach;
                     let (k0, f) = (k.floor() as usize, k - k.floor());
                     let k1 = (k0 + 1).min(profile.len() - 1);
                     z[i] -= (profile[k0] * (1.0 - f) + profile[k1] * f) as f32;
                 }
             }
         }
-        done
+        under
     }
 
     /// Whether catalogued stars explain the segment `s`: predicted trails along its
