@@ -34,6 +34,10 @@ const COVERED_SHARE: f64 = 0.8;
 /// trail is several times brighter than it).
 const LEVEL_RATIO: f64 = 2.0;
 const LEVEL_SLACK_SIGMA: f64 = 3.0;
+/// A trail wholly under a candidate is measured by the others no brighter in the catalogue
+/// than this many times it (the catalogue magnitude and the sky's colour scatter by about a
+/// tenth of a magnitude; 1.5 is 0.44 mag).
+const FAINTER: f64 = 1.5;
 /// How far a star's trail wanders from its predicted path, pixels: the pointing jitter, which
 /// the prediction (a still pointing shifted by the image's mean jitter) leaves out; 1-1.5 px
 /// measured on a 580 px trail of a rotated survey image.
@@ -49,6 +53,10 @@ struct Prepared {
     reach: f64,
     /// Bounding box of the nodes, grown by `reach`.
     bbox: [f64; 4],
+    /// The map's median along the trail.
+    level: f64,
+    /// Predicted photo-electrons per pixel of path: how bright the catalogue says it is.
+    electrons_per_px: f64,
 }
 
 /// The predicted trails of one image, measured on its smoothed unit-noise map `z` before
@@ -99,11 +107,18 @@ impl Sky {
                 for &(x, y) in &t.nodes {
                     (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
                 }
+                let path: f64 = t
+                    .nodes
+                    .windows(2)
+                    .map(|p| (p[1].0 - p[0].0).hypot(p[1].1 - p[0].1))
+                    .sum();
                 Some(Prepared {
                     nodes: t.nodes.clone(),
                     samples,
                     reach,
                     bbox: [x0 - reach, y0 - reach, x1 + reach, y1 + reach],
+                    level,
+                    electrons_per_px: t.electrons / path.max(1.0),
                 })
             })
             .collect();
@@ -267,9 +282,8 @@ impl Sky {
                     .map(|q| q.2)
                     .collect();
                 if v.len() < 8 {
-                    // The trail lies wholly under the segment: nothing to compare, and it
-                    // covers it.
-                    f64::INFINITY
+                    // The trail lies wholly under the segment: nothing of it to compare with.
+                    self.level_of_fainter(t.electrons_per_px, &near, &used)
                 } else {
                     median_of(&mut v).max(0.0)
                 }
@@ -307,6 +321,29 @@ impl Sky {
 /// An axis sample of a segment: the map's value there (None: outside the image) and the trails
 /// within reach, as (index, distance).
 type Covering = (Option<f64>, Vec<(usize, f64)>);
+
+impl Sky {
+    /// The level a trail of `electrons_per_px` can show, from the others: the highest level
+    /// measured on a moving trail no brighter in the catalogue (within a factor `FAINTER`) and
+    /// not under the segment (`near`, `used`); the stretch is monotone, so a fainter star never
+    /// looks brighter. None measured: the trail explains whatever lies on it.
+    fn level_of_fainter(&self, electrons_per_px: f64, near: &[&Prepared], used: &[bool]) -> f64 {
+        self.trails
+            .iter()
+            .filter(|t| {
+                t.nodes.len() >= 2
+                    && t.samples.len() >= 8
+                    && t.electrons_per_px <= FAINTER * electrons_per_px
+                    && !near
+                        .iter()
+                        .zip(used)
+                        .any(|(n, &u)| u && std::ptr::eq(*n, *t))
+            })
+            .map(|t| t.level.max(0.0))
+            .fold(None, |m: Option<f64>, l| Some(m.map_or(l, |m| m.max(l))))
+            .unwrap_or(f64::INFINITY)
+    }
+}
 
 /// Distance from `q` to the polyline through `nodes`.
 fn distance_to_path(q: (f64, f64), nodes: &[(f64, f64)]) -> f64 {
