@@ -3,6 +3,7 @@
 //! `detect_streaks_among_stars`, timed per image. Writes YOLO-format predictions (for
 //! `soig eval`) and prints recall at confidence 0.5 and IoU 0.5 by angle to the star trails
 //! (0-2, 2-7, 7-90 degrees), the false positives at that confidence, and the median time.
+//! `SKY_EVAL_ONLY=000035,000053` runs only the images whose stems end so (to look at a few).
 //!
 //! ```sh
 //! cargo run --release --example sky_eval -- CAMPAIGN RUN_DIR PRED_DIR [--set k=v]...
@@ -46,6 +47,11 @@ fn main() -> anyhow::Result<()> {
     let mut ms = Vec::new();
     for png in &pngs {
         let stem = png.file_stem().unwrap().to_string_lossy().into_owned();
+        if let Ok(only) = std::env::var("SKY_EVAL_ONLY")
+            && !only.split(',').any(|o| stem.ends_with(o))
+        {
+            continue;
+        }
         let index: u64 = stem.trim_start_matches("img_").parse()?;
         let truth_path = run.join("truth").join(format!("{stem}.json"));
         let truth: serde_json::Value =

@@ -445,8 +445,8 @@ pub fn detect_streaks_explained(
 /// and drops every candidate within `star_trail_tolerance_deg` of it, which loses debris
 /// moving nearly with the stars. A second pass keeps the trails (no subtraction), masks the
 /// predicted ones where they show (subtracts each one's median cross-section) and drops a candidate only where they explain it (module
-/// `sky`); of it, the candidates the first pass could not have given (aligned with the trails)
-/// and not already found join the first pass's. The first pass stays, because a trail that
+/// `sky`); of it, the candidates the first pass could not have given (aligned with the trails),
+/// and those a little beyond that the first pass did not find, join the first pass's. The first pass stays, because a trail that
 /// is not subtracted splits a bright streak crossing it into fragments that do not always
 /// join again. `None`, or no trail direction: as [`detect_streaks`].
 pub fn detect_streaks_among_stars(
@@ -483,7 +483,7 @@ pub fn detect_streaks_among_stars(
         None,
     )
     .0;
-    // The second pass keeps only candidates along the trails, so it searches only there.
+    // The second pass finds what the first cannot, along the trails, so it searches only there.
     let along = Sanitized {
         along: Some(trail),
         ..p.clone()
@@ -505,7 +505,19 @@ pub fn detect_streaks_among_stars(
             .to_degrees();
         angle_diff_deg(c.orientation_deg, trail) <= p.trail_tol + slack
     };
-    found.extend(second.into_iter().filter(near_trail));
+    // Beyond the tolerance the first pass's own candidates come first: the second pass adds
+    // only streaks it missed. Its trail filter (`trail_filter_px` along the trails) removes
+    // most of a line up to about 8 degrees off them, which the tolerance (5 degrees plus
+    // slack) does not cover: 4 debris streaks at 5.6-7 degrees, SNR 60-110, that the second
+    // pass found were lost on 200 rotated survey images.
+    let (mut within, beyond): (Vec<Candidate>, Vec<Candidate>) =
+        second.into_iter().partition(near_trail);
+    within.extend(beyond.into_iter().filter(|c| {
+        !found
+            .iter()
+            .any(|k| lies_along(c, k, p.dup_dist) || lies_along(k, c, p.dup_dist))
+    }));
+    found.extend(within);
     // One streak, one box: a candidate lying mostly along a longer one (the same streak from
     // both passes, or a piece of it) is dropped, whatever its score.
     found.sort_by(|a, b| b.length_px.total_cmp(&a.length_px));
@@ -607,8 +619,9 @@ fn detect_on(
 ) -> (Vec<Candidate>, Vec<Dropped>) {
     // The map before any trail is subtracted: what the star-aware test compares levels on.
     let sky = stars.map(|t| (sky::Sky::new(t, &z, w, h, p), z.clone()));
+    let mut under_trails = None;
     if let Some((sky, _)) = &sky {
-        sky.subtract(&mut z, w, h);
+        under_trails = Some(sky.subtract(&mut z, w, h));
     } else if let Some(a) = star_trail_angle_deg.filter(|a| a.is_finite()) {
         remove_trails(&mut z, w, h, a.to_radians(), p);
     }
@@ -649,6 +662,7 @@ fn detect_on(
         z: &z,
         p,
         noise: &noise,
+        under_trails: under_trails.as_deref(),
     };
     let trail = star_trail_angle_deg.filter(|a| a.is_finite());
     // A short segment's orientation is uncertain by about its width over its length, so the

@@ -64,6 +64,8 @@ pub(super) struct Ctx<'a> {
     pub(super) p: &'a Sanitized,
     /// The line filter's measured noise, which inflates the white-noise sd of profile sums.
     pub(super) noise: &'a LineNoise,
+    /// The star-aware pass: the pixels under a subtracted star trail (see `Sky::subtract`).
+    pub(super) under_trails: Option<&'a [bool]>,
 }
 
 /// Distance from `p` to the segment `a`-`b`.
