@@ -194,7 +194,8 @@ fn track_pointing_is_approximated_between_its_three_wcs() {
 }
 
 /// Errors: a PNG, a FITS without a WCS, a catalogue with a bad value; each names the file
-/// (and the catalogue's line and column) and leaves no output.
+/// (and the catalogue's line and column) and leaves no output. `--catalog` with YOLO alone is
+/// refused too.
 #[test]
 fn bad_catalogue_inputs_fail_naming_the_file() {
     let tmp = tempfile::tempdir().unwrap();
@@ -256,6 +257,20 @@ fn bad_catalogue_inputs_fail_naming_the_file() {
             bare.to_str().unwrap(),
         ],
         &["bare.fits", "WCS"],
+    );
+    // YOLO alone: the catalogue would inform no detector.
+    fails(
+        &[
+            "detect",
+            "--detector",
+            "yolo",
+            "--catalog",
+            cat.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            fits.to_str().unwrap(),
+        ],
+        &["--catalog", "--detector yolo"],
     );
 }
 

@@ -218,6 +218,13 @@ pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options) -> anyhow::Result<Sum
             "--explain does not explain the star-aware pass that --catalog runs: give one or the other"
         );
     }
+    // The catalogue informs the streak detector only: with YOLO alone it would change nothing
+    // but still demand a WCS of every frame.
+    if opts.catalog.is_some() && opts.which == Which::Yolo {
+        bail!(
+            "--catalog informs the streak detector only, and --detector yolo runs none: drop --catalog or use --detector streak or all"
+        );
+    }
     let catalog = match &opts.catalog {
         Some(path) => Some(catalog::read(path, opts.catalog_epoch_jyear)?),
         None => None,
