@@ -4,7 +4,6 @@
 //! the debris and drops the trails. Bad inputs fail naming the file and what is missing.
 
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 use soig::campaign::Campaign;
 use soig::detect_frames::catalog::FrameSky;
@@ -12,17 +11,7 @@ use soig::experiment::{self, Experiment};
 use soig::frames::Frame;
 
 mod common;
-use common::{CampaignToml, soig, tle_object};
-
-fn ok(o: Output) -> Output {
-    assert!(
-        o.status.success(),
-        "soig failed: {}\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
+use common::{CampaignToml, ok, soig, tle_object};
 
 /// Images of 512 px (0.7 arcsec/px) in pointing `mode`, rendered only (FITS and truth).
 fn campaign(mode: &str) -> CampaignToml {
@@ -204,8 +193,18 @@ fn bad_catalogue_inputs_fail_naming_the_file() {
     write_catalog(&c, 0, &cat);
     let fits = tmp.path().join("run/fits/img_000000.fits");
     let out = tmp.path().join("det");
-    let fails = |args: &[&str], expect: &[&str]| {
-        let o = soig(args);
+    // `soig detect [extra] --catalog CATALOG --out OUT FRAME` must fail, naming `expect`.
+    let fails = |extra: &[&str], catalog: &Path, frame: &Path, expect: &[&str]| {
+        let mut args = vec!["detect"];
+        args.extend(extra);
+        args.extend([
+            "--catalog",
+            catalog.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            frame.to_str().unwrap(),
+        ]);
+        let o = soig(&args);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{args:?} succeeded");
         for e in expect {
@@ -216,60 +215,23 @@ fn bad_catalogue_inputs_fail_naming_the_file() {
     // A catalogue whose third line has no number for the declination.
     let bad = tmp.path().join("bad.csv");
     std::fs::write(&bad, "ra,dec,mag\n10.0,20.0,12.0\n10.1,north,13.0\n").unwrap();
-    fails(
-        &[
-            "detect",
-            "--catalog",
-            bad.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            fits.to_str().unwrap(),
-        ],
-        &["bad.csv:3", "dec"],
-    );
+    fails(&[], &bad, &fits, &["bad.csv:3", "dec"]);
     // A PNG: no WCS, no timing.
     let png = tmp.path().join("frame.png");
     image::GrayImage::from_pixel(64, 48, image::Luma([20u8]))
         .save(&png)
         .unwrap();
-    fails(
-        &[
-            "detect",
-            "--catalog",
-            cat.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            png.to_str().unwrap(),
-        ],
-        &["frame.png", "PNG", "FITS"],
-    );
+    fails(&[], &cat, &png, &["frame.png", "PNG", "FITS"]);
     // A FITS without a WCS.
     let bare = tmp.path().join("bare.fits");
     let pixels = vec![100.0f32; 64 * 48];
     soig::fits::write_image(&bare, 64, 48, soig::fits::Pixels::F32(&pixels), &Vec::new()).unwrap();
-    fails(
-        &[
-            "detect",
-            "--catalog",
-            cat.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            bare.to_str().unwrap(),
-        ],
-        &["bare.fits", "WCS"],
-    );
+    fails(&[], &cat, &bare, &["bare.fits", "WCS"]);
     // YOLO alone: the catalogue would inform no detector.
     fails(
-        &[
-            "detect",
-            "--detector",
-            "yolo",
-            "--catalog",
-            cat.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            fits.to_str().unwrap(),
-        ],
+        &["--detector", "yolo"],
+        &cat,
+        &fits,
         &["--catalog", "--detector yolo"],
     );
 }

@@ -3,22 +3,11 @@
 //! every output file is there; bad inputs fail with their file named and leave no output.
 
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 mod common;
-use common::soig;
+use common::{ok, soig};
 
 use soig::sky::projection::Tan;
-
-fn ok(o: Output) -> Output {
-    assert!(
-        o.status.success(),
-        "soig failed: {}\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
 
 fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)

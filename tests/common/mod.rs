@@ -20,6 +20,17 @@ pub fn soig(args: &[&str]) -> Output {
         .expect("soig runs")
 }
 
+/// `o`, a run of `soig` that must have succeeded (its stdout and stderr shown if not).
+pub fn ok(o: Output) -> Output {
+    assert!(
+        o.status.success(),
+        "soig failed: {}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
 /// Run the `soig` binary under test from directory `cwd`.
 pub fn soig_in(cwd: &Path, args: &[&str]) -> Output {
     std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
