@@ -17,21 +17,16 @@ impl Ctx<'_> {
     pub(super) fn survives(&self, s: &Seg, others: &[(Point, Point)]) -> bool {
         let (ux, uy) = s.dir();
         let (nx, ny) = (-uy, ux);
-        let hl = 0.5 * s.length;
-        let ta = (-hl + 0.5).ceil() as i64;
-        let tb = (hl - 0.5).floor() as i64;
         let taps = self.contrast_taps();
-        let mut vals = Vec::new();
-        for t in ta..=tb {
-            let (x, y) = (s.cx + t as f64 * ux, s.cy + t as f64 * uy);
-            if others
-                .iter()
-                .any(|&(a, b)| point_segment_distance((x, y), a, b) <= self.p.dup_dist)
-            {
-                continue;
-            }
-            vals.push(self.contrast(&taps, x, y, nx, ny));
-        }
+        let mut vals: Vec<f64> = s
+            .axis_points()
+            .filter(|&q| {
+                !others
+                    .iter()
+                    .any(|&(a, b)| point_segment_distance(q, a, b) <= self.p.dup_dist)
+            })
+            .map(|(x, y)| self.contrast(&taps, x, y, nx, ny))
+            .collect();
         let n = vals.len();
         if (n as f64) < self.p.min_length || n == 0 {
             return false;
@@ -155,9 +150,6 @@ impl Ctx<'_> {
     pub(super) fn gap(&self, s: &Seg) -> Option<Gap> {
         let (ux, uy) = s.dir();
         let (nx, ny) = (-uy, ux);
-        let hl = 0.5 * s.length;
-        let ta = (-hl + 0.5).ceil() as i64;
-        let tb = (hl - 0.5).floor() as i64;
         let taps = self.contrast_taps();
         // Samples under a subtracted star trail are left out: a streak crossing a bright trail
         // shows less there (the 8-bit stretch), which is no gap (a debris streak 5 degrees off
@@ -172,11 +164,10 @@ impl Ctx<'_> {
                     && m[j as usize * self.w + i as usize]
             })
         };
-        let vals: Vec<f64> = (ta..=tb)
-            .filter_map(|t| {
-                let (x, y) = (s.cx + t as f64 * ux, s.cy + t as f64 * uy);
-                (!under(x, y)).then(|| self.contrast(&taps, x, y, nx, ny))
-            })
+        let vals: Vec<f64> = s
+            .axis_points()
+            .filter(|&(x, y)| !under(x, y))
+            .map(|(x, y)| self.contrast(&taps, x, y, nx, ny))
             .collect();
         let n = vals.len();
         if n < 4 {

@@ -52,6 +52,15 @@ impl Seg {
             (self.cx + hl * ux, self.cy + hl * uy),
         )
     }
+    /// The axis points 1 px apart from the centre, whole steps only (the profile samples).
+    pub(super) fn axis_points(&self) -> impl Iterator<Item = (f64, f64)> + use<> {
+        let (ux, uy) = self.dir();
+        let (cx, cy) = (self.cx, self.cy);
+        let hl = 0.5 * self.length;
+        let ta = (-hl + 0.5).ceil() as i64;
+        let tb = (hl - 0.5).floor() as i64;
+        (ta..=tb).map(move |t| (cx + t as f64 * ux, cy + t as f64 * uy))
+    }
 }
 
 /// What refinement, merging and output read: the image, its background and the smoothed map.
