@@ -39,6 +39,35 @@ pub struct Sensor {
     pub noise: Noise,
 }
 
+#[cfg(test)]
+impl Sensor {
+    /// For unit tests: the campaigns' optics (0.70 arcsec pixels: 0.1 deg over 1024 px, a 1
+    /// arcsec PSF), the paper's detector and noise, on a square image of `side_px` with jitter
+    /// `jitter_deg_per_sqrt_s` (the paper's: 2e-4 deg per sqrt(s)).
+    pub(crate) fn for_tests(side_px: usize, jitter_deg_per_sqrt_s: f64) -> Sensor {
+        Sensor {
+            width_px: side_px,
+            height_px: side_px,
+            fov_radius_deg: 0.1 * side_px as f64 / 1024.0,
+            psf_sigma_arcsec: 1.0,
+            zero_point_mag: 22.26,
+            mag_limit: 16.5,
+            jitter_deg_per_sqrt_s,
+            gain_e_per_adu: 1.6,
+            bias: AduRange {
+                min_adu: 2.0,
+                max_adu: 3.0,
+            },
+            background: AduRange {
+                min_adu: 190.0,
+                max_adu: 210.0,
+            },
+            background_exposure_s: 5.0,
+            noise: Noise::Paper,
+        }
+    }
+}
+
 impl Sensor {
     /// Degrees per pixel: the field radius spans half the image width.
     pub fn pixel_scale_deg(&self) -> f64 {

@@ -2,7 +2,6 @@
 
 use super::*;
 use crate::rng::{PixelPurpose, pixel_stream};
-use crate::sensor::AduRange;
 use crate::sky::stars::Star;
 
 /// The sensor and render settings of the tests.
@@ -15,26 +14,7 @@ struct Fixture {
 /// field radius, and the given jitter (the paper's: 2e-4 deg per sqrt(s)).
 fn fixture(jitter_deg_per_sqrt_s: f64) -> Fixture {
     Fixture {
-        sensor: Sensor {
-            width_px: 128,
-            height_px: 128,
-            fov_radius_deg: 0.0125,
-            psf_sigma_arcsec: 1.0,
-            zero_point_mag: 22.26,
-            mag_limit: 16.5,
-            jitter_deg_per_sqrt_s,
-            gain_e_per_adu: 1.6,
-            bias: AduRange {
-                min_adu: 2.0,
-                max_adu: 3.0,
-            },
-            background: AduRange {
-                min_adu: 190.0,
-                max_adu: 210.0,
-            },
-            background_exposure_s: 5.0,
-            noise: crate::noise::Noise::Paper,
-        },
+        sensor: Sensor::for_tests(128, jitter_deg_per_sqrt_s),
         render: Settings {
             method: RenderMethod::PhotonMapping,
             merge_threshold: 100_000,

@@ -8,31 +8,12 @@ use crate::enhance;
 use crate::render::{RenderMethod, Settings, render};
 use crate::rng::{PixelPurpose, pixel_stream};
 use crate::scene::Scene;
-use crate::sensor::{AduRange, Sensor};
+use crate::sensor::Sensor;
 
 /// The campaigns' sensor (SENTINEL-class optics: 0.70 arcsec pixels, 1 arcsec PSF, the
 /// paper's jitter and noise) on a 256 px image.
 fn sensor() -> Sensor {
-    Sensor {
-        width_px: 256,
-        height_px: 256,
-        fov_radius_deg: 0.1 * 256.0 / 1024.0,
-        psf_sigma_arcsec: 1.0,
-        zero_point_mag: 22.26,
-        mag_limit: 16.5,
-        jitter_deg_per_sqrt_s: 2e-4,
-        gain_e_per_adu: 1.6,
-        bias: AduRange {
-            min_adu: 2.0,
-            max_adu: 3.0,
-        },
-        background: AduRange {
-            min_adu: 190.0,
-            max_adu: 210.0,
-        },
-        background_exposure_s: 5.0,
-        noise: crate::noise::Noise::Paper,
-    }
+    Sensor::for_tests(256, 2e-4)
 }
 
 /// A streak of `length` px at `angle_deg` through `centre`, of magnitude `mag` over 2 s,
