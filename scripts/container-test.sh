@@ -93,8 +93,14 @@ podman build -q --force-rm -t localhost/soig:ci -f Containerfile \
   || { tail -40 "$work/build.log"; exit 1; }
 
 # The image's default command is `soig --help`; then the quickstart, written inside the container.
-podman run --rm localhost/soig:ci | grep -q "Usage: soig" \
-  || { echo "container-test: 'soig --help' in the image printed no usage" >&2; exit 1; }
+# (Captured, not piped into `grep -q`: under pipefail, grep's early exit can kill podman with
+# SIGPIPE mid-write and fail a good image; that is how CI failed at 2026-11-26 20:40.)
+usage=$(podman run --rm localhost/soig:ci 2>&1) \
+  || { echo "container-test: 'soig --help' in the image failed:" >&2; echo "$usage" | tail -20 >&2; exit 1; }
+case "$usage" in
+  *"Usage: soig"*) ;;
+  *) echo "container-test: 'soig --help' in the image printed no usage:" >&2; echo "$usage" | tail -20 >&2; exit 1 ;;
+esac
 digest=$(podman run --rm -v "$root":/data:ro localhost/soig:ci sh -c \
   'soig run campaigns/quickstart.toml --out /tmp/q --quiet >/dev/null && soig verify /tmp/q' \
   | sed -n 's/.*digest //p')

@@ -29,7 +29,7 @@ fi
 chown munge:munge /etc/munge/munge.key && chmod 400 /etc/munge/munge.key
 mkdir -p /run/munge && chown munge:munge /run/munge
 munge -n 2>/dev/null | unmunge >/dev/null 2>&1 || su -s /bin/sh munge -c munged
-munge -n | unmunge | grep -q Success
+munge -n | unmunge | grep Success >/dev/null
 
 # slurm.conf: one node, no cgroups, root as SlurmUser.
 mem=$(( $(free -m | awk '/^Mem:/ {print $2}') - 1024 ))
@@ -67,7 +67,7 @@ slurmctld -i
 slurmd
 trap stop EXIT
 for _ in $(seq 30); do sinfo -h -o %T 2>/dev/null | grep -q idle && break; sleep 1; done
-sinfo -h -o %T | grep -q idle || { echo "slurm-test: the node is not idle: $(sinfo)" >&2; exit 1; }
+sinfo -h -o %T | grep idle >/dev/null || { echo "slurm-test: the node is not idle: $(sinfo)" >&2; exit 1; }
 
 work=$(mktemp -d /tmp/soig-slurm-test.XXXXXX)
 out="$work/out dir/quickstart"   # a space, so the quoting is tested too
@@ -75,7 +75,7 @@ out="$work/out dir/quickstart"   # a space, so the quoting is tested too
     --partition test --time 01:00:00 --mem 1G --cpus-per-task 1 --sbatch=--requeue
 # sbatch accepts the job files with those options (--test-only: checked, not queued).
 for job in array merge; do
-    (cd "$work/jobs" && sbatch --test-only "$job.sbatch") 2>&1 | grep -q "to start at" || {
+    (cd "$work/jobs" && sbatch --test-only "$job.sbatch") 2>&1 | grep "to start at" >/dev/null || {
         echo "slurm-test: sbatch --test-only refuses $job.sbatch:" >&2
         (cd "$work/jobs" && sbatch --test-only "$job.sbatch") >&2 || true
         exit 1
