@@ -114,7 +114,7 @@ impl Sky {
         let inside =
             |x: f64, y: f64| x >= 0.0 && y >= 0.0 && x <= (w - 1) as f64 && y <= (h - 1) as f64;
         // Each trail's samples inside the image and the map's median along them.
-        let measured: Vec<(StarTrail, Vec<(f64, f64, f64)>, f64)> = trails
+        let measured: Vec<Measured> = trails
             .iter()
             .filter(|t| {
                 !t.nodes.is_empty() && t.nodes.iter().all(|n| n.0.is_finite() && n.1.is_finite())
@@ -409,6 +409,10 @@ fn shows(nodes: &[(f64, f64)], samples: &[(f64, f64, f64)]) -> bool {
     vals[vals.len() / 4] >= SHOWS_SIGMA
 }
 
+/// A trail followed to its light (`wander`), its samples inside the image with the map's value
+/// at each, and the map's median along them.
+type Measured = (StarTrail, Vec<(f64, f64, f64)>, f64);
+
 /// An axis sample of a segment: the map's value there (None: outside the image) and the trails
 /// within reach, as (index, distance).
 type Covering = (Option<f64>, Vec<(usize, f64)>);
@@ -467,7 +471,7 @@ fn wander(
 /// a trail's prediction can run where the image has no light of it (beyond a rotated frame's
 /// footprint, into the fill), and the least level of 127 e-/px trail measured over 8 such
 /// samples was 0.03, which would have capped every trail of its image.
-fn catalogue_bounds(measured: &[(StarTrail, Vec<(f64, f64, f64)>, f64)]) -> Vec<Option<f64>> {
+fn catalogue_bounds(measured: &[Measured]) -> Vec<Option<f64>> {
     let per_px = |t: &StarTrail| {
         let path: f64 = t
             .nodes
