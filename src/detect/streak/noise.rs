@@ -59,6 +59,9 @@ impl LineNoise {
             .step_by(step as usize)
             .flat_map(|y| (x0..x1).step_by(step as usize).map(move |x| (x, y)))
             .collect();
+        // Every centre's lines stay inside the map (an image over twice the longest filter).
+        let inside =
+            x0 >= hmax && x1 - 1 + hmax < w as isize && y0 >= hmax && y1 - 1 + hmax < h as isize;
         let at = |x: isize, y: isize| -> f64 {
             if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
                 0.0
@@ -86,16 +89,27 @@ impl LineNoise {
                 })
                 .collect();
             let offset = |i: isize| offsets[(i + hmax) as usize];
+            // The same offsets in the row-major map, for centres whose every line lies inside.
+            let linear: Vec<isize> = offsets
+                .iter()
+                .map(|&(dx, dy)| dy * w as isize + dx)
+                .collect();
             let model = model_sd(j, p);
             for (l, &hk) in p.half_lengths.iter().enumerate() {
                 let hk = hk as isize;
+                let line = &linear[(hmax - hk) as usize..=(hmax + hk) as usize];
                 for (sum, &(x, y)) in sums.iter_mut().zip(&centres) {
-                    *sum = (-hk..=hk)
-                        .map(|i| {
-                            let (dx, dy) = offset(i);
-                            at(x + dx, y + dy)
-                        })
-                        .sum();
+                    *sum = if inside {
+                        let c = y * w as isize + x;
+                        line.iter().map(|&o| zc[(c + o) as usize] as f64).sum()
+                    } else {
+                        (-hk..=hk)
+                            .map(|i| {
+                                let (dx, dy) = offset(i);
+                                at(x + dx, y + dy)
+                            })
+                            .sum()
+                    };
                 }
                 let mut v = sums.clone();
                 let med = median_of(&mut v);
