@@ -98,18 +98,39 @@ impl LineNoise {
             for (l, &hk) in p.half_lengths.iter().enumerate() {
                 let hk = hk as isize;
                 let line = &linear[(hmax - hk) as usize..=(hmax + hk) as usize];
-                for (sum, &(x, y)) in sums.iter_mut().zip(&centres) {
-                    *sum = if inside {
-                        let c = y * w as isize + x;
-                        line.iter().map(|&o| zc[(c + o) as usize] as f64).sum()
-                    } else {
-                        (-hk..=hk)
+                if inside {
+                    let base = |&(x, y): &(isize, isize)| y * w as isize + x;
+                    // Four centres at a time: four independent chains of adds (one chain waits
+                    // on each add), each in the line's order from -0, as `sum` adds.
+                    let quads = sums.len() / 4 * 4;
+                    for (s4, c4) in sums[..quads]
+                        .chunks_exact_mut(4)
+                        .zip(centres[..quads].chunks_exact(4))
+                    {
+                        let c = [base(&c4[0]), base(&c4[1]), base(&c4[2]), base(&c4[3])];
+                        let mut acc = [-0.0f64; 4];
+                        for &o in line {
+                            for k in 0..4 {
+                                acc[k] += zc[(c[k] + o) as usize] as f64;
+                            }
+                        }
+                        s4.copy_from_slice(&acc);
+                    }
+                    for (sum, c) in sums[quads..].iter_mut().zip(&centres[quads..]) {
+                        *sum = line
+                            .iter()
+                            .map(|&o| zc[(base(c) + o) as usize] as f64)
+                            .sum();
+                    }
+                } else {
+                    for (sum, &(x, y)) in sums.iter_mut().zip(&centres) {
+                        *sum = (-hk..=hk)
                             .map(|i| {
                                 let (dx, dy) = offset(i);
                                 at(x + dx, y + dy)
                             })
-                            .sum()
-                    };
+                            .sum();
+                    }
                 }
                 let mut v = sums.clone();
                 let med = median_of(&mut v);
