@@ -266,8 +266,15 @@ impl Ctx<'_> {
         }
         // Robust SNR: the median contrast over the segment times its sample count, so that a
         // bright star on the axis does not make a streak, nor a raised patch of background.
+        // (A contrast profile holds these samples already.)
         let mut seg_vals: Vec<f64> = (s..=e)
-            .map(|t| self.contrast(&taps, cx + t as f64 * ux, cy + t as f64 * uy, nx, ny))
+            .map(|t| {
+                if seed.contrast {
+                    at(t)
+                } else {
+                    self.contrast(&taps, cx + t as f64 * ux, cy + t as f64 * uy, nx, ny)
+                }
+            })
             .collect();
         let n = seg_vals.len();
         let snr = median_of(&mut seg_vals) * n as f64 / self.contrast_sum_sd(&taps, th, n);
