@@ -7,7 +7,8 @@ use super::Sanitized;
 use super::noise::LineNoise;
 use super::smooth::corr;
 
-/// Best response (sigma) and best orientation index per pixel.
+/// Best response (sigma) and best orientation index per pixel; `noise` is `p`'s (it holds the
+/// filters' white-noise sd too).
 #[inline(never)]
 pub(super) fn line_filter(
     zc: &[f32],
@@ -26,7 +27,7 @@ pub(super) fn line_filter(
     let mut accs: Vec<Vec<f32>> = vec![Vec::new(); p.half_lengths.len()];
     for j in (0..n).filter(|&j| p.uses(j)) {
         let (x_major, t) = slope(j, n);
-        let model = model_sd(j, p);
+        let model = noise.model_sd(j);
         let inv: Vec<f32> = model
             .iter()
             .enumerate()

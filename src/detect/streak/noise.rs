@@ -25,6 +25,10 @@ pub(super) struct LineNoise {
     lengths: Vec<usize>,
     /// `ratio[j * lengths.len() + l]`: orientation j, length l.
     ratio: Vec<f64>,
+    /// [`model_sd`] of each filter the pass runs (`p.uses(j)`), laid out as `ratio` (0 for the
+    /// others): computed once here for the line filter too (an exp per pair of a line's
+    /// pixels, 96 orientations of 51 px at the binned levels).
+    model: Vec<f64>,
 }
 
 impl LineNoise {
@@ -70,11 +74,13 @@ impl LineNoise {
             }
         };
         let mut ratio = Vec::with_capacity(p.n_angles * lengths.len());
+        let mut models = Vec::with_capacity(p.n_angles * lengths.len());
         let mut sums = vec![0f64; centres.len()];
         for j in 0..p.n_angles {
             if !p.uses(j) {
                 // A filter the pass does not run.
                 ratio.extend(p.half_lengths.iter().map(|_| 1.0));
+                models.extend(p.half_lengths.iter().map(|_| 0.0));
                 continue;
             }
             let (x_major, t) = slope(j, p.n_angles);
@@ -95,6 +101,7 @@ impl LineNoise {
                 .map(|&(dx, dy)| dy * w as isize + dx)
                 .collect();
             let model = model_sd(j, p);
+            models.extend(&model);
             for (l, &hk) in p.half_lengths.iter().enumerate() {
                 let hk = hk as isize;
                 let line = &linear[(hmax - hk) as usize..=(hmax + hk) as usize];
@@ -143,6 +150,7 @@ impl LineNoise {
             n_angles: p.n_angles,
             lengths,
             ratio,
+            model: models,
         }
     }
 
@@ -152,7 +160,22 @@ impl LineNoise {
             n_angles: p.n_angles,
             lengths: p.half_lengths.iter().map(|&h| 2 * h + 1).collect(),
             ratio: vec![1.0; p.n_angles * p.half_lengths.len()],
+            model: (0..p.n_angles)
+                .flat_map(|j| {
+                    if p.uses(j) {
+                        model_sd(j, p)
+                    } else {
+                        vec![0.0; p.half_lengths.len()]
+                    }
+                })
+                .collect(),
         }
+    }
+
+    /// [`model_sd`] of orientation `j`, one per length (`j` a filter the pass runs).
+    pub(super) fn model_sd(&self, j: usize) -> &[f64] {
+        let n = self.lengths.len();
+        &self.model[j * n..(j + 1) * n]
     }
 
     /// The ratio for filter (j, l).
