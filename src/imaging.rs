@@ -7,7 +7,9 @@
 pub fn bilinear(img: &[f32], width: usize, height: usize, x: f64, y: f64) -> f32 {
     let x = x.clamp(0.0, (width - 1) as f64);
     let y = y.clamp(0.0, (height - 1) as f64);
-    let (i, j) = (x.floor() as usize, y.floor() as usize);
+    // Truncation is the floor here (x, y >= 0 after the clamp; NaN gives 0 either way), and
+    // needs no call to libm's floor, which the default x86-64 target has no instruction for.
+    let (i, j) = (x as usize, y as usize);
     let (i1, j1) = ((i + 1).min(width - 1), (j + 1).min(height - 1));
     let (fx, fy) = ((x - i as f64) as f32, (y - j as f64) as f32);
     let at = |a: usize, b: usize| img[b * width + a];

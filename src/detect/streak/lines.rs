@@ -7,7 +7,8 @@ use super::Sanitized;
 use super::noise::LineNoise;
 use super::smooth::corr;
 
-/// Best response (sigma) and best orientation index per pixel.
+/// Best response (sigma) and best orientation index per pixel; `noise` is `p`'s (it holds the
+/// filters' white-noise sd too).
 #[inline(never)]
 pub(super) fn line_filter(
     zc: &[f32],
@@ -26,7 +27,7 @@ pub(super) fn line_filter(
     let mut accs: Vec<Vec<f32>> = vec![Vec::new(); p.half_lengths.len()];
     for j in (0..n).filter(|&j| p.uses(j)) {
         let (x_major, t) = slope(j, n);
-        let model = model_sd(j, p);
+        let model = noise.model_sd(j);
         let inv: Vec<f32> = model
             .iter()
             .enumerate()
@@ -88,16 +89,18 @@ pub(super) fn model_sd(j: usize, p: &Sanitized) -> Vec<f64> {
     p.half_lengths.iter().map(|&hk| sd[2 * hk + 1]).collect()
 }
 
-/// Blocked transpose of a `w` x `h` row-major map into `h` x `w`.
+/// Blocked transpose of a `w` x `h` row-major map into `h` x `w`: 8-column strips of the
+/// source, read a row at a time, fill 8 rows of the destination, whose lines stay in the L1
+/// cache (32 blocks of rows 4 KiB apart, as before, contend for L1's sets: 0.8 ms against
+/// 0.5 ms for a 1024 px map here).
 #[inline(never)]
 pub(super) fn transpose(src: &[f32], dst: &mut [f32], w: usize, h: usize) {
-    const B: usize = 32;
-    for y0 in (0..h).step_by(B) {
-        for x0 in (0..w).step_by(B) {
-            for y in y0..(y0 + B).min(h) {
-                for x in x0..(x0 + B).min(w) {
-                    dst[x * h + y] = src[y * w + x];
-                }
+    const B: usize = 8;
+    for x0 in (0..w).step_by(B) {
+        let xn = (w - x0).min(B);
+        for y in 0..h {
+            for (x, &v) in src[y * w + x0..][..xn].iter().enumerate() {
+                dst[(x0 + x) * h + y] = v;
             }
         }
     }

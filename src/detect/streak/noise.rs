@@ -25,6 +25,10 @@ pub(super) struct LineNoise {
     lengths: Vec<usize>,
     /// `ratio[j * lengths.len() + l]`: orientation j, length l.
     ratio: Vec<f64>,
+    /// [`model_sd`] of each filter the pass runs (`p.uses(j)`), laid out as `ratio` (0 for the
+    /// others): computed once here for the line filter too (an exp per pair of a line's
+    /// pixels, 96 orientations of 51 px at the binned levels).
+    model: Vec<f64>,
 }
 
 impl LineNoise {
@@ -59,6 +63,9 @@ impl LineNoise {
             .step_by(step as usize)
             .flat_map(|y| (x0..x1).step_by(step as usize).map(move |x| (x, y)))
             .collect();
+        // Every centre's lines stay inside the map (an image over twice the longest filter).
+        let inside =
+            x0 >= hmax && x1 - 1 + hmax < w as isize && y0 >= hmax && y1 - 1 + hmax < h as isize;
         let at = |x: isize, y: isize| -> f64 {
             if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
                 0.0
@@ -67,11 +74,13 @@ impl LineNoise {
             }
         };
         let mut ratio = Vec::with_capacity(p.n_angles * lengths.len());
+        let mut models = Vec::with_capacity(p.n_angles * lengths.len());
         let mut sums = vec![0f64; centres.len()];
         for j in 0..p.n_angles {
             if !p.uses(j) {
                 // A filter the pass does not run.
                 ratio.extend(p.half_lengths.iter().map(|_| 1.0));
+                models.extend(p.half_lengths.iter().map(|_| 0.0));
                 continue;
             }
             let (x_major, t) = slope(j, p.n_angles);
@@ -86,16 +95,49 @@ impl LineNoise {
                 })
                 .collect();
             let offset = |i: isize| offsets[(i + hmax) as usize];
+            // The same offsets in the row-major map, for centres whose every line lies inside.
+            let linear: Vec<isize> = offsets
+                .iter()
+                .map(|&(dx, dy)| dy * w as isize + dx)
+                .collect();
             let model = model_sd(j, p);
+            models.extend(&model);
             for (l, &hk) in p.half_lengths.iter().enumerate() {
                 let hk = hk as isize;
-                for (sum, &(x, y)) in sums.iter_mut().zip(&centres) {
-                    *sum = (-hk..=hk)
-                        .map(|i| {
-                            let (dx, dy) = offset(i);
-                            at(x + dx, y + dy)
-                        })
-                        .sum();
+                let line = &linear[(hmax - hk) as usize..=(hmax + hk) as usize];
+                if inside {
+                    let base = |&(x, y): &(isize, isize)| y * w as isize + x;
+                    // Four centres at a time: four independent chains of adds (one chain waits
+                    // on each add), each in the line's order from -0, as `sum` adds.
+                    let quads = sums.len() / 4 * 4;
+                    for (s4, c4) in sums[..quads]
+                        .chunks_exact_mut(4)
+                        .zip(centres[..quads].chunks_exact(4))
+                    {
+                        let c = [base(&c4[0]), base(&c4[1]), base(&c4[2]), base(&c4[3])];
+                        let mut acc = [-0.0f64; 4];
+                        for &o in line {
+                            for k in 0..4 {
+                                acc[k] += zc[(c[k] + o) as usize] as f64;
+                            }
+                        }
+                        s4.copy_from_slice(&acc);
+                    }
+                    for (sum, c) in sums[quads..].iter_mut().zip(&centres[quads..]) {
+                        *sum = line
+                            .iter()
+                            .map(|&o| zc[(base(c) + o) as usize] as f64)
+                            .sum();
+                    }
+                } else {
+                    for (sum, &(x, y)) in sums.iter_mut().zip(&centres) {
+                        *sum = (-hk..=hk)
+                            .map(|i| {
+                                let (dx, dy) = offset(i);
+                                at(x + dx, y + dy)
+                            })
+                            .sum();
+                    }
                 }
                 let mut v = sums.clone();
                 let med = median_of(&mut v);
@@ -108,6 +150,7 @@ impl LineNoise {
             n_angles: p.n_angles,
             lengths,
             ratio,
+            model: models,
         }
     }
 
@@ -117,7 +160,22 @@ impl LineNoise {
             n_angles: p.n_angles,
             lengths: p.half_lengths.iter().map(|&h| 2 * h + 1).collect(),
             ratio: vec![1.0; p.n_angles * p.half_lengths.len()],
+            model: (0..p.n_angles)
+                .flat_map(|j| {
+                    if p.uses(j) {
+                        model_sd(j, p)
+                    } else {
+                        vec![0.0; p.half_lengths.len()]
+                    }
+                })
+                .collect(),
         }
+    }
+
+    /// [`model_sd`] of orientation `j`, one per length (`j` a filter the pass runs).
+    pub(super) fn model_sd(&self, j: usize) -> &[f64] {
+        let n = self.lengths.len();
+        &self.model[j * n..(j + 1) * n]
     }
 
     /// The ratio for filter (j, l).
