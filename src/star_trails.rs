@@ -43,17 +43,25 @@ pub fn of_image(
     Ok(trails
         .iter()
         .filter(|t| t.nodes.iter().any(|n| on_detector(&n)))
-        .map(|t| StarTrail {
-            nodes: t
+        .map(|t| {
+            let (nodes, times_s) = t
                 .nodes
                 .iter()
-                .filter(on_detector)
-                .map(|&[px, py]| match &s.frame {
-                    Some(f) => f.map(px, py),
-                    None => (px, py),
+                .zip(&t.times_s)
+                .filter(|(n, _)| on_detector(n))
+                .map(|(&[px, py], &time)| {
+                    let at = match &s.frame {
+                        Some(f) => f.map(px, py),
+                        None => (px, py),
+                    };
+                    (at, time)
                 })
-                .collect(),
-            electrons: t.expected_electrons,
+                .unzip();
+            StarTrail {
+                nodes,
+                times_s,
+                electrons: t.expected_electrons,
+            }
         })
         .collect())
 }

@@ -240,6 +240,8 @@ pub fn in_region(predicted: &[Predicted], region: crate::frames::Region) -> Vec<
                 .collect();
             (!nodes.is_empty()).then(|| StarTrail {
                 nodes,
+                // A catalogue's trails are not followed over the exposure (jitter_across).
+                times_s: Vec::new(),
                 electrons: p.electrons.unwrap_or(f64::NAN),
             })
         })

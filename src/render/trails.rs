@@ -21,6 +21,8 @@ pub struct PredictedTrail {
     /// Positions at the renderer's time nodes while the star is near the image (one node for a
     /// star under fixed pointing); linear in between.
     pub nodes: Vec<[f64; 2]>,
+    /// Each node's time from the exposure's start, seconds.
+    pub times_s: Vec<f64>,
     /// Expected photo-electrons over those nodes' share of the exposure.
     pub expected_electrons: f64,
 }
@@ -34,36 +36,43 @@ pub fn star_trails(
 ) -> Vec<PredictedTrail> {
     let still = Jitter::still(scene.exposure_s);
     let [jx, jy] = jitter_mean_px;
-    let mut paths: Vec<(Vec<[f64; 2]>, f64)> = Vec::new();
+    let mut paths: Vec<(Vec<[f64; 2]>, Vec<f64>, f64)> = Vec::new();
     let traced = for_each_source(sensor, scene, &still, |source| {
         if source.debris {
             return;
         }
-        let nodes = match source.path {
-            Path::Still { x, y } => vec![[x + jx, y + jy]],
+        let (nodes, times) = match source.path {
+            Path::Still { x, y } => (vec![[x + jx, y + jy]], vec![0.5 * scene.exposure_s]),
             Path::Trail { nodes, step } => {
                 // The source's photons arrive over [t_a, t_b], which are node times.
                 let a = (source.t_a / step).round() as usize;
                 let b = ((source.t_b / step).round() as usize).min(nodes.len() - 1);
-                nodes[a.min(b)..=b]
-                    .iter()
-                    .map(|&(x, y)| [x + jx, y + jy])
-                    .collect()
+                let a = a.min(b);
+                (
+                    nodes[a..=b]
+                        .iter()
+                        .map(|&(x, y)| [x + jx, y + jy])
+                        .collect(),
+                    (a..=b).map(|k| k as f64 * step).collect(),
+                )
             }
             Path::Instant { .. } => unreachable!("only debris samples are instants"),
         };
-        paths.push((nodes, source.expected));
+        paths.push((nodes, times, source.expected));
     });
     // `for_each_source` traces the stars in the order it adds their sources.
     traced
         .into_iter()
         .zip(paths)
-        .map(|(star, (nodes, expected_electrons))| PredictedTrail {
-            ra_deg: star.ra_deg,
-            dec_deg: star.dec_deg,
-            mag: star.mag,
-            nodes,
-            expected_electrons,
-        })
+        .map(
+            |(star, (nodes, times_s, expected_electrons))| PredictedTrail {
+                ra_deg: star.ra_deg,
+                dec_deg: star.dec_deg,
+                mag: star.mag,
+                nodes,
+                times_s,
+                expected_electrons,
+            },
+        )
         .collect()
 }

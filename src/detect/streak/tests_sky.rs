@@ -25,6 +25,7 @@ fn star_field() -> (Vec<f64>, Vec<StarTrail>) {
         add_segment(&mut img, W, H, 50.0, y, 450.0, y, amp);
         trails.push(StarTrail {
             nodes: vec![(50.0, y), (450.0, y)],
+            times_s: Vec::new(),
             electrons: amp * 400.0,
         });
     }
@@ -141,6 +142,7 @@ fn debris_along_most_of_a_faint_stars_trail_is_found_whole() {
         add_segment(&mut img, W, H, 50.0, y, 450.0, y, amp);
         trails.push(StarTrail {
             nodes: vec![(50.0, y), (450.0, y)],
+            times_s: Vec::new(),
             electrons: amp * 400.0,
         });
     }
