@@ -474,14 +474,7 @@ fn wander(
     let (nx, ny) = (-(b.1 - a.1) / len, (b.0 - a.0) / len);
     // At most about 128 samples make each median.
     let stride = (samples.len() / 128).max(1);
-    let level = |d: f64| {
-        let mut v: Vec<f64> = samples
-            .iter()
-            .step_by(stride)
-            .map(|q| bilinear(z, w, h, q.0 + d * nx, q.1 + d * ny) as f64)
-            .collect();
-        median_of(&mut v)
-    };
+    let level = |d: f64| median_across(z, w, h, samples, stride, (nx, ny), d);
     let here = level(0.0);
     let (d, best) = (-WANDER_PX..=WANDER_PX)
         .filter(|&d| d != 0)
@@ -490,6 +483,25 @@ fn wander(
     let lost =
         here < SHOWS_SIGMA && best >= SHOWS_SIGMA && best >= 2.0 * here.max(0.0) + WANDER_GAIN;
     (d != 0.0 && lost).then_some(d)
+}
+
+/// The map's median `d` px across a path (along its normal `n`) over every `stride`-th of its
+/// points `pts` (x, y, anything).
+fn median_across(
+    z: &[f32],
+    w: usize,
+    h: usize,
+    pts: &[(f64, f64, f64)],
+    stride: usize,
+    n: (f64, f64),
+    d: f64,
+) -> f64 {
+    let mut v: Vec<f64> = pts
+        .iter()
+        .step_by(stride)
+        .map(|q| bilinear(z, w, h, q.0 + d * n.0, q.1 + d * n.1) as f64)
+        .collect();
+    median_of(&mut v)
 }
 
 /// `t`'s nodes each moved across the trail by `offset(time)` pixels (along (-u_y, u_x), u its
@@ -569,12 +581,7 @@ fn jitter_across(trails: &[StarTrail], z: &[f32], w: usize, h: usize) -> Option<
             }
         }
         let level = |part: &[(f64, f64, f64)], stride: usize, d: f64| {
-            let mut v: Vec<f64> = part
-                .iter()
-                .step_by(stride)
-                .map(|q| bilinear(z, w, h, q.0 + d * nx, q.1 + d * ny) as f64)
-                .collect();
-            median_of(&mut v)
+            median_across(z, w, h, part, stride, (nx, ny), d)
         };
         // Only trails that show clearly near their path (judged on about 64 points: most
         // trails are faint, and this is all they cost).
