@@ -444,11 +444,12 @@ pub fn detect_streaks_explained(
 /// see [`StarTrail`]). [`detect_streaks`] subtracts everything along `star_trail_angle_deg`
 /// and drops every candidate within `star_trail_tolerance_deg` of it, which loses debris
 /// moving nearly with the stars. A second pass keeps the trails (no subtraction), masks the
-/// predicted ones where they show (subtracts each one's median cross-section) and drops a candidate only where they explain it (module
-/// `sky`); of it, the candidates the first pass could not have given (aligned with the trails),
-/// and those a little beyond that the first pass did not find, join the first pass's. The first pass stays, because a trail that
-/// is not subtracted splits a bright streak crossing it into fragments that do not always
-/// join again. `None`, or no trail direction: as [`detect_streaks`].
+/// predicted ones where they show (subtracts each one's median cross-section) and drops a
+/// candidate only where they explain it (module `sky`); of it, the candidates the first pass
+/// could not have given (aligned with the trails), and those a little beyond that the first
+/// pass did not find, join the first pass's. The first pass stays, because a trail that is not
+/// subtracted splits a bright streak crossing it into fragments that do not always join
+/// again. `None`, or no trail direction: as [`detect_streaks`].
 pub fn detect_streaks_among_stars(
     pixels: &[u8],
     width: usize,

@@ -56,6 +56,7 @@ const BOUNDING_TRAILS: usize = 4;
 /// much its median there must beat twice the path's own, in unit noise (a median of 128
 /// samples of the smoothed map scatters by about 0.1-0.2).
 const WANDER_PX: i64 = 4;
+const WANDER_GAIN: f64 = 0.5;
 /// Trails are measured for the pointing's wander (`jitter_across`) in pieces of twice this
 /// many pixels, this far apart, where a piece shows at least `FOLLOW_SIGMA`; the exposure is cut
 /// into `JITTER_BINS` spans, each measured from at least `JITTER_PIECES` pieces.
@@ -63,7 +64,6 @@ const FOLLOW_STEP_PX: usize = 32;
 const FOLLOW_SIGMA: f64 = 3.0;
 const JITTER_BINS: usize = 16;
 const JITTER_PIECES: usize = 3;
-const WANDER_GAIN: f64 = 0.5;
 /// How far a star's trail wanders from its predicted path, pixels: the pointing jitter, which
 /// the prediction (a still pointing shifted by the image's mean jitter) leaves out; 1-1.5 px
 /// measured on a 580 px trail of a rotated survey image.
@@ -146,31 +146,17 @@ impl Sky {
             })
             .filter_map(|t| {
                 let mut samples = Vec::new();
-                let mut add = |x: f64, y: f64| {
-                    if inside(x, y) {
-                        samples.push((x, y, bilinear(z, w, h, x, y) as f64));
-                    }
-                };
-                if t.nodes.len() == 1 {
-                    add(t.nodes[0].0, t.nodes[0].1);
-                }
-                for pair in t.nodes.windows(2) {
-                    let (a, b) = (pair[0], pair[1]);
-                    let n = ((b.0 - a.0).hypot(b.1 - a.1)).ceil().max(1.0) as usize;
-                    for k in 0..n {
-                        let f = k as f64 / n as f64;
-                        add(a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1));
-                    }
-                }
+                walk(&t.nodes, w, h, |x, y, _, _| {
+                    samples.push((x, y, bilinear(z, w, h, x, y) as f64));
+                });
                 if samples.is_empty() {
                     return None;
                 }
                 let mut t = t.clone();
                 if let Some(d) = wander(&t.nodes, &samples, z, w, h) {
                     // Follow the trail to where its light is (see `wander`).
-                    let (a, b) = (t.nodes[0], t.nodes[t.nodes.len() - 1]);
-                    let len = (b.0 - a.0).hypot(b.1 - a.1);
-                    let (nx, ny) = (-(b.1 - a.1) / len * d, (b.0 - a.0) / len * d);
+                    let ((ux, uy), _) = heading(&t.nodes);
+                    let (nx, ny) = (-uy * d, ux * d);
                     t.nodes.iter_mut().for_each(|n| *n = (n.0 + nx, n.1 + ny));
                     samples = samples
                         .iter()
@@ -204,9 +190,7 @@ impl Sky {
                 // their residue made 6 of 20 false boxes on 200 rotated survey images), and its
                 // reach is where that falls below the fade level, plus the jitter's wander.
                 let profile = (cap.is_none() && shows(&t.nodes, &samples)).then(|| {
-                    let (a, b) = (t.nodes[0], t.nodes[t.nodes.len() - 1]);
-                    let len = (b.0 - a.0).hypot(b.1 - a.1).max(1e-9);
-                    let (ux, uy) = ((b.0 - a.0) / len, (b.1 - a.1) / len);
+                    let ((ux, uy), _) = heading(&t.nodes);
                     let big = (3.0 * reach).ceil().min(MAX_REACH_PX) as i64;
                     let prof: Vec<f64> = (-big..=big)
                         .map(|d| {
@@ -267,9 +251,7 @@ impl Sky {
             let Some(profile) = &t.profile else {
                 continue;
             };
-            let (a, b) = (t.nodes[0], t.nodes[t.nodes.len() - 1]);
-            let len = (b.0 - a.0).hypot(b.1 - a.1).max(1e-9);
-            let (ux, uy) = ((b.0 - a.0) / len, (b.1 - a.1) / len);
+            let ((ux, uy), _) = heading(&t.nodes);
             let r = t.reach.ceil() as i64;
             // Each pixel within the reach of the trail's samples, once, by its lateral offset.
             for q in &t.samples {
@@ -452,10 +434,11 @@ type Covering = (Option<f64>, Vec<(usize, f64)>);
 /// clear: the lateral offset (whole pixels, up to `WANDER_PX`) at which the map's median along
 /// the trail is highest, if the trail does not show on its path (`SHOWS_SIGMA`) but does
 /// there, by twice the path's median plus `WANDER_GAIN`. (Only lost trails: a trail that
-/// shows where predicted and was allowed to move followed a debris streak beside it.) The prediction shifts a still pointing by the image's mean jitter; a trail in
-/// the image for part of the exposure follows the jitter of that part only, 2-4 px off on
-/// 80-600 e-/px trails of a rotated survey image, whose light then fell beside their reach and
-/// made 4 false boxes there.
+/// shows where predicted and was allowed to move followed a debris streak beside it.) The
+/// prediction shifts a still pointing by the image's mean jitter; a trail in the image for part
+/// of the exposure follows the jitter of that part only, 2-4 px off on 80-600 e-/px trails of
+/// a rotated survey image, whose light then fell beside their reach and made 4 false boxes
+/// there.
 fn wander(
     nodes: &[(f64, f64)],
     samples: &[(f64, f64, f64)],
@@ -466,12 +449,11 @@ fn wander(
     if nodes.len() < 2 || samples.len() < 8 {
         return None;
     }
-    let (a, b) = (nodes[0], nodes[nodes.len() - 1]);
-    let len = (b.0 - a.0).hypot(b.1 - a.1);
+    let ((ux, uy), len) = heading(nodes);
     if len < 1.0 {
         return None;
     }
-    let (nx, ny) = (-(b.1 - a.1) / len, (b.0 - a.0) / len);
+    let (nx, ny) = (-uy, ux);
     // At most about 128 samples make each median.
     let stride = (samples.len() / 128).max(1);
     let level = |d: f64| median_across(z, w, h, samples, stride, (nx, ny), d);
@@ -483,6 +465,37 @@ fn wander(
     let lost =
         here < SHOWS_SIGMA && best >= SHOWS_SIGMA && best >= 2.0 * here.max(0.0) + WANDER_GAIN;
     (d != 0.0 && lost).then_some(d)
+}
+
+/// A path's direction from its first node to its last: the unit vector and the distance (the
+/// vector is the direction over at least 1e-9 px, so a still trail gives zeros, not NaN).
+fn heading(nodes: &[(f64, f64)]) -> ((f64, f64), f64) {
+    let (a, b) = (nodes[0], nodes[nodes.len() - 1]);
+    let len = (b.0 - a.0).hypot(b.1 - a.1);
+    let l = len.max(1e-9);
+    (((b.0 - a.0) / l, (b.1 - a.1) / l), len)
+}
+
+/// Visits the points of the path through `nodes` 1 px apart (each segment cut into whole steps
+/// no longer than a pixel; one node: that node) that lie inside a `w` x `h` image, with the
+/// segment's index and the fraction along it.
+fn walk(nodes: &[(f64, f64)], w: usize, h: usize, mut visit: impl FnMut(f64, f64, usize, f64)) {
+    let inside =
+        |x: f64, y: f64| x >= 0.0 && y >= 0.0 && x <= (w - 1) as f64 && y <= (h - 1) as f64;
+    if nodes.len() == 1 && inside(nodes[0].0, nodes[0].1) {
+        visit(nodes[0].0, nodes[0].1, 0, 0.0);
+    }
+    for (k, pair) in nodes.windows(2).enumerate() {
+        let (a, b) = (pair[0], pair[1]);
+        let n = ((b.0 - a.0).hypot(b.1 - a.1)).ceil().max(1.0) as usize;
+        for j in 0..n {
+            let f = j as f64 / n as f64;
+            let (x, y) = (a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1));
+            if inside(x, y) {
+                visit(x, y, k, f);
+            }
+        }
+    }
 }
 
 /// The map's median `d` px across a path (along its normal `n`) over every `stride`-th of its
@@ -511,12 +524,11 @@ fn across(t: &StarTrail, offset: impl Fn(f64) -> f64) -> Vec<(f64, f64)> {
     if n < 2 || t.times_s.len() != n {
         return t.nodes.clone();
     }
-    let (a, b) = (t.nodes[0], t.nodes[n - 1]);
-    let len = (b.0 - a.0).hypot(b.1 - a.1);
+    let ((ux, uy), len) = heading(&t.nodes);
     if len < 1.0 {
         return t.nodes.clone();
     }
-    let (nx, ny) = (-(b.1 - a.1) / len, (b.0 - a.0) / len);
+    let (nx, ny) = (-uy, ux);
     t.nodes
         .iter()
         .zip(&t.times_s)
@@ -560,26 +572,17 @@ fn jitter_across(trails: &[StarTrail], z: &[f32], w: usize, h: usize) -> Option<
         {
             continue;
         }
-        let (a, b) = (t.nodes[0], t.nodes[n - 1]);
-        let len = (b.0 - a.0).hypot(b.1 - a.1);
+        let ((ux, uy), len) = heading(&t.nodes);
         if len < (2 * FOLLOW_STEP_PX) as f64 {
             continue;
         }
-        let (nx, ny) = (-(b.1 - a.1) / len, (b.0 - a.0) / len);
+        let (nx, ny) = (-uy, ux);
         // Points 1 px apart inside the image, with their times.
         let mut pts: Vec<(f64, f64, f64)> = Vec::new();
-        for k in 0..n - 1 {
-            let ((x0, y0), (x1, y1)) = (t.nodes[k], t.nodes[k + 1]);
+        walk(&t.nodes, w, h, |x, y, k, f| {
             let (t0, t1) = (t.times_s[k], t.times_s[k + 1]);
-            let m = ((x1 - x0).hypot(y1 - y0)).ceil().max(1.0) as usize;
-            for j in 0..m {
-                let f = j as f64 / m as f64;
-                let (x, y) = (x0 + f * (x1 - x0), y0 + f * (y1 - y0));
-                if x >= 0.0 && y >= 0.0 && x <= (w - 1) as f64 && y <= (h - 1) as f64 {
-                    pts.push((x, y, t0 + f * (t1 - t0)));
-                }
-            }
-        }
+            pts.push((x, y, t0 + f * (t1 - t0)));
+        });
         let level = |part: &[(f64, f64, f64)], stride: usize, d: f64| {
             median_across(z, w, h, part, stride, (nx, ny), d)
         };
