@@ -164,3 +164,13 @@ fn debris_along_most_of_a_faint_stars_trail_is_found_whole() {
     .collect();
     found_alone(&found, &label, "along a faint trail");
 }
+
+#[test]
+fn debris_beside_the_whole_of_a_trail_is_found_whole() {
+    // 4 sigmas, 5 px beside the 2.5-sigma trail at y = 60 along all of it, and 30 px beyond its
+    // end: the streak is in the trail's median at every offset on its side, and subtracted
+    // with the star's light it was lost but for the 30 px beyond (the trail's profile, made
+    // symmetric about its path, keeps only the star: `symmetric`).
+    let (aware, _, label) = run_with(Some(((50.0, 65.0), (480.0, 65.0))), 4.0, 12);
+    found_alone(&aware, &label.unwrap(), "beside a whole trail");
+}
