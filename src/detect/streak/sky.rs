@@ -428,7 +428,7 @@ const CENTRE_PX: f64 = 2.0;
 /// refined by a parabola through it and its neighbours). A debris streak running 4-6 px
 /// beside a trail along its whole length is in the median at every offset on its side, and
 /// was subtracted with the star (4 of 39 false boxes on the 400 images of the rotated survey
-/// row were such debris boxed too short). Two trails side by side are each subtracted once,
+/// row, before its new fill, were such debris boxed too short). Two trails side by side are each subtracted once,
 /// not with each other's light too.
 fn symmetric(prof: &[f64]) -> Vec<f64> {
     let r = prof.len() / 2;
@@ -930,7 +930,7 @@ mod symmetric_tests {
     /// (the wander's error). The star's own sides lose at most what linear interpolation
     /// between 1 px samples of a 2 px Gaussian misses (0.2 of its peak of 10, computed); with
     /// the bump, the bump's wing on the star pulls the peak 0.1-0.3 px towards it, and the
-    /// far side is then trimmed by up to 1.5 (15% of the peak, computed: 1.46-1.86).
+    /// far side is then trimmed by up to 1.9 (computed: 1.46-1.86 of the peak of 10).
     #[test]
     fn the_star_is_kept_and_what_lies_beside_it_left_out() {
         for c in [0.0, 0.6, -0.9] {
