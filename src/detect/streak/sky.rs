@@ -100,14 +100,8 @@ impl Prepared {
     fn shape(&self, d: f64, se: f64) -> f64 {
         match &self.profile {
             Some(prof) if prof[prof.len() / 2] > 0.0 => {
-                let r = (prof.len() / 2) as f64;
-                let at = |k: f64| {
-                    let k = k.clamp(0.0, 2.0 * r);
-                    let (k0, f) = (k.floor() as usize, k - k.floor());
-                    let k1 = (k0 + 1).min(prof.len() - 1);
-                    prof[k0] * (1.0 - f) + prof[k1] * f
-                };
-                (0.5 * (at(r + d) + at(r - d)) / prof[prof.len() / 2]).clamp(0.0, 1.0)
+                let both = profile_at(prof, d) + profile_at(prof, -d);
+                (0.5 * both / prof[prof.len() / 2]).clamp(0.0, 1.0)
             }
             _ => (-d * d / (2.0 * se * se)).exp(),
         }
@@ -275,9 +269,7 @@ impl Sky {
                         continue;
                     }
                     under[i] |= off.abs() <= t.reach;
-                    let (k0, f) = (k.floor() as usize, k - k.floor());
-                    let k1 = (k0 + 1).min(profile.len() - 1);
-                    z[i] -= (profile[k0] * (1.0 - f) + profile[k1] * f) as f32;
+                    z[i] -= profile_at(profile, off) as f32;
                 }
             }
         }
@@ -432,12 +424,6 @@ const CENTRE_PX: f64 = 2.0;
 /// not with each other's light too.
 fn symmetric(prof: &[f64]) -> Vec<f64> {
     let r = prof.len() / 2;
-    let at = |o: f64| {
-        let k = (o + r as f64).clamp(0.0, 2.0 * r as f64);
-        let (k0, f) = (k.floor() as usize, k - k.floor());
-        let k1 = (k0 + 1).min(prof.len() - 1);
-        prof[k0] * (1.0 - f) + prof[k1] * f
-    };
     let reach = (CENTRE_PX as usize).min(r.saturating_sub(1));
     let k = (r - reach..=r + reach).fold(r, |k, j| if prof[j] > prof[k] { j } else { k });
     let centre = if k > 0 && k + 1 < prof.len() {
@@ -452,8 +438,18 @@ fn symmetric(prof: &[f64]) -> Vec<f64> {
         0.0
     };
     (0..prof.len())
-        .map(|k| prof[k].min(at(2.0 * centre - (k as f64 - r as f64))))
+        .map(|k| prof[k].min(profile_at(prof, 2.0 * centre - (k as f64 - r as f64))))
         .collect()
+}
+
+/// A cross-section profile (offsets `-r..=r` from the path, 1 px apart) at lateral offset
+/// `offset`: linear between its samples, its end values beyond them.
+fn profile_at(prof: &[f64], offset: f64) -> f64 {
+    let r = (prof.len() / 2) as f64;
+    let k = (offset + r).clamp(0.0, 2.0 * r);
+    let (k0, f) = (k.floor() as usize, k - k.floor());
+    let k1 = (k0 + 1).min(prof.len() - 1);
+    prof[k0] * (1.0 - f) + prof[k1] * f
 }
 
 /// Whether a predicted trail shows in the map: it moves, and three quarters of its `samples`
