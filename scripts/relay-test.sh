@@ -2,8 +2,8 @@
 # The training relay end to end on CPU (issue 32): a queue of one tiny model (12 images of
 # 256 px, imgsz 64, 2 epochs a stage, 4 in all) goes queue -> stage -> adopt twice, the second
 # stage training on from the first's adopted weights and run by the loan's own command,
-# scripts/gpu-session.sh (with the stage settings the queue gives the paper models: amp, which
-# stays off on CPU, and validation at the end only); a stage adopted twice, a stage whose
+# scripts/gpu-session.sh (validation at the end only, as the queue's paper models train, and
+# `train.amp`, which a queue may set and which stays off on CPU); a stage adopted twice, a stage whose
 # file was changed, and a finished queue are refused. Needs a Python with Ultralytics
 # (`bash scripts/setup-train.sh`; $SOIG_TRAIN_PYTHON overrides) and target/release/soig.
 set -euo pipefail
