@@ -175,11 +175,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-survey-original-semisynthetic.toml",
-        "ad75f2464a269f229782e04c0b299159db0e5d7145cc325f9c9725cc39b113ee",
+        "9141bfda7ddb9d8b098ecdb7fa5497ba1e36493a0a35dc35225ade1ca6776ace",
     ),
     (
         "results/campaigns/results-survey-original-synthetic.toml",
-        "baf9ddd965079d0ae8be2ca4aabc82fa954eadc6208c81b67bcdf3383d598476",
+        "9ec4f8664173716034cf059c8f6ccfa47a02269bfa717dc5d31bb29c789b95bc",
     ),
     (
         "results/campaigns/results-survey-rotated-semisynthetic.toml",
