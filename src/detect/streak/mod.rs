@@ -72,7 +72,8 @@
 //!    of `psf_sigma_px` by the renderer's code and boxed by the label's rule (the box holding
 //!    99 % of the flux, `geometry::flux_box`); where no fit is possible, the refined segment
 //!    padded by `box_pad_along_sigma * psf_sigma_px` along the axis and
-//!    `box_pad_across_sigma * psf_sigma_px` across it. In pixel-edge coordinates (pixel `i`
+//!    `box_pad_across_sigma * psf_sigma_px` across it. In the star-aware pass each kept streak
+//!    is first followed beyond its ends across the trails that hide it (`reach`). In pixel-edge coordinates (pixel `i`
 //!    spans `[i, i + 1]`), clipped to the image. Candidates are sorted by decreasing score, at most
 //!    `max_candidates`.
 //!
@@ -83,7 +84,7 @@
 //! Everything is single-threaded and deterministic: the same input gives the same output.
 //!
 //! One submodule per step: `background` (1), `smooth`, `trails` and `stars` (2), `lines` (3),
-//! `radon` (3b), `components` (4), `refine` and `merge` (5-6), `output` and `fit` (7);
+//! `radon` (3b), `components` (4), `refine` and `merge` (5-6), `output`, `fit` and `reach` (7);
 //! `stats` holds the robust statistics they share (bilinear sampling is
 //! [`crate::imaging::bilinear`]). This file holds the parameters and the pipeline.
 
@@ -96,6 +97,7 @@ mod merge;
 mod noise;
 mod output;
 mod radon;
+mod reach;
 mod refine;
 mod sky;
 mod smooth;
@@ -637,9 +639,10 @@ fn detect_on(
 ) -> (Vec<Candidate>, Vec<Dropped>) {
     // The map before any trail is subtracted: what the star-aware test compares levels on.
     let sky = stars.map(|t| (sky::Sky::new(t, &z, w, h, p), z.clone()));
-    let mut under_trails = None;
+    let (mut under_trails, mut removed) = (None, None);
     if let Some((sky, _)) = &sky {
-        under_trails = Some(sky.subtract(&mut z, w, h));
+        let (u, r) = sky.subtract(&mut z, w, h);
+        (under_trails, removed) = (Some(u), Some(r));
     } else if let Some(a) = star_trail_angle_deg.filter(|a| a.is_finite()) {
         remove_trails(&mut z, w, h, a.to_radians(), p);
     }
@@ -681,6 +684,7 @@ fn detect_on(
         p,
         noise: &noise,
         under_trails: under_trails.as_deref(),
+        removed: removed.as_deref(),
     };
     let trail = star_trail_angle_deg.filter(|a| a.is_finite());
     // A short segment's orientation is uncertain by about its width over its length, so the
@@ -806,9 +810,10 @@ fn detect_on(
         }
         kept.push((s, sc));
     }
+    // The star-aware pass: each streak followed across the trails that hide it (`reach`).
     let found = kept
         .into_iter()
-        .map(|(s, sc)| ctx.candidate(&s, sc))
+        .map(|(s, sc)| ctx.candidate(&ctx.reach(&s), sc))
         .collect();
     (found, dropped)
 }

@@ -73,8 +73,10 @@ pub(super) struct Ctx<'a> {
     pub(super) p: &'a Sanitized,
     /// The line filter's measured noise, which inflates the white-noise sd of profile sums.
     pub(super) noise: &'a LineNoise,
-    /// The star-aware pass: the pixels under a subtracted star trail (see `Sky::subtract`).
+    /// The star-aware pass: the pixels under a subtracted star trail, and what was subtracted
+    /// at each (see `Sky::subtract`).
     pub(super) under_trails: Option<&'a [bool]>,
+    pub(super) removed: Option<&'a [f32]>,
 }
 
 /// Distance from `p` to the segment `a`-`b`.
@@ -320,7 +322,7 @@ impl Ctx<'_> {
     }
 
     /// Flux (grey levels) and weighted elongation within 3 PSF sigmas of the segment.
-    fn flux_and_elongation(&self, s: &Seg) -> (f64, f64) {
+    pub(super) fn flux_and_elongation(&self, s: &Seg) -> (f64, f64) {
         let r = 3.0 * self.p.psf_sigma;
         let (a, b) = s.ends();
         let x0 = (a.0.min(b.0) - r).floor().max(0.0) as usize;

@@ -249,10 +249,12 @@ impl Sky {
     /// beside or along part of it, covers too little of it to move a median and keeps its
     /// light. Returns which pixels lie within the reach of a subtracted trail: there a streak
     /// crossing it shows less than elsewhere (the 8-bit stretch compresses light added to a
-    /// bright trail), which is no gap in the streak.
-    pub(super) fn subtract(&self, z: &mut [f32], w: usize, h: usize) -> Vec<bool> {
+    /// bright trail), which is no gap in the streak; and how much was subtracted at each pixel
+    /// (where that is more than half a streak's level, the streak is hidden: see `reach`).
+    pub(super) fn subtract(&self, z: &mut [f32], w: usize, h: usize) -> (Vec<bool>, Vec<f32>) {
         let mut stamp = vec![usize::MAX; w * h];
         let mut under = vec![false; w * h];
+        let mut removed = vec![0.0f32; w * h];
         for (id, t) in self.trails.iter().enumerate() {
             let Some(profile) = &t.profile else {
                 continue;
@@ -277,11 +279,13 @@ impl Sky {
                         continue;
                     }
                     under[i] |= off.abs() <= t.reach;
-                    z[i] -= profile_at(profile, off) as f32;
+                    let v = profile_at(profile, off) as f32;
+                    z[i] -= v;
+                    removed[i] += v;
                 }
             }
         }
-        under
+        (under, removed)
     }
 
     /// Whether catalogued stars explain the segment `s`: predicted trails along its

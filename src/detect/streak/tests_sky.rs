@@ -174,3 +174,41 @@ fn debris_beside_the_whole_of_a_trail_is_found_whole() {
     let (aware, _, label) = run_with(Some(((50.0, 65.0), (480.0, 65.0))), 4.0, 12);
     found_alone(&aware, &label.unwrap(), "beside a whole trail");
 }
+
+#[test]
+fn debris_running_through_overlapping_trails_is_boxed_whole() {
+    // The star field plus two 6-sigma trails 0.5 px apart at y = 260 from x = 120 to 400 (two
+    // stars whose paths coincide: each one's profile holds the other's light, and both
+    // subtracted leave the map far below zero along them, as where two or three trails overlap
+    // on the rotated survey row), and a 4-sigma debris streak from x = 20 to 490, 1.5 degrees
+    // off them, through them. Without `reach` it is two boxes, 99 and 131 px long, of its
+    // visible ends (the 240 px between lie within 6 px of the trails); followed across the
+    // trails, one box at IoU 0.5 or more.
+    let (mut img, mut trails) = star_field();
+    let amp = 6.0 * NOISE;
+    for y in [260.0, 260.5] {
+        add_segment(&mut img, W, H, 120.0, y, 400.0, y, amp);
+        trails.push(StarTrail {
+            nodes: vec![(120.0, y), (400.0, y)],
+            times_s: Vec::new(),
+            electrons: amp * 280.0,
+        });
+    }
+    let mut alone = vec![0.0; W * H];
+    add_segment(&mut alone, W, H, 20.0, 266.2, 490.0, 253.9, 4.0 * NOISE);
+    img.iter_mut().zip(&alone).for_each(|(v, d)| *v += d);
+    let label = truth_box(&alone, W, H);
+    let pixels = quantise(&img, &mut ChaCha8Rng::seed_from_u64(13));
+    let found: Vec<Candidate> = detect_streaks_among_stars(
+        &pixels,
+        W,
+        H,
+        &StreakParams::default(),
+        Some(0.0),
+        Some(&trails),
+    )
+    .into_iter()
+    .filter(|c| c.detection.score >= 0.5)
+    .collect();
+    found_alone(&found, &label, "through overlapping trails");
+}

@@ -1,0 +1,157 @@
+//! Star-aware pass, after explaining away: a kept streak followed beyond its ends, piece by
+//! piece, across the star trails that hide it and along the pointing's wander, to where it
+//! truly ends.
+//!
+//! Where a debris streak runs onto a bright star's trail (along it, or into it at a small
+//! angle), the 8-bit stretch compresses its light: on the rotated survey row a streak of 4.3
+//! unit-noise sigmas alone added 0.3-1 to a trail of 5 sigmas, and where two or three trails
+//! overlap their subtraction left the map 2-7 sigmas below zero. The ends found on the
+//! subtracted map (`refine`, `fit`) stop where the trail begins: 8 debris streaks of that row's
+//! 400 images were boxed too short so (IoU 0.27-0.48), in one or two pieces. And a long streak
+//! is not straight: the pointing's wander bends it by a few pixels, so the refined (straight)
+//! axis of a piece of it leaves it beyond that piece. The map cannot tell under a bright trail
+//! whether the streak goes on; beyond the trail it can. So the streak is followed outwards from
+//! each end in pieces of `PIECE_PX`, each looked for within `ACROSS_PX` across of the last one's
+//! line (wider for each piece it was not seen in), and the end is the change point of the same
+//! half-level excess as `refine`'s (`min(mean, 1.5 level) - level / 2`, summed outwards),
+//! except that a piece where the trails' subtraction removed at least half the streak's level
+//! on any line it may take is hidden: a dip there is no end (only light counts). The streak is
+//! thus followed across a trail only as far as it shows again beyond it (or beside it, where the
+//! trail is fainter), by at least `MIN_GAIN_PX` of excess.
+
+use super::refine::{Ctx, Point, Seg};
+use super::stats::median_of;
+
+/// Length of a piece, pixels: 16 samples of the smoothed map average its noise to about 0.7.
+const PIECE_PX: f64 = 16.0;
+/// How far across a piece is looked for from the last one's line, pixels, and in what steps:
+/// the wander bends a streak by a few pixels over hundreds. Each piece since the streak last
+/// showed (hidden, or too faint) widens the search by as much, up to `MAX_ACROSS_PX`: a short
+/// fragment's axis is a degree or so off, 4 px over a 250 px trail.
+const ACROSS_PX: f64 = 1.5;
+const ACROSS_STEP_PX: f64 = 0.5;
+const MAX_ACROSS_PX: f64 = 8.0;
+/// A piece is hidden where the trails' subtraction removed at least this share of the streak's
+/// level (median along the piece).
+const HIDDEN_SHARE: f64 = 0.5;
+/// An end moves only if the pieces beyond it hold at least this many pixels' worth of
+/// half-level excess (a streak at its level gains half its level per pixel) ...
+const MIN_GAIN_PX: f64 = 16.0;
+/// ... and the walk stops where it has lost this many pieces' worth since the best end.
+const GIVE_UP_PIECES: f64 = 4.0;
+
+impl Ctx<'_> {
+    /// `s` with each end moved outwards to where the streak followed beyond it ends (see the
+    /// module docs); `s` itself where no end moves, or outside the star-aware pass.
+    pub(super) fn reach(&self, s: &Seg) -> Seg {
+        if self.removed.is_none() {
+            return *s;
+        }
+        let (ux, uy) = s.dir();
+        let (nx, ny) = (-uy, ux);
+        // The streak's level: the median along it (its ends stopped where trails hide it).
+        let mut along: Vec<f64> = s
+            .axis_points()
+            .map(|(x, y)| self.cross_mean(x, y, nx, ny))
+            .collect();
+        let level = median_of(&mut along);
+        if level <= 0.0 {
+            return *s;
+        }
+        let (a, b) = s.ends();
+        let (a2, b2) = (
+            self.follow(a, (-ux, -uy), level),
+            self.follow(b, (ux, uy), level),
+        );
+        if a2 == a && b2 == b {
+            return *s;
+        }
+        let length = (b2.0 - a2.0).hypot(b2.1 - a2.1);
+        let mut r = Seg {
+            cx: 0.5 * (a2.0 + b2.0),
+            cy: 0.5 * (a2.1 + b2.1),
+            theta: (b2.1 - a2.1).atan2(b2.0 - a2.0),
+            length,
+            ..*s
+        };
+        (r.flux, r.elongation) = self.flux_and_elongation(&r);
+        r
+    }
+
+    /// The end of a streak of `level` followed from its end `e` outwards along `u`.
+    fn follow(&self, e: Point, u: (f64, f64), level: f64) -> Point {
+        let (nx, ny) = (-u.1, u.0);
+        let cap = 1.5 * level;
+        // Lateral offset of the streak from the line through `e` along `u`, and the pieces
+        // since it was last seen.
+        let (mut off, mut missed) = (0.0, 0.0);
+        let (mut acc, mut best, mut best_end) = (0.0, 0.0, e);
+        let mut start = 0.0;
+        loop {
+            // The piece's k-th sample (1 px apart) at lateral offset `o`.
+            let at = |o: f64, k: usize| {
+                let t = start + k as f64 + 0.5;
+                (e.0 + t * u.0 + o * nx, e.1 + t * u.1 + o * ny)
+            };
+            let n = PIECE_PX as usize;
+            let (x1, y1) = at(off, n - 1);
+            if x1 < 0.0 || y1 < 0.0 || x1 > (self.w - 1) as f64 || y1 > (self.h - 1) as f64 {
+                break;
+            }
+            let mean = |o: f64| {
+                (0..n)
+                    .map(|k| self.z_at(at(o, k).0, at(o, k).1))
+                    .sum::<f64>()
+                    / n as f64
+            };
+            let across = (ACROSS_PX * (1.0 + missed)).min(MAX_ACROSS_PX);
+            let n_across = (across / ACROSS_STEP_PX).round() as i64;
+            let offsets = (-n_across..=n_across).map(|j| off + j as f64 * ACROSS_STEP_PX);
+            let (o_best, m) =
+                offsets
+                    .clone()
+                    .map(|o| (o, mean(o)))
+                    .fold(
+                        (off, f64::NEG_INFINITY),
+                        |b, c| if c.1 > b.1 { c } else { b },
+                    );
+            // Hidden where the trails hide any line the streak may take (whole pixels apart).
+            let hidden = offsets.step_by((1.0 / ACROSS_STEP_PX) as usize).any(|o| {
+                let mut removed: Vec<f64> = (0..n).map(|k| self.removed_at(at(o, k))).collect();
+                median_of(&mut removed) >= HIDDEN_SHARE * level
+            });
+            let gain = (m.min(cap) - 0.5 * level) * PIECE_PX;
+            if !hidden && m >= 0.5 * level {
+                (off, missed) = (o_best, 0.0);
+            } else {
+                missed += 1.0;
+            }
+            acc += if hidden { gain.max(0.0) } else { gain };
+            if acc > best {
+                best = acc;
+                let (x, y) = at(off, n - 1);
+                best_end = (x + 0.5 * u.0, y + 0.5 * u.1);
+            }
+            start += PIECE_PX;
+            if acc < best - GIVE_UP_PIECES * PIECE_PX * 0.5 * level {
+                break;
+            }
+        }
+        if best >= MIN_GAIN_PX * 0.5 * level {
+            best_end
+        } else {
+            e
+        }
+    }
+
+    /// What the trails' subtraction removed at the pixel nearest `q` (0 outside the image).
+    fn removed_at(&self, (x, y): Point) -> f64 {
+        let (i, j) = (x.round(), y.round());
+        match self.removed {
+            Some(r) if i >= 0.0 && j >= 0.0 && i < self.w as f64 && j < self.h as f64 => {
+                r[j as usize * self.w + i as usize] as f64
+            }
+            _ => 0.0,
+        }
+    }
+}
