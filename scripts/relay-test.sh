@@ -48,6 +48,32 @@ printf 'x' >> "$work/bad/tiny/stage2/model.onnx"
 expect_fail "model.onnx: sha256" adopt "$work/bad/tiny/stage2"
 relay adopt "$work/out2/tiny/stage2"
 expect_fail "nothing to train" next
+# A model trained before the relay joins it: its entry names starting weights, which its first
+# stage trains on from (and only from: a changed file is refused).
+cp "$work/models/tiny.pt" "$work/models/tiny-b.pt"
+start_b=$(sha256sum "$work/models/tiny-b.pt" | cut -d' ' -f1)
+cat >> "$Q" <<TOML
+
+[[model]]
+name = "tiny-b"
+campaign = "campaigns/quickstart.toml"
+weights = "$work/models/tiny-b.pt"
+onnx = "$work/models/tiny-b.onnx"
+records = "$work/models/training/tiny-b"
+epochs_target = 1
+stage = { epochs = 1, set = ["images=12", "sensor.width_px=256", "sensor.height_px=256", 'stages=["render","enhance","dataset"]', "train.device=cpu", "train.workers=0", "train.imgsz=64", "train.batch=4", "train.val=false"] }
+stages_done = 0
+epochs_done = 0
+weights_sha256 = "$start_b"
+onnx_sha256 = ""
+TOML
+printf 'x' >> "$work/models/tiny-b.pt"
+expect_fail "tiny-b.pt: sha256" stage --out "$work/outb" --python "$PY" --work "$work/wb"
+cp "$work/models/tiny.pt" "$work/models/tiny-b.pt"
+relay stage --out "$work/outb" --python "$PY" --work "$work/wb" > "$work/stageb.txt"
+python3 -c 'import json,sys; s=json.load(open(sys.argv[1])); assert s["start"]["sha256"] == sys.argv[2] and s["stage"] == 1, s' \
+  "$work/outb/tiny-b/stage1/stage.json" "$start_b"
+relay adopt "$work/outb/tiny-b/stage1"
 "$PY" - "$work" <<'PY'
 import hashlib, json, sys, tomllib
 from pathlib import Path
@@ -76,6 +102,7 @@ for n in (1, 2):
     assert sorted(p.name for p in d.iterdir()) == sorted(
         ["stage.json", "summary.json", "results.csv", "soig-train.txt", "manifest-summary.json"]), n
 print("relay-test: queue -> stage -> adopt twice; stage 2 trained on from stage 1's weights;",
-      "refusals of a re-adopt, a changed file and a finished queue; test mAP50-95",
+      "refusals of a re-adopt, a changed file and a finished queue; a first stage from given",
+      "weights; test mAP50-95",
       s1["test"]["mAP50-95"], s2["test"]["mAP50-95"])
 PY

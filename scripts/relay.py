@@ -104,8 +104,9 @@ def stage(a) -> None:
     else:
         sets.append(f"train.epochs={st['epochs']}")
     start = None
-    if m["stages_done"] > 0:
-        # A later stage trains on from the committed weights, and only from those.
+    if m["stages_done"] > 0 or m["weights_sha256"]:
+        # A later stage trains on from the committed weights, and only from those; so does a
+        # first stage whose queue entry names starting weights (a model trained before the relay).
         weights = resolve(root, m["weights"])
         if not weights.is_file():
             raise RelayError(f"{queue_path}: model {m['name']}: weights {weights} not found")
