@@ -13,6 +13,11 @@ PY=${SOIG_TRAIN_PYTHON:-.venv-train/bin/python3}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 Q=$work/queue.toml
+# A tiny stage on CPU, for every model of the test's queue.
+tiny=$(cat <<'SET'
+"images=12", "sensor.width_px=256", "sensor.height_px=256", 'stages=["render","enhance","dataset"]', "train.device=cpu", "train.workers=0", "train.imgsz=64", "train.batch=4"
+SET
+)
 cat > "$Q" <<TOML
 # the relay test's queue
 [[model]]
@@ -22,7 +27,7 @@ weights = "$work/models/tiny.pt"
 onnx = "$work/models/tiny.onnx"
 records = "$work/models/training/tiny"
 epochs_target = 4
-stage = { epochs = 2, set = ["images=12", "sensor.width_px=256", "sensor.height_px=256", 'stages=["render","enhance","dataset"]', "train.device=cpu", "train.workers=0", "train.imgsz=64", "train.batch=4", "train.amp=true", "train.val=false"] }
+stage = { epochs = 2, set = [$tiny, "train.amp=true", "train.val=false"] }
 stages_done = 0   # progress, rewritten by adopt
 epochs_done = 0
 weights_sha256 = ""
@@ -61,7 +66,7 @@ weights = "$work/models/tiny-b.pt"
 onnx = "$work/models/tiny-b.onnx"
 records = "$work/models/training/tiny-b"
 epochs_target = 1
-stage = { epochs = 1, set = ["images=12", "sensor.width_px=256", "sensor.height_px=256", 'stages=["render","enhance","dataset"]', "train.device=cpu", "train.workers=0", "train.imgsz=64", "train.batch=4", "train.val=false"] }
+stage = { epochs = 1, set = [$tiny, "train.val=false"] }
 stages_done = 0
 epochs_done = 0
 weights_sha256 = "$start_b"

@@ -73,8 +73,8 @@
 //!    99 % of the flux, `geometry::flux_box`); where no fit is possible, the refined segment
 //!    padded by `box_pad_along_sigma * psf_sigma_px` along the axis and
 //!    `box_pad_across_sigma * psf_sigma_px` across it. In the star-aware pass each kept streak
-//!    is first followed beyond its ends across the trails that hide it (`reach`). In pixel-edge coordinates (pixel `i`
-//!    spans `[i, i + 1]`), clipped to the image. Candidates are sorted by decreasing score, at most
+//!    is first followed beyond its ends across the trails that hide it (`reach`). In
+//!    pixel-edge coordinates (pixel `i` spans `[i, i + 1]`), clipped to the image. Candidates are sorted by decreasing score, at most
 //!    `max_candidates`.
 //!
 //! Orientations (the output `orientation_deg` and the input `star_trail_angle_deg`) are in

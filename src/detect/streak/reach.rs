@@ -100,7 +100,10 @@ impl Ctx<'_> {
             }
             let mean = |o: f64| {
                 (0..n)
-                    .map(|k| self.z_at(at(o, k).0, at(o, k).1))
+                    .map(|k| {
+                        let (x, y) = at(o, k);
+                        self.z_at(x, y)
+                    })
                     .sum::<f64>()
                     / n as f64
             };

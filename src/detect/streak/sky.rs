@@ -34,8 +34,8 @@ const SHOWS_SIGMA: f64 = 1.0;
 const FADE_SIGMA: f64 = 1.0;
 /// The farthest a trail's measured light is looked for beside it, pixels.
 const MAX_REACH_PX: f64 = 24.0;
-/// A candidate is a star's if predicted trails lie within their reach (`COVER_SLACK_PX`) of this share of its
-/// axis samples (the rest: its ends' uncertainty) ...
+/// A candidate is a star's if predicted trails lie within their reach (plus `COVER_SLACK_PX`)
+/// of this share of its axis samples (the rest: its ends' uncertainty) ...
 const COVERED_SHARE: f64 = 0.8;
 /// ... and its level is at most this many times what those trails put there (each one's level
 /// elsewhere, through its cross-section), plus `LEVEL_SLACK_SIGMA` in unit noise (a median
@@ -290,9 +290,10 @@ impl Sky {
 
     /// Whether catalogued stars explain the segment `s`: predicted trails along its
     /// direction (within `tolerance_deg` plus the orientation uncertainty of a short segment)
-    /// lie within their reach (plus `COVER_SLACK_PX`) of `COVERED_SHARE` of its axis samples, and its level on the map
-    /// `z` exceeds `LEVEL_RATIO` times what those trails put there (each one's level elsewhere
-    /// through its cross-section) by at most `LEVEL_SLACK_SIGMA` (median over the samples).
+    /// lie within their reach (plus `COVER_SLACK_PX`) of `COVERED_SHARE` of its axis samples,
+    /// and its level on the map `z` exceeds `LEVEL_RATIO` times what those trails put there
+    /// (each one's level elsewhere through its cross-section) by at most `LEVEL_SLACK_SIGMA`
+    /// (median over the samples).
     pub(super) fn explains(
         &self,
         s: &Seg,
@@ -432,8 +433,8 @@ const CENTRE_PX: f64 = 2.0;
 /// refined by a parabola through it and its neighbours). A debris streak running 4-6 px
 /// beside a trail along its whole length is in the median at every offset on its side, and
 /// was subtracted with the star (4 of 39 false boxes on the 400 images of the rotated survey
-/// row, before its new fill, were such debris boxed too short). Two trails side by side are each subtracted once,
-/// not with each other's light too.
+/// row, before its new fill, were such debris boxed too short). Two trails side by side are
+/// each subtracted once, not with each other's light too.
 fn symmetric(prof: &[f64]) -> Vec<f64> {
     let r = prof.len() / 2;
     let reach = (CENTRE_PX as usize).min(r.saturating_sub(1));

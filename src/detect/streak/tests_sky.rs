@@ -69,6 +69,34 @@ fn run_with(
     )
 }
 
+/// Candidates of confidence 0.5 and more from the star-aware detector on `img` (noise-free,
+/// its stars' predicted paths `trails`) with a debris streak of `sigmas` noise sigmas from `a`
+/// to `b` added, and the debris' label box.
+fn aware_with_debris(
+    mut img: Vec<f64>,
+    trails: &[StarTrail],
+    (a, b): ((f64, f64), (f64, f64)),
+    sigmas: f64,
+    seed: u64,
+) -> (Vec<Candidate>, [f64; 4]) {
+    let mut alone = vec![0.0; W * H];
+    add_segment(&mut alone, W, H, a.0, a.1, b.0, b.1, sigmas * NOISE);
+    img.iter_mut().zip(&alone).for_each(|(v, d)| *v += d);
+    let pixels = quantise(&img, &mut ChaCha8Rng::seed_from_u64(seed));
+    let found = detect_streaks_among_stars(
+        &pixels,
+        W,
+        H,
+        &StreakParams::default(),
+        Some(0.0),
+        Some(trails),
+    )
+    .into_iter()
+    .filter(|c| c.detection.score >= 0.5)
+    .collect();
+    (found, truth_box(&alone, W, H))
+}
+
 /// The debris is the one confident candidate, at IoU 0.5 with its label.
 fn found_alone(found: &[Candidate], label: &[f64; 4], what: &str) {
     assert_eq!(found.len(), 1, "{what}: {found:#?}");
@@ -146,22 +174,7 @@ fn debris_along_most_of_a_faint_stars_trail_is_found_whole() {
             electrons: amp * 400.0,
         });
     }
-    let mut alone = vec![0.0; W * H];
-    add_segment(&mut alone, W, H, 150.0, 21.0, 470.0, 21.0, 3.0 * NOISE);
-    img.iter_mut().zip(&alone).for_each(|(v, d)| *v += d);
-    let label = truth_box(&alone, W, H);
-    let pixels = quantise(&img, &mut ChaCha8Rng::seed_from_u64(11));
-    let found: Vec<Candidate> = detect_streaks_among_stars(
-        &pixels,
-        W,
-        H,
-        &StreakParams::default(),
-        Some(0.0),
-        Some(&trails),
-    )
-    .into_iter()
-    .filter(|c| c.detection.score >= 0.5)
-    .collect();
+    let (found, label) = aware_with_debris(img, &trails, ((150.0, 21.0), (470.0, 21.0)), 3.0, 11);
     found_alone(&found, &label, "along a faint trail");
 }
 
@@ -194,21 +207,6 @@ fn debris_running_through_overlapping_trails_is_boxed_whole() {
             electrons: amp * 280.0,
         });
     }
-    let mut alone = vec![0.0; W * H];
-    add_segment(&mut alone, W, H, 20.0, 266.2, 490.0, 253.9, 4.0 * NOISE);
-    img.iter_mut().zip(&alone).for_each(|(v, d)| *v += d);
-    let label = truth_box(&alone, W, H);
-    let pixels = quantise(&img, &mut ChaCha8Rng::seed_from_u64(13));
-    let found: Vec<Candidate> = detect_streaks_among_stars(
-        &pixels,
-        W,
-        H,
-        &StreakParams::default(),
-        Some(0.0),
-        Some(&trails),
-    )
-    .into_iter()
-    .filter(|c| c.detection.score >= 0.5)
-    .collect();
+    let (found, label) = aware_with_debris(img, &trails, ((20.0, 266.2), (490.0, 253.9)), 4.0, 13);
     found_alone(&found, &label, "through overlapping trails");
 }
