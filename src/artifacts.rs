@@ -430,10 +430,10 @@ pub fn provenance_cards(
     }
     // A moving camera's WCS at the exposure's start and end (alternates S and E), so that a
     // reader of the FITS alone can place the stars over the exposure (`soig detect --catalog`).
-    cards.extend(crate::sky::motion::cards(
+    cards.extend(crate::fits::cards_of(crate::sky::motion::cards(
         &scene.pointing,
         &scene.projection(sensor).shifted(jx, jy),
         scene.exposure_s,
-    ));
+    )));
     cards
 }

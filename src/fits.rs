@@ -72,7 +72,12 @@ pub type Cards = Vec<(String, Card, String)>;
 
 /// The WCS cards of a projection.
 pub fn wcs_cards(tan: &Tan) -> Cards {
-    tan.wcs_cards()
+    cards_of(tan.wcs_cards())
+}
+
+/// Header cards of the sky layer's (keyword, value, comment) triples.
+pub fn cards_of<K: Into<String>>(values: Vec<(K, WcsValue, &'static str)>) -> Cards {
+    values
         .into_iter()
         .map(|(k, v, c)| {
             let v = match v {
@@ -80,7 +85,7 @@ pub fn wcs_cards(tan: &Tan) -> Cards {
                 WcsValue::Real(r) => Card::Real(r),
                 WcsValue::Str(s) => Card::Str(s.to_string()),
             };
-            (k.to_string(), v, c.to_string())
+            (k.into(), v, c.to_string())
         })
         .collect()
 }

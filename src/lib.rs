@@ -40,6 +40,10 @@
 //! `examples/render_one.rs` builds its campaign in code; [`run`] writes a whole campaign with a
 //! [`Progress`] callback of the caller's.
 
+// The layers below, re-exported: `soig::rng`, `soig::sky`, ... name the same modules as before.
+pub use soig_base::{build_id, hash, input_file, progress, python, rng};
+pub use soig_sky as sky;
+
 pub use artifacts::{Provenance, provenance_cards};
 pub use campaign::{Campaign, CampaignError};
 pub use error::{Error, Result};
@@ -51,7 +55,6 @@ pub use simulate::{Experiment, ImageProducts};
 
 pub(crate) mod artifacts;
 pub mod background;
-pub mod build_id;
 pub mod campaign;
 pub mod collect;
 pub mod compare;
@@ -67,9 +70,7 @@ pub mod export;
 pub mod fits;
 pub mod frames;
 pub mod geometry;
-pub(crate) mod hash;
 pub mod imaging;
-pub mod input_file;
 pub mod journal;
 pub mod launch;
 pub mod light_curve;
@@ -80,17 +81,13 @@ pub mod noise;
 pub mod output;
 pub mod pipeline;
 pub(crate) mod plot;
-pub mod progress;
-pub(crate) mod python;
 pub mod render;
 pub mod report;
-pub mod rng;
 pub mod scene;
 pub mod sensor;
 pub mod shard;
 pub mod sighting;
 pub mod simulate;
-pub mod sky;
 pub mod star_trails;
 pub mod study;
 pub mod summary;

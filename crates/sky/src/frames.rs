@@ -204,12 +204,12 @@ pub fn teme_to_gcrs(r_teme_km: Vec3, t: Epoch) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sky::norm;
-    use crate::sky::testing::{When, arcsec_between};
+    use crate::norm;
+    use crate::testing::{When, arcsec_between};
 
     include!(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/tests/fixtures/sky/teme_gcrs.rs"
+        "/../../tests/fixtures/sky/teme_gcrs.rs"
     ));
 
     #[test]

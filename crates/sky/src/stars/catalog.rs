@@ -6,7 +6,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use super::{Star, chord2, cone, normalize_ra, sort_stars};
-use crate::sky::radec_unit;
+use crate::radec_unit;
 
 /// Milliarcseconds per degree: the "conversion factor" of Eq. 8.
 const MAS_PER_DEG: f64 = 3.6e6;

@@ -88,7 +88,7 @@ pub fn debris_in_catalogue_frame(los: Vec3, observer_gcrs_km_s: Vec3, earth_km_s
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sky::{angle_deg, norm, radec_unit};
+    use crate::{angle_deg, norm, radec_unit};
 
     const ARCSEC_DEG: f64 = 1.0 / 3600.0;
 

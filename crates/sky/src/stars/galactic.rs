@@ -1,7 +1,7 @@
 //! Galactic coordinates: the ICRS -> galactic rotation that the count model's latitude needs.
 
 use super::normalize_ra;
-use crate::sky::{Mat3, mat_vec, radec_unit};
+use crate::{Mat3, mat_vec, radec_unit};
 
 /// ICRS -> galactic rotation as astropy composes it: the ICRS -> FK5 (J2000) frame bias, then
 /// FK5 -> galactic with the pole (192.8594812065348, 27.12825118085622) and l(NCP) =
@@ -38,7 +38,7 @@ pub fn equatorial_to_galactic(ra_deg: f64, dec_deg: f64) -> (f64, f64) {
 /// Inverse of [`equatorial_to_galactic`], for the tests of the procedural sky.
 #[cfg(test)]
 pub(super) fn galactic_to_equatorial(l: f64, b: f64) -> (f64, f64) {
-    let v = mat_vec(&crate::sky::transpose(&ICRS_TO_GALACTIC), radec_unit(l, b));
+    let v = mat_vec(&crate::transpose(&ICRS_TO_GALACTIC), radec_unit(l, b));
     (
         normalize_ra(v[1].atan2(v[0]).to_degrees()),
         v[2].atan2(v[0].hypot(v[1])).to_degrees(),

@@ -7,8 +7,8 @@ use hifitime::Epoch;
 
 use super::epoch_to_chrono;
 use super::tle::Tle;
-use crate::sky::frames::teme_to_gcrs;
-use crate::sky::norm;
+use crate::frames::teme_to_gcrs;
+use crate::norm;
 
 /// WGS72 equatorial radius (km): the radius SGP4 uses with the WGS72 constants.
 const EARTH_RADIUS_KM: f64 = 6378.135;
@@ -342,14 +342,14 @@ impl Propagator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sky::orbit::parse_tles;
-    use crate::sky::sub;
-    use crate::sky::testing::{When, arcsec_between, catalog};
+    use crate::orbit::parse_tles;
+    use crate::sub;
+    use crate::testing::{When, arcsec_between, catalog};
     use hifitime::Unit;
 
     include!(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/tests/fixtures/sky/orbit_teme.rs"
+        "/../../tests/fixtures/sky/orbit_teme.rs"
     ));
 
     /// SENTINEL 3A: python-sgp4 TEME then astropy GCRS, km.

@@ -336,8 +336,8 @@ fn parse_one(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sky::orbit::{Propagator, Regime};
-    use crate::sky::testing::{catalog, catalog_text};
+    use crate::orbit::{Propagator, Regime};
+    use crate::testing::{catalog, catalog_text};
     use hifitime::Unit;
 
     /// Line with its checksum recomputed, to build TLEs that fail only where a test wants.

@@ -1,3 +1,5 @@
+//! soig's sky layer, which imports nothing of soig.
+//!
 //! The sky: time, orbits, Sun and Moon, stars, projection onto the detector and photometry.
 //! Geometry is in f64, positions in km, angles in degrees unless a name says otherwise.
 
@@ -8,6 +10,7 @@ pub mod frames;
 pub mod motion;
 pub mod orbit;
 pub mod photometry;
+pub mod pointing;
 pub mod projection;
 pub mod stars;
 #[cfg(test)]

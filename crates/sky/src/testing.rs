@@ -11,7 +11,7 @@ use super::{ARCSEC, Vec3, cross, dot, norm};
 pub fn catalog_text() -> String {
     std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/campaigns/data/catalog-2022-01-22.tle"
+        "/../../campaigns/data/catalog-2022-01-22.tle"
     ))
     .expect("campaigns/data/catalog-2022-01-22.tle")
 }

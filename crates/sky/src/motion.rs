@@ -9,8 +9,8 @@
 use super::projection::Tan;
 use super::vec3::{Vec3, cross, dot, norm, radec_deg, radec_unit, rotate, scale};
 use super::wcs::TanWcs;
-use crate::fits::{Card, Cards};
-use crate::scene::Pointing;
+use super::pointing::Pointing;
+use super::projection::WcsValue;
 
 /// The alternate-WCS letters of the exposure's start and end.
 pub const START: char = 'S';
@@ -236,11 +236,11 @@ fn turn_at(pointing: &Pointing, t_s: f64) -> Option<(Vec3, f64)> {
     }
 }
 
-/// The header cards of the WCS at the start and end of an exposure of `exposure_s` seconds
-/// whose mid-exposure WCS is `mid` (jitter shift included), for a pointing that moves; none for
-/// fixed pointing.
-pub fn cards(pointing: &Pointing, mid: &Tan, exposure_s: f64) -> Cards {
-    let mut cards = Cards::new();
+/// The header cards (keyword, value, comment) of the WCS at the start and end of an exposure of
+/// `exposure_s` seconds whose mid-exposure WCS is `mid` (jitter shift included), for a pointing
+/// that moves; none for fixed pointing.
+pub fn cards(pointing: &Pointing, mid: &Tan, exposure_s: f64) -> Vec<(String, WcsValue, &'static str)> {
+    let mut cards = Vec::new();
     if matches!(pointing, Pointing::Fixed { .. }) {
         return cards;
     }
@@ -253,44 +253,44 @@ pub fn cards(pointing: &Pointing, mid: &Tan, exposure_s: f64) -> Cards {
             Some((axis, angle)) => camera.turned(axis, angle).wcs(),
             None => camera.wcs(),
         };
-        let mut push = |k: &str, v: Card, comment: &str| {
-            cards.push((format!("{k}{letter}"), v, comment.to_string()))
+        let mut push = |k: &str, v: WcsValue, comment: &'static str| {
+            cards.push((format!("{k}{letter}"), v, comment))
         };
-        push("WCSNAME", Card::Str(name.into()), "camera at this instant");
+        push("WCSNAME", WcsValue::Str(name), "camera at this instant");
         push(
             "CTYPE1",
-            Card::Str("RA---TAN".into()),
+            WcsValue::Str("RA---TAN"),
             "gnomonic projection",
         );
         push(
             "CTYPE2",
-            Card::Str("DEC--TAN".into()),
+            WcsValue::Str("DEC--TAN"),
             "gnomonic projection",
         );
-        push("CUNIT1", Card::Str("deg".into()), "");
-        push("CUNIT2", Card::Str("deg".into()), "");
+        push("CUNIT1", WcsValue::Str("deg"), "");
+        push("CUNIT2", WcsValue::Str("deg"), "");
         push(
             "CRVAL1",
-            Card::Real(w.crval[0]),
+            WcsValue::Real(w.crval[0]),
             "[deg] RA of the tangent point",
         );
         push(
             "CRVAL2",
-            Card::Real(w.crval[1]),
+            WcsValue::Real(w.crval[1]),
             "[deg] Dec of the tangent point",
         );
         push(
             "CRPIX1",
-            Card::Real(w.crpix[0]),
+            WcsValue::Real(w.crpix[0]),
             "tangent point, 1-based pixel",
         );
         push(
             "CRPIX2",
-            Card::Real(w.crpix[1]),
+            WcsValue::Real(w.crpix[1]),
             "tangent point, 1-based pixel",
         );
         for (i, j) in [(1, 1), (1, 2), (2, 1), (2, 2)] {
-            push(&format!("CD{i}_{j}"), Card::Real(w.cd[i - 1][j - 1]), "");
+            push(&format!("CD{i}_{j}"), WcsValue::Real(w.cd[i - 1][j - 1]), "");
         }
     }
     cards

@@ -18,7 +18,7 @@ pub use counts::{
 pub use galactic::equatorial_to_galactic;
 pub use procedural::{CELL_DEG, ProceduralSky};
 
-use crate::sky::{Vec3, dot, radec_unit, sub};
+use crate::{Vec3, dot, radec_unit, sub};
 
 /// A star: ICRS position in degrees and magnitude.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]

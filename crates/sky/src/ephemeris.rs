@@ -283,7 +283,7 @@ fn ecliptic_of_date_to_gcrs(v: [f64; 3], tc: f64) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sky::{angle_deg, norm};
+    use crate::{angle_deg, norm};
     use hifitime::TimeScale;
 
     /// (year, month, day, hour, minute, second, is_tt, Sun km, Moon km).
@@ -291,7 +291,7 @@ mod tests {
 
     include!(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/tests/fixtures/sky/ephemeris.rs"
+        "/../../tests/fixtures/sky/ephemeris.rs"
     ));
 
     fn epoch(row: &Row) -> Epoch {

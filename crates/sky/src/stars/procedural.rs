@@ -18,7 +18,7 @@ use sha2::{Digest, Sha256};
 
 use super::counts::{BRIGHT_MAG_LIMIT, GENERATION_MAG_LIMIT, model};
 use super::{Star, chord2, cone, equatorial_to_galactic, normalize_ra, sort_stars};
-use crate::sky::radec_unit;
+use crate::radec_unit;
 
 /// Height of the declination bands (and about the width of the cells) of the procedural sky.
 pub const CELL_DEG: f64 = 0.1;
@@ -284,7 +284,7 @@ mod tests {
     use super::super::galactic::galactic_to_equatorial;
     use super::super::{chord2_of_radius, separation_deg};
     use super::*;
-    use crate::sky::{cross, dot, norm, scale, sub};
+    use crate::{cross, dot, norm, scale, sub};
 
     fn within(stars: &[Star], ra: f64, dec: f64, r: f64) -> Vec<Star> {
         let (c, max) = (radec_unit(ra, dec), chord2_of_radius(r).unwrap());

@@ -1,5 +1,5 @@
 //! Orbits: two/three-line element sets (TLEs) and SGP4/SDP4 propagation; the TEME -> GCRS
-//! rotation that takes propagated positions to the sky is in [`crate::sky::frames`].
+//! rotation that takes propagated positions to the sky is in [`crate::frames`].
 //!
 //! Propagation uses the `sgp4` crate in its AFSPC compatibility mode (WGS72 gravity, AFSPC sidereal
 //! time and epoch expressions, AFSPC Lyddane branch): TLEs are fitted by the US Space Force with
