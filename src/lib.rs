@@ -43,6 +43,7 @@
 // The layers below, re-exported: `soig::rng`, `soig::sky`, ... name the same modules as before.
 pub use soig_base::{build_id, hash, input_file, progress, python, rng};
 pub use soig_sky as sky;
+pub use soig_image::{enhance, fits, frames, geometry, hint, imaging, psf};
 
 pub use artifacts::{Provenance, provenance_cards};
 pub use campaign::{Campaign, CampaignError};
@@ -63,14 +64,9 @@ pub mod dataset;
 pub mod detect;
 pub mod detect_frames;
 pub mod disk;
-pub mod enhance;
 pub mod error;
 pub mod experiment;
 pub mod export;
-pub mod fits;
-pub mod frames;
-pub mod geometry;
-pub mod imaging;
 pub mod journal;
 pub mod launch;
 pub mod light_curve;

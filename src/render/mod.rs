@@ -192,7 +192,7 @@ pub fn render_placed(
             .enumerate()
             .map(|(k, object)| {
                 let rng = &mut object_photons(k as u64);
-                let flux = expected::DebrisFlux::of_scene(sensor, object, jitter);
+                let flux = expected::debris_flux(sensor, object, jitter);
                 // An object alone, its photons all single: drawn per pixel as `photons` would
                 // (the same draws) into a map of the box they can reach, and added to the
                 // image there: no whole image of zeros to fill, add and search an object.
@@ -262,7 +262,7 @@ fn photons(
     // The debris' trajectory samples share one source's packet budget (2000 samples of a
     // magnitude -1 debris would otherwise trace 2e9 packets).
     let debris_packets = (MAX_PACKETS_PER_SOURCE / scene.trajectory.len().max(1) as u64).max(1);
-    let debris_flux = expected::DebrisFlux::of_scene(sensor, scene, jitter);
+    let debris_flux = expected::debris_flux(sensor, scene, jitter);
     // Where no trajectory sample can be merged into packets, all its photons are single and
     // drawn per pixel from the debris' expected flux: the same distribution as tracing them
     // (`DebrisFlux::draw`), at a fraction of the cost.

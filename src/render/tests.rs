@@ -192,7 +192,7 @@ fn debris_drawn_per_pixel_is_distributed_as_its_photons_traced() {
         jitter.max_excursion() > 0.5,
         "the jitter path moves the streak"
     );
-    let flux = expected::DebrisFlux::of_scene(&c.sensor, &s, &jitter);
+    let flux = expected::debris_flux(&c.sensor, &s, &jitter);
     let lambda: f64 = s.trajectory.iter().map(|p| p.expected_electrons).sum();
     assert!(
         (flux.total() / lambda - 1.0).abs() < 1e-9,
@@ -526,7 +526,7 @@ fn an_objects_own_box_holds_the_whole_image_draws_and_label() {
         &s,
         &mut pixel_stream(5, 0, PixelPurpose::Photons),
     );
-    let flux = expected::DebrisFlux::of_scene(&c.sensor, &s, &jitter);
+    let flux = expected::debris_flux(&c.sensor, &s, &jitter);
     let (w, h) = (c.sensor.width_px, c.sensor.height_px);
     let mut whole = vec![0u32; w * h];
     let total = flux.draw(

@@ -12,7 +12,7 @@
 
 use super::refine::{Ctx, Seg};
 use crate::geometry::{BoxPx, LABEL_SHARE};
-use crate::render::expected::DebrisFlux;
+use crate::psf::DebrisFlux;
 
 /// Offset across a Gaussian profile, in its sigmas, where it is at half its peak: sqrt(2 ln 2).
 const HALF_WIDTH: f64 = 1.177_410_022_515_474_5;

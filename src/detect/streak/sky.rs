@@ -12,20 +12,8 @@ use super::Sanitized;
 use super::merge::angle_diff_deg;
 use super::refine::{Seg, point_segment_distance};
 use super::stats::median_of;
+pub use crate::hint::StarTrail;
 use crate::imaging::bilinear;
-
-/// A catalogued star's predicted path in the detector's image: pixel centres at integers,
-/// linear between nodes (one node: a star that does not move).
-#[derive(Clone, Debug, PartialEq)]
-pub struct StarTrail {
-    pub nodes: Vec<(f64, f64)>,
-    /// Each node's time from the exposure's start, seconds (empty: not known). With them the
-    /// pointing's wander over the exposure is measured on the bright trails and followed by
-    /// all (see `jitter_across`).
-    pub times_s: Vec<f64>,
-    /// Expected photo-electrons of the star while its trail is in the image.
-    pub electrons: f64,
-}
 
 /// Unit-noise level, in the smoothed map, below which a trail or its wings are noise: a trail
 /// is subtracted only if three quarters of it are at least this bright.

@@ -480,7 +480,7 @@ pub fn flux_box<P: Flux>(img: &[P], width: usize, height: usize, share: f64) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::{PixelPurpose, pixel_stream};
+    use soig_base::rng::{PixelPurpose, pixel_stream};
     use rand::RngExt;
 
     #[test]

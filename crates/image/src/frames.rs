@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use fitsio::FitsFile;
 use fitsio::hdu::HduInfo;
 
-use crate::sky::wcs::TanWcs;
+use soig_sky::wcs::TanWcs;
 
 /// A frame that cannot be read, with its path.
 #[derive(Debug, thiserror::Error)]
@@ -91,7 +91,7 @@ fn header_keys() -> Vec<String> {
         .chain(EXPOSURE_KEYS.iter())
         .map(|k| k.to_string())
         .collect();
-    for letter in [crate::sky::motion::START, crate::sky::motion::END] {
+    for letter in [soig_sky::motion::START, soig_sky::motion::END] {
         keys.extend(WCS_KEYS.iter().map(|k| format!("{k}{letter}")));
     }
     keys
@@ -108,7 +108,7 @@ impl Frame {
         {
             use std::io::Read;
             let mut f =
-                crate::hash::open_regular(path).map_err(|e| err(format!("cannot open: {e}")))?;
+                soig_base::hash::open_regular(path).map_err(|e| err(format!("cannot open: {e}")))?;
             let n = f
                 .read(&mut head)
                 .map_err(|e| err(format!("cannot read: {e}")))?;
@@ -147,7 +147,7 @@ fn check_pixels(width: u64, height: u64) -> Result<(), String> {
 fn read_png(path: &Path) -> Result<Frame, String> {
     let open = || {
         image::ImageReader::new(std::io::BufReader::new(
-            crate::hash::open_regular(path).map_err(|e| format!("cannot open: {e}"))?,
+            soig_base::hash::open_regular(path).map_err(|e| format!("cannot open: {e}"))?,
         ))
         .with_guessed_format()
         .map_err(|e| format!("cannot read: {e}"))
@@ -359,7 +359,7 @@ mod tests {
     #[test]
     fn reads_the_neossat_fixture_with_its_wcs() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/fixtures/neossat/NEOS_SCI_2024239174545_cord.fits");
+            .join("../../tests/fixtures/neossat/NEOS_SCI_2024239174545_cord.fits");
         let f = Frame::read(&path).unwrap();
         assert_eq!((f.width, f.height), (512, 512));
         assert_eq!(f.region_keyword, Some("TRIMSEC"));

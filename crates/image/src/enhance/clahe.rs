@@ -339,7 +339,7 @@ mod tests {
     use std::path::PathBuf;
 
     fn fixture_dir() -> PathBuf {
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/clahe")
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures/clahe")
     }
 
     fn load_grey(name: &str) -> (Vec<u8>, usize, usize) {

@@ -9,7 +9,7 @@ use std::path::Path;
 use fitsio::FitsFile;
 use fitsio::images::{ImageDescription, ImageType};
 
-use crate::sky::projection::{Tan, WcsValue};
+use soig_sky::projection::{Tan, WcsValue};
 
 /// A file name cfitsio cannot misread. cfitsio parses every name for its extended syntax
 /// (`f.fits[1]`, `f.fits(template)`, a leading `!`, `-` for stdin, ...), so a folder named
@@ -26,7 +26,7 @@ impl CfitsioName {
     /// The name of existing file `path`, to read: refused unless it is a regular file.
     pub fn to_read(path: &Path) -> std::io::Result<CfitsioName> {
         use std::os::fd::AsRawFd;
-        let f = crate::hash::open_regular(path)?;
+        let f = soig_base::hash::open_regular(path)?;
         let name = format!("/proc/self/fd/{}", f.as_raw_fd()).into();
         Ok(CfitsioName { _open: f, name })
     }
@@ -155,9 +155,9 @@ fn read<T: fitsio::images::ReadImage>(
     };
     // Before cfitsio sees it: a device would never end, and a header that claims more pixels
     // than the file holds would have cfitsio allocate them all.
-    let len = crate::input_file::regular(path).map_err(|why| refuse(&why))?;
+    let len = soig_base::input_file::regular(path).map_err(|why| refuse(&why))?;
     let mut head = [0u8; 9];
-    let n = crate::hash::open_regular(path)
+    let n = soig_base::hash::open_regular(path)
         .and_then(|mut f| std::io::Read::read(&mut f, &mut head))
         .map_err(|e| refuse(&e.to_string()))?;
     if n < head.len() || &head != b"SIMPLE  =" {

@@ -1,0 +1,18 @@
+//! soig's image layer: pixels and what is drawn on them, for the simulator and the detectors
+//! alike. It imports soig's base and sky layers only.
+//!
+//! - [`imaging`]: bilinear sampling, robust statistics;
+//! - [`geometry`]: the detector's frame kinds (original, padded, rotated), warps and label boxes;
+//! - [`fits`]: FITS writing and reading through cfitsio, header cards;
+//! - [`frames`]: real frames (FITS or PNG) and their sky region, for `soig detect`;
+//! - [`enhance`]: the paper's FITS -> 8-bit conversion (stretch, CLAHE) and PNG;
+//! - [`psf`]: the streak flux model shared by the renderer's labels and the streak detector;
+//! - [`hint`]: what a detector may be told besides the pixels (predicted star trails).
+
+pub mod enhance;
+pub mod fits;
+pub mod frames;
+pub mod geometry;
+pub mod hint;
+pub mod imaging;
+pub mod psf;
