@@ -29,7 +29,7 @@ fn main() -> Result<(), soig::Error> {
         .map(String::as_str)
         .unwrap_or("campaigns/quickstart.toml");
     let campaign = Campaign::load_with_overrides(Path::new(path), &sets)?;
-    let mut x = Experiment::new(&campaign);
+    let mut x = soig::experiment::of(&campaign);
     let images: u64 = args
         .get(1)
         .map(|s| s.parse().expect("IMAGES is a count"))

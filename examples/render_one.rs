@@ -22,7 +22,7 @@ fn main() -> Result<(), soig::Error> {
          [sensor]\nwidth_px = 256\nheight_px = 256\nfov_radius_deg = 0.025\n"
     );
     let campaign = Campaign::from_toml(&text, Path::new("render-one.toml"))?;
-    let experiment = Experiment::new(&campaign);
+    let experiment = soig::experiment::of(&campaign);
     let inputs = soig::experiment::inputs(&campaign)?;
 
     let image = soig::simulate::image(&experiment, &inputs, 0)?;

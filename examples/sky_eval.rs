@@ -32,7 +32,7 @@ fn main() -> anyhow::Result<()> {
         anyhow::bail!("usage: sky_eval CAMPAIGN RUN_DIR PRED_DIR [--set k=v]...");
     };
     let campaign = Campaign::load_with_overrides(Path::new(campaign), &sets)?;
-    let x = soig::Experiment::new(&campaign);
+    let x = soig::experiment::of(&campaign);
     let inputs = soig::experiment::inputs(&campaign)?;
     let params = campaign.resolved.detect.streak.clone();
     let run = PathBuf::from(run);

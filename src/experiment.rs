@@ -43,139 +43,139 @@ pub struct Effective {
     pub sky_e_per_s: Option<f64>,
 }
 
-impl Experiment {
-    pub fn new(campaign: &Campaign) -> Experiment {
-        let c = &campaign.resolved;
-        let s = &c.sensor;
-        let sensor = Sensor {
-            width_px: s.width_px as usize,
-            height_px: s.height_px as usize,
-            fov_radius_deg: s.fov_radius_deg,
-            psf_sigma_arcsec: s.psf_sigma_arcsec,
-            zero_point_mag: s.zero_point_mag,
-            mag_limit: s.mag_limit,
-            jitter_deg_per_sqrt_s: s.jitter_deg_per_sqrt_s,
-            gain_e_per_adu: s.gain_e_per_adu,
-            bias: AduRange {
-                min_adu: s.bias_min_adu,
-                max_adu: s.bias_max_adu,
-            },
-            background: AduRange {
-                min_adu: s.background_min_adu,
-                max_adu: s.background_max_adu,
-            },
-            background_exposure_s: s.background_exposure_s,
-            noise: Noise::Paper,
-        };
-        let sensor = Sensor {
-            noise: noise_of(c, &sensor),
-            ..sensor
-        };
-        let v = &c.visibility;
-        let scene = scene::Spec {
-            window_start: campaign.window_start,
-            window_end: campaign.window_end,
-            exposure_min_s: c.exposure.min_s,
-            exposure_max_s: c.exposure.max_s,
-            pointing: c.pointing.mode,
-            debris_weights: c.debris.iter().map(|d| d.weight.unwrap_or(1.0)).collect(),
-            placement_fraction: c.pointing.placement_fraction,
-            area: photometry_area(&c.photometry),
-            albedo: match c.photometry.preset {
-                PhotometryPreset::Paper => c.photometry.albedo,
-                PhotometryPreset::NasaFragments => debris_sizes::ODPO_ALBEDO,
-            },
-            tumble: match c.photometry.light_curve {
-                LightCurve::None => None,
-                LightCurve::Tumbling {
-                    period_min_s,
-                    period_max_s,
-                    amplitude_max,
-                } => Some(TumbleRange {
-                    period_min_s,
-                    period_max_s,
-                    amplitude_max,
-                }),
-            },
-            gate: Gate {
-                earth_min_deg: v.earth_min_deg,
-                sun_min_deg: v.sun_min_deg,
-                moon_min_deg: v.moon_min_deg,
-                earth_clearance_km: v.earth_clearance_km,
-                brightest_star_mag: v.brightest_star_mag,
-                snr_min: campaign.snr_min(),
-                snr_definition: v.snr_definition,
-                max_attempts: v.max_attempts,
-            },
-            star_cone_deg: c.stars.cone_radius_deg(),
-            trajectory_samples: c.render.trajectory_samples as usize,
-            apparent_positions: c.render.apparent_positions,
-            frame_share: match &c.background {
-                Background::Frames { share, .. } => *share,
-                Background::Uniform => 1.0,
-            },
-            collect_frames: c.collect_frames() as u64,
-            collect_gap_s: c.collect.as_ref().map_or(0.0, |k| k.gap_s),
-            objects: c.objects.as_ref().map(|o| {
-                let (min, max) = o.per_frame.bounds();
-                scene::ObjectCount {
-                    min,
-                    max,
-                    empty_share: o.empty_share,
-                }
+/// The values a campaign renders with (the config layer's one reading of the campaign for the
+/// simulator).
+pub fn of(campaign: &Campaign) -> Experiment {
+    let c = &campaign.resolved;
+    let s = &c.sensor;
+    let sensor = Sensor {
+        width_px: s.width_px as usize,
+        height_px: s.height_px as usize,
+        fov_radius_deg: s.fov_radius_deg,
+        psf_sigma_arcsec: s.psf_sigma_arcsec,
+        zero_point_mag: s.zero_point_mag,
+        mag_limit: s.mag_limit,
+        jitter_deg_per_sqrt_s: s.jitter_deg_per_sqrt_s,
+        gain_e_per_adu: s.gain_e_per_adu,
+        bias: AduRange {
+            min_adu: s.bias_min_adu,
+            max_adu: s.bias_max_adu,
+        },
+        background: AduRange {
+            min_adu: s.background_min_adu,
+            max_adu: s.background_max_adu,
+        },
+        background_exposure_s: s.background_exposure_s,
+        noise: Noise::Paper,
+    };
+    let sensor = Sensor {
+        noise: noise_of(c, &sensor),
+        ..sensor
+    };
+    let v = &c.visibility;
+    let scene = scene::Spec {
+        window_start: campaign.window_start,
+        window_end: campaign.window_end,
+        exposure_min_s: c.exposure.min_s,
+        exposure_max_s: c.exposure.max_s,
+        pointing: c.pointing.mode,
+        debris_weights: c.debris.iter().map(|d| d.weight.unwrap_or(1.0)).collect(),
+        placement_fraction: c.pointing.placement_fraction,
+        area: photometry_area(&c.photometry),
+        albedo: match c.photometry.preset {
+            PhotometryPreset::Paper => c.photometry.albedo,
+            PhotometryPreset::NasaFragments => debris_sizes::ODPO_ALBEDO,
+        },
+        tumble: match c.photometry.light_curve {
+            LightCurve::None => None,
+            LightCurve::Tumbling {
+                period_min_s,
+                period_max_s,
+                amplitude_max,
+            } => Some(TumbleRange {
+                period_min_s,
+                period_max_s,
+                amplitude_max,
             }),
-        };
-        let render = render::Settings {
-            method: c.render.method,
-            merge_threshold: c.render.merge_threshold,
-            merge_factor: c.render.merge_factor,
-            jitter_steps: c.render.jitter_steps as usize,
-        };
-        let e = &c.enhance;
-        let product = c
-            .stages
-            .contains(&crate::campaign::Stage::Enhance)
-            .then(|| Product {
-                frame: e.geometry,
-                pad_px: e.pad_px as usize,
-                enhance: enhance_settings(Some(campaign)),
-            });
-        Experiment {
-            seed: c.seed,
-            sensor,
-            scene,
-            render,
-            product,
-        }
-    }
-
-    /// The values resolved late, for the manifest.
-    pub fn effective(&self, campaign: &Campaign) -> Effective {
-        let (train_imgsz, train_batch) = train_size_and_batch(campaign);
-        let frame = self.product.as_ref().map(|p| {
-            let f = Frame::new(
-                p.frame,
-                self.sensor.width_px,
-                self.sensor.height_px,
-                p.pad_px,
-                0.0,
-            );
-            [f.width, f.height]
+        },
+        gate: Gate {
+            earth_min_deg: v.earth_min_deg,
+            sun_min_deg: v.sun_min_deg,
+            moon_min_deg: v.moon_min_deg,
+            earth_clearance_km: v.earth_clearance_km,
+            brightest_star_mag: v.brightest_star_mag,
+            snr_min: campaign.snr_min(),
+            snr_definition: v.snr_definition,
+            max_attempts: v.max_attempts,
+        },
+        star_cone_deg: c.stars.cone_radius_deg(),
+        trajectory_samples: c.render.trajectory_samples as usize,
+        apparent_positions: c.render.apparent_positions,
+        frame_share: match &c.background {
+            Background::Frames { share, .. } => *share,
+            Background::Uniform => 1.0,
+        },
+        collect_frames: c.collect_frames() as u64,
+        collect_gap_s: c.collect.as_ref().map_or(0.0, |k| k.gap_s),
+        objects: c.objects.as_ref().map(|o| {
+            let (min, max) = o.per_frame.bounds();
+            scene::ObjectCount {
+                min,
+                max,
+                empty_share: o.empty_share,
+            }
+        }),
+    };
+    let render = render::Settings {
+        method: c.render.method,
+        merge_threshold: c.render.merge_threshold,
+        merge_factor: c.render.merge_factor,
+        jitter_steps: c.render.jitter_steps as usize,
+    };
+    let e = &c.enhance;
+    let product = c
+        .stages
+        .contains(&crate::campaign::Stage::Enhance)
+        .then(|| Product {
+            frame: e.geometry,
+            pad_px: e.pad_px as usize,
+            enhance: enhance_settings(Some(campaign)),
         });
-        Effective {
-            pixel_scale_arcsec: self.sensor.pixel_scale_deg() * 3600.0,
-            psf_sigma_px: self.sensor.psf_sigma_px(),
-            psf_fwhm_px: self.sensor.psf_fwhm_px(),
-            snr_min: self.scene.gate.snr_min,
-            sqrt: self.product.as_ref().map(|p| p.enhance.sqrt),
-            frame_px: frame,
-            train_imgsz,
-            train_batch,
-            sky_e_per_s: match &self.sensor.noise {
-                Noise::Physical(p) => Some(p.sky_e_per_s),
-                Noise::Paper => None,
-            },
-        }
+    Experiment {
+        seed: c.seed,
+        sensor,
+        scene,
+        render,
+        product,
+    }
+}
+
+/// The values resolved late, for the manifest.
+pub fn effective(x: &Experiment, campaign: &Campaign) -> Effective {
+    let (train_imgsz, train_batch) = train_size_and_batch(campaign);
+    let frame = x.product.as_ref().map(|p| {
+        let f = Frame::new(
+            p.frame,
+            x.sensor.width_px,
+            x.sensor.height_px,
+            p.pad_px,
+            0.0,
+        );
+        [f.width, f.height]
+    });
+    Effective {
+        pixel_scale_arcsec: x.sensor.pixel_scale_deg() * 3600.0,
+        psf_sigma_px: x.sensor.psf_sigma_px(),
+        psf_fwhm_px: x.sensor.psf_fwhm_px(),
+        snr_min: x.scene.gate.snr_min,
+        sqrt: x.product.as_ref().map(|p| p.enhance.sqrt),
+        frame_px: frame,
+        train_imgsz,
+        train_batch,
+        sky_e_per_s: match &x.sensor.noise {
+            Noise::Physical(p) => Some(p.sky_e_per_s),
+            Noise::Paper => None,
+        },
     }
 }
 

@@ -30,7 +30,7 @@
 //! use soig::{Campaign, Experiment};
 //!
 //! let campaign = Campaign::load("campaigns/quickstart.toml".as_ref())?;
-//! let experiment = Experiment::new(&campaign);
+//! let experiment = crate::experiment::of(&campaign);
 //! let inputs = soig::experiment::inputs(&campaign)?;
 //! let image = soig::simulate::image(&experiment, &inputs, 0)?;
 //! println!("{} at SNR {:.2}", image.exposure.truth.object, image.exposure.truth.snr);
@@ -44,6 +44,7 @@
 pub use soig_base::{build_id, hash, input_file, progress, python, rng};
 pub use soig_sky as sky;
 pub use soig_image::{enhance, fits, frames, geometry, hint, imaging, psf};
+pub use soig_sim::{background, noise, render, scene, sensor, sighting, simulate};
 
 pub use artifacts::{Provenance, provenance_cards};
 pub use campaign::{Campaign, CampaignError};
@@ -55,7 +56,6 @@ pub use sensor::Sensor;
 pub use simulate::{Experiment, ImageProducts};
 
 pub(crate) mod artifacts;
-pub mod background;
 pub mod campaign;
 pub mod collect;
 pub mod compare;
@@ -73,17 +73,11 @@ pub mod light_curve;
 pub mod manifest;
 pub mod merge;
 pub mod metrics;
-pub mod noise;
 pub mod output;
 pub mod pipeline;
 pub(crate) mod plot;
-pub mod render;
 pub mod report;
-pub mod scene;
-pub mod sensor;
 pub mod shard;
-pub mod sighting;
-pub mod simulate;
 pub mod star_trails;
 pub mod study;
 pub mod summary;

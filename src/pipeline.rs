@@ -19,7 +19,7 @@ use crate::dataset::{self, Subset};
 use crate::detect::Detection;
 use crate::detect::streak::{StreakParams, detect_streaks_among_stars};
 use crate::detect::yolo::{YoloDetector, YoloParams};
-use crate::experiment::{self, Experiment};
+use crate::experiment;
 use crate::geometry::FrameKind;
 use crate::journal::{self, Identity, Journal, PngRecord, Record};
 use crate::manifest::{self, MANIFEST, Manifest};
@@ -347,7 +347,7 @@ fn seal(
     training: Option<serde_json::Value>,
 ) -> anyhow::Result<()> {
     m.effective = Some(serde_json::to_value(
-        Experiment::new(campaign).effective(campaign),
+        crate::experiment::effective(&crate::experiment::of(campaign), campaign),
     )?);
     if training.is_some() {
         m.training = training;
@@ -458,7 +458,7 @@ fn render(
         std::fs::create_dir_all(d).with_context(|| format!("cannot create {}", d.display()))?;
     }
 
-    let x = Experiment::new(campaign);
+    let x = crate::experiment::of(campaign);
     let inputs = experiment::inputs(campaign)?;
     let provenance = Provenance {
         campaign: c.name.clone(),
@@ -786,7 +786,7 @@ fn detect_and_report(
         // then reported as debris in the track quickstart; with the direction alone, none).
         let sky = match c.pointing.mode {
             PointingMode::Survey => {
-                Some((Experiment::new(campaign), experiment::inputs(campaign)?))
+                Some((crate::experiment::of(campaign), experiment::inputs(campaign)?))
             }
             PointingMode::Fixed | PointingMode::Track => None,
         };

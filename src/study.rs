@@ -110,7 +110,7 @@ pub fn run(campaign: &Campaign, out: &Path, opts: &Options) -> anyhow::Result<Su
 fn study(campaign: &Campaign, dir: &Path, opts: &Options) -> anyhow::Result<Summary> {
     let started = Instant::now();
     let inputs = experiment::inputs(campaign)?;
-    let base = Experiment::new(campaign);
+    let base = crate::experiment::of(campaign);
 
     // The reference: exact renderer, no merging, refined trajectory and jitter path.
     let ref_samples = base

@@ -22,7 +22,7 @@ fn campaign(mode: &str) -> Campaign {
 #[test]
 fn survey_star_trails_are_parallel_and_horizontal_after_rotation() {
     let c = campaign("survey");
-    let sensor = Experiment::new(&c).sensor;
+    let sensor = soig::experiment::of(&c).sensor;
     for image in rendered(&c, 4) {
         let s = image.scene;
         let Pointing::Survey(track) = s.pointing else {

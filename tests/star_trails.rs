@@ -51,7 +51,7 @@ fn predicted_star_trails_lie_on_the_rendered_starlight() {
         (campaign("track", ""), true),
         (campaign("track", "jitter_deg_per_sqrt_s = 0.0\n"), false),
     ] {
-        let sensor = Experiment::new(&c).sensor;
+        let sensor = soig::experiment::of(&c).sensor;
         let psf = sensor.psf_sigma_px();
         let (w, h) = (sensor.width_px, sensor.height_px);
         for image in rendered(&c, 4) {

@@ -33,7 +33,7 @@ fn the_tracked_object_stays_on_its_pixel() {
     // field (the campaign's placement).
     for (extra, centred) in [("placement_fraction = 1e-6\n", true), ("", false)] {
         let c = load(extra);
-        let sensor = Experiment::new(&c).sensor;
+        let sensor = soig::experiment::of(&c).sensor;
         let psf = sensor.psf_sigma_px();
         for image in rendered(&c, 4) {
             let s = &image.scene;
@@ -84,7 +84,7 @@ fn the_tracked_object_stays_on_its_pixel() {
 #[test]
 fn star_trails_match_the_tracking_rate() {
     let c = load("placement_fraction = 1e-6\n");
-    let sensor = Experiment::new(&c).sensor;
+    let sensor = soig::experiment::of(&c).sensor;
     let mut pinned = Vec::new();
     for image in rendered(&c, 4) {
         let s = &image.scene;

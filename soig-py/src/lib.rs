@@ -140,7 +140,7 @@ impl NativeCampaign {
         let p = py
             .detach(move || -> Result<Prepared, soig::Error> {
                 Ok(Prepared {
-                    experiment: Experiment::new(&c),
+                    experiment: soig::experiment::of(&c),
                     inputs: soig::experiment::inputs(&c)?,
                     provenance: soig::Provenance {
                         campaign: c.resolved.name.clone(),

@@ -185,7 +185,7 @@ mod tests {
     #[test]
     fn a_sky_in_mag_per_arcsec2_becomes_electrons_per_pixel() {
         let c = campaign("[noise]\nmodel = \"physical\"\nsky_mag_per_arcsec2 = 21.0\n").unwrap();
-        let x = crate::experiment::Experiment::new(&c);
+        let x = crate::experiment::of(&c);
         let crate::noise::Noise::Physical(p) = &x.sensor.noise else {
             panic!("physical model expected")
         };
@@ -197,7 +197,7 @@ mod tests {
             "[noise]\nmodel = \"physical\"\nhot_pixel_fraction = 1e-4\ncosmic_rate_per_cm2_s = 2.0\n",
         )
         .unwrap();
-        let x = crate::experiment::Experiment::new(&c);
+        let x = crate::experiment::of(&c);
         let crate::noise::Noise::Physical(p) = &x.sensor.noise else {
             panic!("physical model expected")
         };

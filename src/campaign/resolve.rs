@@ -11,8 +11,7 @@ use super::{Background, Body, CampaignFile, ObjectSpec, PointingMode, Stars};
 use crate::hash::sha256_file;
 use crate::sky::orbit::{self, OrbitalElements, Propagator, Tle};
 
-/// Largest boresight drift over one survey exposure (the paper's is about 0.5 deg).
-pub const MAX_SURVEY_DRIFT_DEG: f64 = 2.0;
+pub use crate::scene::MAX_SURVEY_DRIFT_DEG;
 
 /// A resolved campaign: what its hash covers, and the bodies and window the scenes use.
 pub(super) struct Resolved {

@@ -7,10 +7,9 @@ use super::{CampaignFile, FrameKind, LightCurve, PointingMode, Stage, Stars, def
 const MAX_STARS_PER_CONE: f64 = 2e6;
 
 /// Highest background or bias level, ADU (see `validate`).
-const MAX_LEVEL_ADU: f64 = 1e9;
+pub use crate::scene::MAX_OBJECTS_PER_FRAME;
 
-/// Most objects an image may show (each is drawn, traced and labelled: the cost grows with it).
-pub const MAX_OBJECTS_PER_FRAME: u32 = 100;
+const MAX_LEVEL_ADU: f64 = 1e9;
 
 /// Largest debris area, m^2 (see `validate`).
 const MAX_AREA_M2: f64 = 1e4;

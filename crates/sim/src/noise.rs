@@ -8,11 +8,11 @@
 //! are a property of the sensor: their positions come from the campaign seed alone, the same in
 //! every image; their charge is drawn per image.
 
-use crate::rng::PixelRng;
+use soig_base::rng::PixelRng;
 use rand::RngExt;
 use rand_distr::{Distribution, Normal, Poisson, StandardNormal};
 
-use crate::rng::{PixelPurpose, pixel_stream, poisson};
+use soig_base::rng::{PixelPurpose, pixel_stream, poisson};
 
 /// How the detector turns photo-electrons into ADU.
 #[derive(Clone, Debug, Default, PartialEq)]

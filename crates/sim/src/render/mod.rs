@@ -4,12 +4,12 @@
 //! the detector (Eq. 11). Also the label box and the truth of the debris as rendered.
 //! It reads the sensor and its own settings, never the campaign file.
 
-use crate::rng::PixelRng;
+use soig_base::rng::PixelRng;
 use serde::Serialize;
 
 use crate::background::RealFrame;
-use crate::geometry::{BoxPx, LABEL_SHARE, flux_box};
-use crate::rng::poisson;
+use soig_image::geometry::{BoxPx, LABEL_SHARE, flux_box};
+use soig_base::rng::poisson;
 use crate::scene::Scene;
 use crate::sensor::Sensor;
 
@@ -27,7 +27,7 @@ pub use jitter::Jitter;
 use photons::{Canvas, Tally, trace};
 pub use sources::TracedStar;
 use sources::{Path, Source, for_each_source};
-pub(crate) use truth::iso_utc;
+pub use truth::iso_utc;
 pub use truth::{FrameTruth, ObjectTruth, Truth};
 
 /// Above this many packets per source the packet weight grows so that no source traces more

@@ -1,8 +1,8 @@
 //! Photon counts against Eq. 3, merging, jitter, and the two renderers against each other.
 
 use super::*;
-use crate::rng::{PixelPurpose, pixel_stream};
-use crate::sky::stars::Star;
+use soig_base::rng::{PixelPurpose, pixel_stream};
+use soig_sky::stars::Star;
 
 /// The sensor and render settings of the tests.
 struct Fixture {
@@ -25,7 +25,7 @@ fn fixture(jitter_deg_per_sqrt_s: f64) -> Fixture {
 }
 
 /// The projection of the test scenes: centred on (10, 20), 128 px.
-fn tan_of(c: &Fixture) -> crate::sky::projection::Tan {
+fn tan_of(c: &Fixture) -> soig_sky::projection::Tan {
     c.sensor.projection(10.0, 20.0)
 }
 
@@ -469,7 +469,7 @@ fn noise_level_is_the_mean_the_detector_adds() {
     use crate::background::{FrameChoice, RealFrame};
     let c = fixture(0.0);
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/neossat/NEOSSAT_240__30_2020214095318.fits");
+        .join("../../tests/fixtures/neossat/NEOSSAT_240__30_2020214095318.fits");
     let frame = RealFrame::load(&path).unwrap();
     let mut big = fixture(0.0);
     big.sensor.width_px = 512;

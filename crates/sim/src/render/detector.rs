@@ -3,7 +3,7 @@
 //! frame's noise matrix scaled by exposure (`background`), the bias uniform per pixel; or the
 //! physical model of `noise`.
 
-use crate::rng::PixelRng;
+use soig_base::rng::PixelRng;
 use rand::RngExt;
 
 use crate::background::RealFrame;

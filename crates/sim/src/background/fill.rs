@@ -11,7 +11,7 @@
 //! sigma stands 11 sd off). Every block comes from an independent random place, so nothing
 //! repeats at the block pitch.
 
-use crate::rng::PixelRng;
+use soig_base::rng::PixelRng;
 use rand::RngExt;
 
 /// Side of a block, pixels, at most (a field smaller than this gives smaller blocks).
@@ -88,7 +88,7 @@ pub fn fluctuations(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::{PixelPurpose, pixel_stream};
+    use soig_base::rng::{PixelPurpose, pixel_stream};
 
     fn white(n: usize, seed: u64) -> Vec<f32> {
         let mut rng = pixel_stream(seed, 0, PixelPurpose::Noise);

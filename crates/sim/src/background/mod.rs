@@ -25,10 +25,10 @@ const MAX_TRAIL_ROUNDS: usize = 12;
 
 use std::path::{Path, PathBuf};
 
-use crate::rng::PixelRng;
+use soig_base::rng::PixelRng;
 use fitsio::FitsFile;
 
-use crate::imaging::robust_stats;
+use soig_image::imaging::robust_stats;
 pub use prepare::Region;
 
 /// A background frame that cannot be used, with its path.
@@ -75,11 +75,11 @@ impl RealFrame {
             path: path.to_path_buf(),
             message: e.to_string(),
         };
-        let (raw, rows, cols) = crate::fits::read_f32(path).map_err(|e| match e {
+        let (raw, rows, cols) = soig_image::fits::read_f32(path).map_err(|e| match e {
             fitsio::errors::Error::Message(m) => err(&m),
             e => err(&format!("not a readable 2-D FITS image ({e})")),
         })?;
-        let safe = crate::fits::CfitsioName::to_read(path).map_err(|e| err(&e))?;
+        let safe = soig_image::fits::CfitsioName::to_read(path).map_err(|e| err(&e))?;
         let mut f = FitsFile::open(&safe.name).map_err(|e| err(&e))?;
         let hdu = f.primary_hdu().map_err(|e| err(&e))?;
         let exposure_s: f64 = ["EXPTIME", "EXPOSURE", "AEXPTIME"]
@@ -179,7 +179,7 @@ impl RealFrame {
             )));
         }
         let mean = pixels.iter().map(|&v| v as f64).sum::<f64>() / pixels.len() as f64;
-        let sha256 = crate::hash::sha256_file(path).map_err(|e| err(&e))?.0;
+        let sha256 = soig_base::hash::sha256_file(path).map_err(|e| err(&e))?.0;
         Ok(RealFrame {
             path: path.to_path_buf(),
             name: path
@@ -286,7 +286,7 @@ pub struct FrameChoice {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::{PixelPurpose, pixel_stream};
+    use soig_base::rng::{PixelPurpose, pixel_stream};
 
     /// A prepared 300 x 300 frame of constant level 100 plus a ramp-free pattern, 10 s.
     fn frame() -> RealFrame {
@@ -340,10 +340,10 @@ mod tests {
         let pixels: Vec<f32> = (0..64 * 64).map(value).collect();
         let cards = vec![(
             "EXPTIME".to_string(),
-            crate::fits::Card::Real(10.0),
+            soig_image::fits::Card::Real(10.0),
             String::new(),
         )];
-        crate::fits::write_image(&path, 64, 64, crate::fits::Pixels::F32(&pixels), &cards).unwrap();
+        soig_image::fits::write_image(&path, 64, 64, soig_image::fits::Pixels::F32(&pixels), &cards).unwrap();
         path
     }
 
@@ -375,7 +375,7 @@ mod tests {
 
     fn fixture(name: &str) -> RealFrame {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/fixtures/neossat")
+            .join("../../tests/fixtures/neossat")
             .join(name);
         RealFrame::load(&path).unwrap()
     }

@@ -5,10 +5,10 @@
 use hifitime::{Duration, Epoch};
 use serde::Serialize;
 
-use crate::sky::apparent::{debris_in_catalogue_frame, earth_velocity_km_s, retarded_position};
-use crate::sky::frames::teme_to_gcrs_matrix;
-use crate::sky::orbit::Propagator;
-use crate::sky::{Mat3, Vec3, mat_vec, radec_deg, sub};
+use soig_sky::apparent::{debris_in_catalogue_frame, earth_velocity_km_s, retarded_position};
+use soig_sky::frames::teme_to_gcrs_matrix;
+use soig_sky::orbit::Propagator;
+use soig_sky::{Mat3, Vec3, mat_vec, radec_deg, sub};
 
 /// The observer and the debris at one instant, GCRS km, and the debris direction in the image
 /// frame (not normalised).
@@ -212,9 +212,9 @@ impl Track<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sky::apparent::C_KM_S;
-    use crate::sky::orbit::OrbitalElements;
-    use crate::sky::{angle_deg, dot, norm, scale, unit};
+    use soig_sky::apparent::C_KM_S;
+    use soig_sky::orbit::OrbitalElements;
+    use soig_sky::{angle_deg, dot, norm, scale, unit};
 
     /// Period (min) of a circular orbit at `altitude_km` (Kepler, WGS72).
     fn period(altitude_km: f64) -> f64 {

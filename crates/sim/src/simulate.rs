@@ -8,10 +8,10 @@
 
 use std::time::Instant;
 
-use crate::enhance::{self, Gray8};
-use crate::geometry::{self, BoxPx, Fill, Frame, FrameKind, LABEL_SHARE};
+use soig_image::enhance::{self, Gray8};
+use soig_image::geometry::{self, BoxPx, Fill, Frame, FrameKind, LABEL_SHARE};
 use crate::render::{self, Exposure};
-use crate::rng::{PixelPurpose, PixelRng, object_pixel_stream, pixel_stream};
+use soig_base::rng::{PixelPurpose, PixelRng, object_pixel_stream, pixel_stream};
 use crate::scene::{self, Inputs, NoScene, Scene};
 use crate::sensor::Sensor;
 

@@ -2,7 +2,7 @@
 
 use serde::Serialize;
 
-use crate::geometry::{BoxPx, Frame};
+use soig_image::geometry::{BoxPx, Frame};
 use crate::scene::Pointing;
 
 /// The truth of one image, written as the JSON sidecar.
@@ -240,7 +240,7 @@ pointing.trail_angle_deg.";
 /// ISO 8601 UTC with microseconds, e.g. `2022-03-04T05:06:07.891234` (a millisecond is 6 px
 /// of LEO motion; the FITS `DATE-OBS` and the truth's `start_utc`). Truncated, not rounded, so
 /// the second never rolls over.
-pub(crate) fn iso_utc(t: hifitime::Epoch) -> String {
+pub fn iso_utc(t: hifitime::Epoch) -> String {
     let (y, mo, d, h, mi, s, ns) = t.to_gregorian_utc();
     format!(
         "{y:04}-{mo:02}-{d:02}T{h:02}:{mi:02}:{s:02}.{:06}",

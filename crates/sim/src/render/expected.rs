@@ -5,12 +5,12 @@
 //! for a fixed jitter path both renderers have the same distribution (without merging), and
 //! this one does work per pixel the PSF reaches instead of per photon.
 
-use crate::rng::PixelRng;
+use soig_base::rng::PixelRng;
 
 use super::{Canvas, Jitter, Path, Source};
-pub use crate::psf::{DebrisFlux, DebrisMap};
-use crate::psf::{add_separable, weights_into};
-use crate::rng::poisson;
+pub use soig_image::psf::{DebrisFlux, DebrisMap};
+use soig_image::psf::{add_separable, weights_into};
+use soig_base::rng::poisson;
 use crate::scene::Scene;
 use crate::sensor::Sensor;
 
@@ -200,7 +200,7 @@ fn path_nodes(source: &Source, jitter: &Jitter, spacing: f64) -> Vec<(f64, f64, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::psf::erfc;
+    use soig_image::psf::erfc;
 
     #[test]
     fn erfc_and_pixel_mass() {

@@ -2,14 +2,14 @@
 //! (fixed on the detector, or along survey trails sampled on a time grid) and the debris'
 //! trajectory samples, each with its expected photo-electrons and path over the exposure.
 
-use crate::rng::PixelRng;
+use soig_base::rng::PixelRng;
 use rand::RngExt;
 use serde::Serialize;
 
 use super::Jitter;
 use crate::scene::{Pointing, Scene, SurveyTrack, TargetTrack};
 use crate::sensor::Sensor;
-use crate::sky::photometry::photon_rate;
+use soig_sky::photometry::photon_rate;
 
 /// Spacing of the time nodes along a survey star trail, pixels.
 const SURVEY_NODE_SPACING_PX: f64 = 4.0;

@@ -17,19 +17,27 @@ use rand_chacha::ChaCha12Rng;
 use serde::Serialize;
 
 use crate::background::{BackgroundModel, FrameChoice, RealFrame};
-use crate::rng::{Purpose, object_stream, stream};
+use soig_base::rng::{Purpose, object_stream, stream};
 use crate::sensor::Sensor;
 use crate::sighting::{Ephemeris, Sight, Sighting};
-use crate::sky::ephemeris::{moon_position_km, sun_position_km};
-use crate::sky::orbit::Propagator;
-use crate::sky::photometry::{debris_magnitude, photon_rate};
-use crate::sky::projection::Tan;
-pub use crate::sky::pointing::{Pointing, SurveyTrack, TargetTrack};
-use crate::sky::stars::{ProceduralSky, Star, StarCatalog};
-use crate::sky::{
+use soig_sky::ephemeris::{moon_position_km, sun_position_km};
+use soig_sky::orbit::Propagator;
+use soig_sky::photometry::{debris_magnitude, photon_rate};
+use soig_sky::projection::Tan;
+pub use soig_sky::pointing::{Pointing, SurveyTrack, TargetTrack};
+use soig_sky::stars::{ProceduralSky, Star, StarCatalog};
+use soig_sky::{
     Vec3, angle_deg, cross, dot, norm, radec_deg, radec_unit, rotate, scale, segment_hits_sphere,
     sub, unit,
 };
+
+/// Most objects an image may show (each is drawn, traced and labelled: the cost grows with it).
+/// The campaign's validation refuses more.
+pub const MAX_OBJECTS_PER_FRAME: u32 = 100;
+
+/// Largest boresight drift over one survey exposure (the paper's is about 0.5 deg); the
+/// campaign's resolution refuses more.
+pub const MAX_SURVEY_DRIFT_DEG: f64 = 2.0;
 
 /// WGS84 equatorial radius, km.
 pub const EARTH_RADIUS_KM: f64 = 6378.137;
@@ -143,7 +151,7 @@ pub struct Spec {
     /// The debris at mid-exposure is placed uniformly within this fraction of the half-field.
     pub placement_fraction: f64,
     /// Debris area and albedo (Eq. 6-7): the paper's |N(mean, std)| m^2, or a preset's.
-    pub area: crate::sky::debris_sizes::AreaModel,
+    pub area: soig_sky::debris_sizes::AreaModel,
     pub albedo: f64,
     pub tumble: Option<TumbleRange>,
     pub gate: Gate,
@@ -696,7 +704,7 @@ fn place(
 /// The track id of object `k` of a collect with `[objects]`: unique in the campaign, the same
 /// in every frame of the collect.
 pub fn object_track_id(collect: u64, k: u64) -> u64 {
-    collect * crate::campaign::MAX_OBJECTS_PER_FRAME as u64 + k
+    collect * MAX_OBJECTS_PER_FRAME as u64 + k
 }
 
 /// A placed object's own draws, in its stream's order after its debris.
@@ -1169,7 +1177,7 @@ fn try_draw(
             let track = target_track(sensor, &sights, exposure_s, (ra_p, dec_p))
                 .ok_or(Rejection::PropagationFailed)?;
             // The star budget of the campaign (`campaign::validate`) allows a survey's drift.
-            if track.drift_deg > crate::campaign::MAX_SURVEY_DRIFT_DEG {
+            if track.drift_deg > MAX_SURVEY_DRIFT_DEG {
                 return Err(Rejection::TrackTooFast);
             }
             // The boresight at t is the mid one turned by R(t), by the debris' angle from

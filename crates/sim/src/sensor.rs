@@ -5,7 +5,7 @@
 
 use crate::background::RealFrame;
 use crate::noise::Noise;
-use crate::sky::projection::Tan;
+use soig_sky::projection::Tan;
 
 /// A uniform range of ADU per pixel, drawn uniformly (the paper's background and bias).
 #[derive(Clone, Copy, Debug, PartialEq)]

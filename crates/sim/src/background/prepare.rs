@@ -2,8 +2,8 @@
 //! large-scale structure, and replace the pixels of sources and star trails by clean pixels of
 //! the same neighbourhood.
 
-use crate::imaging::robust_stats;
-use crate::rng::{PixelPurpose, pixel_stream};
+use soig_image::imaging::robust_stats;
+use soig_base::rng::{PixelPurpose, pixel_stream};
 use rand::RngExt;
 
 /// A rectangle of a frame, 0-based, end-exclusive.

@@ -2,7 +2,7 @@
 //! arrival time, position, jitter and PSF, and counted per pixel; the debris' photons, when
 //! none can be merged, drawn per pixel from its expected flux (`DebrisFlux::draw`).
 
-use crate::rng::PixelRng;
+use soig_base::rng::PixelRng;
 use rand_distr::StandardNormal;
 
 use super::{Jitter, Path, Source};

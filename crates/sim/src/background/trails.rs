@@ -173,7 +173,7 @@ fn elongated(component: &[usize], width: usize) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::{PixelPurpose, pixel_stream};
+    use soig_base::rng::{PixelPurpose, pixel_stream};
 
     /// A 512 x 512 frame of unit Gaussian noise plus `amplitude` on the pixels of `arc`.
     fn noisy(arc: impl Fn(usize, usize) -> bool, amplitude: f32) -> Vec<f32> {
