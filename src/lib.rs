@@ -44,6 +44,7 @@
 pub use soig_base::{build_id, hash, input_file, progress, python, rng};
 pub use soig_sky as sky;
 pub use soig_image::{enhance, fits, frames, geometry, hint, imaging, psf};
+pub use soig_detect::{self as detect, metrics};
 pub use soig_sim::{background, noise, render, scene, sensor, sighting, simulate};
 
 pub use artifacts::{Provenance, provenance_cards};
@@ -61,7 +62,6 @@ pub mod collect;
 pub mod compare;
 pub mod convert;
 pub mod dataset;
-pub mod detect;
 pub mod detect_frames;
 pub mod disk;
 pub mod error;
@@ -72,7 +72,6 @@ pub mod launch;
 pub mod light_curve;
 pub mod manifest;
 pub mod merge;
-pub mod metrics;
 pub mod output;
 pub mod pipeline;
 pub(crate) mod plot;

@@ -39,12 +39,11 @@ pub struct Sensor {
     pub noise: Noise,
 }
 
-#[cfg(test)]
 impl Sensor {
-    /// For unit tests: the campaigns' optics (0.70 arcsec pixels: 0.1 deg over 1024 px, a 1
+    /// For tests (this crate's and the detectors'): the campaigns' optics (0.70 arcsec pixels: 0.1 deg over 1024 px, a 1
     /// arcsec PSF), the paper's detector and noise, on a square image of `side_px` with jitter
     /// `jitter_deg_per_sqrt_s` (the paper's: 2e-4 deg per sqrt(s)).
-    pub(crate) fn for_tests(side_px: usize, jitter_deg_per_sqrt_s: f64) -> Sensor {
+    pub fn for_tests(side_px: usize, jitter_deg_per_sqrt_s: f64) -> Sensor {
         Sensor {
             width_px: side_px,
             height_px: side_px,

@@ -2,7 +2,7 @@
 //! torchvision's NMS in f32) and `scale_boxes` back to the original image.
 
 use super::preprocess::py_round;
-use crate::detect::Detection;
+use crate::Detection;
 
 /// Ultralytics' `max_wh`: class offset added to boxes so that NMS never mixes classes.
 const MAX_WH: f32 = 7680.0;

@@ -4,7 +4,7 @@
 
 use super::numpy::{mean_rows, np_interp, np_linspace, np_mean, np_trapezoid};
 use super::{ImageEval, cmp_desc, det_box};
-use crate::detect::Detection;
+use crate::Detection;
 use serde::{Deserialize, Serialize};
 
 /// Which Ultralytics code to reproduce.

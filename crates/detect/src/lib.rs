@@ -1,5 +1,7 @@
-//! Detectors: YOLOv8 through ONNX Runtime, and a classical streak detector that needs no
-//! model. Both return `Detection`s in the same frame.
+//! soig's detectors: YOLOv8 through ONNX Runtime, and a classical streak detector that needs no
+//! model. Both return `Detection`s in the same frame; [`metrics`] scores them as Ultralytics and
+//! pycocotools do. It imports soig's base and image layers only: a detector sees pixels and the
+//! image layer's `hint`, never the simulator (which its tests use to draw streaks to find).
 
 /// An axis-aligned box in pixel-edge coordinates (the image spans [0, width] x [0, height],
 /// Ultralytics' xyxy convention) with a confidence score and class.
@@ -13,5 +15,6 @@ pub struct Detection {
     pub class: u32,
 }
 
+pub mod metrics;
 pub mod streak;
 pub mod yolo;

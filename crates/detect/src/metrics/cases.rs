@@ -288,7 +288,7 @@ struct Expected {
 }
 
 // `EXPECTED`: the figures tests/reference/metrics_reference.py printed, one `Expected` per case.
-include!("../../tests/fixtures/metrics/expected.rs");
+include!("../../../../tests/fixtures/metrics/expected.rs");
 
 const TOL: f64 = 1e-6;
 

@@ -8,7 +8,7 @@ use std::sync::Mutex;
 use ort::environment::Environment;
 
 use super::YoloError;
-use crate::python;
+use soig_base::python;
 
 /// The process-wide ONNX Runtime environment (`ort` allows one per process).
 static ORT_ENV: Mutex<Option<Environment>> = Mutex::new(None);
@@ -155,7 +155,7 @@ fn locate_onnxruntime(search: &OrtSearch) -> Result<PathBuf, YoloError> {
 pub fn find_onnxruntime() -> Result<PathBuf, YoloError> {
     // The project's .venv (scripts/setup.sh) in the current directory, else beside the
     // executable's repository, so soig finds it when started from anywhere.
-    let repo_venv = Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv");
+    let repo_venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv");
     let mut prefixes = vec![PathBuf::from(".venv"), repo_venv.clone()];
     if let Some(v) = std::env::var_os("VIRTUAL_ENV").filter(|v| !v.is_empty()) {
         prefixes.push(PathBuf::from(v));

@@ -4,11 +4,11 @@
 //! and detected; the label is the renderer's `truth.label_box_px` (99 % of the debris flux).
 
 use super::*;
-use crate::enhance;
-use crate::render::{RenderMethod, Settings, render};
-use crate::rng::{PixelPurpose, pixel_stream};
-use crate::scene::Scene;
-use crate::sensor::Sensor;
+use soig_image::enhance;
+use soig_sim::render::{RenderMethod, Settings, render};
+use soig_base::rng::{PixelPurpose, pixel_stream};
+use soig_sim::scene::Scene;
+use soig_sim::sensor::Sensor;
 
 /// The campaigns' sensor (SENTINEL-class optics: 0.70 arcsec pixels, 1 arcsec PSF, the
 /// paper's jitter and noise) on a 256 px image.

@@ -12,8 +12,8 @@ use super::Sanitized;
 use super::merge::angle_diff_deg;
 use super::refine::{Seg, point_segment_distance};
 use super::stats::median_of;
-pub use crate::hint::StarTrail;
-use crate::imaging::bilinear;
+pub use soig_image::hint::StarTrail;
+use soig_image::imaging::bilinear;
 
 /// Unit-noise level, in the smoothed map, below which a trail or its wings are noise: a trail
 /// is subtracted only if three quarters of it are at least this bright.

@@ -11,8 +11,8 @@
 //! each end is where the centre-line profile crosses the level measured beside the line.
 
 use super::refine::{Ctx, Seg};
-use crate::geometry::{BoxPx, LABEL_SHARE};
-use crate::psf::DebrisFlux;
+use soig_image::geometry::{BoxPx, LABEL_SHARE};
+use soig_image::psf::DebrisFlux;
 
 /// Offset across a Gaussian profile, in its sigmas, where it is at half its peak: sqrt(2 ln 2).
 const HALF_WIDTH: f64 = 1.177_410_022_515_474_5;

@@ -1,9 +1,9 @@
 //! Robust statistics of the detector's maps: the histogram median and MAD of the background
 //! cells, medians of small sets, and the median and MAD-sigma of a whole map from a regular
-//! subsample ([`crate::imaging::robust_stats`] of it). The rounding (f64 mean of the middle pair
+//! subsample ([`soig_image::imaging::robust_stats`] of it). The rounding (f64 mean of the middle pair
 //! for small sets, histogram for cells, subsampling for maps) is part of the pinned output.
 
-use crate::imaging::robust_stats;
+use soig_image::imaging::robust_stats;
 
 /// Continuous CDF and quantiles of an 8-bit histogram, each grey level spread uniformly over
 /// [v - 0.5, v + 0.5).

@@ -86,7 +86,7 @@
 //! One submodule per step: `background` (1), `smooth`, `trails` and `stars` (2), `lines` (3),
 //! `radon` (3b), `components` (4), `refine` and `merge` (5-6), `output`, `fit` and `reach` (7);
 //! `stats` holds the robust statistics they share (bilinear sampling is
-//! [`crate::imaging::bilinear`]). This file holds the parameters and the pipeline.
+//! [`soig_image::imaging::bilinear`]). This file holds the parameters and the pipeline.
 
 mod background;
 mod components;

@@ -2,7 +2,7 @@
 
 use super::refine::{Ctx, Seg};
 use super::{Candidate, Detection, Sanitized};
-use crate::geometry::BoxPx;
+use soig_image::geometry::BoxPx;
 
 /// Confidence in [0, 1): the probability that noise alone gives no candidate as significant
 /// in an image of `area_px` pixels, under a Gumbel model of the most significant noise candidate

@@ -4,7 +4,7 @@
 use std::f64::consts::PI;
 
 use super::Sanitized;
-use crate::imaging::bilinear;
+use soig_image::imaging::bilinear;
 
 /// Zero the smoothed map around round compact sources (stars): local maxima of `z` of at least
 /// `star_mask_sigma` whose ring at radius 2 sqrt(2) psf_sigma (twice the smoothed PSF sigma)

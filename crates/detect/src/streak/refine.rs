@@ -8,7 +8,7 @@ use super::Sanitized;
 use super::noise::LineNoise;
 use super::smooth::corr;
 use super::stats::median_of;
-use crate::imaging::bilinear;
+use soig_image::imaging::bilinear;
 
 /// A starting axis for refinement: centre, orientation (rad), half extent, how much of each end
 /// to leave out when measuring the level, and how far beyond the extent to look for the ends.

@@ -2,7 +2,7 @@
 //! confidence and IoU), the figures the paper reports at conf 0.5, IoU 0.5.
 
 use super::{ImageEval, cmp_desc, det_box};
-use crate::detect::Detection;
+use crate::Detection;
 use serde::{Deserialize, Serialize};
 
 /// Intersection over union of two `[x1, y1, x2, y2]` boxes (no `+1`, no epsilon); 0 when the union is
