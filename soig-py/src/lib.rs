@@ -4,7 +4,7 @@
 //! its text, path and `--set` overrides composed by `Campaign::from_toml_with_overrides`, an
 //! image is `simulate::image` (the GIL released while it renders), a run is `soig::run`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
 use numpy::{IntoPyArray, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -16,7 +16,7 @@ use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use soig::scene::Inputs;
 use soig::{Experiment, fits::Card};
 
-// The CLI's allocator (see src/main.rs: each image allocates and frees multi-MB buffers).
+// The CLI's allocator (see src/bin/soig/main.rs: each image allocates and frees multi-MB buffers).
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
@@ -409,50 +409,21 @@ fn eval<'py>(
             "mode {mode:?}: one of \"ultralytics\", \"coco\""
         )));
     }
+    let options = metrics::EvalOptions {
+        mode: if mode == "ultralytics" {
+            metrics::EvalMode::Ultralytics
+        } else {
+            metrics::EvalMode::Coco
+        },
+        images: images.as_deref(),
+        image_size,
+        conf,
+        iou,
+    };
     let json = py
-        .detach(|| -> anyhow::Result<serde_json::Value> {
-            let pairs = metrics::read_yolo_dirs(&labels, &predictions)?;
-            let mut scaled = Vec::with_capacity(pairs.len());
-            for (stem, e) in &pairs {
-                let (w, h) = match &images {
-                    Some(dir) => image_size_of(dir, stem)?,
-                    None => (image_size, image_size),
-                };
-                scaled.push(e.scaled(w as f64, h as f64));
-            }
-            let fixed = metrics::at_threshold(&scaled, conf, iou);
-            let fixed = serde_json::json!({
-                "conf": conf, "iou": iou, "precision": fixed.precision, "recall": fixed.recall,
-                "tp": fixed.tp, "fp": fixed.fp, "fn": fixed.fn_,
-            });
-            Ok(if mode == "ultralytics" {
-                let m = metrics::ultralytics(&scaled);
-                serde_json::json!({
-                    "mode": "ultralytics", "images": scaled.len(), "objects": m.n_truth,
-                    "detections": m.n_detections, "precision": m.precision, "recall": m.recall,
-                    "map50": m.map50, "map50_95": m.map50_95, "f1_conf": m.f1_conf,
-                    "at_threshold": fixed,
-                })
-            } else {
-                let m = metrics::coco(&scaled);
-                serde_json::json!({
-                    "mode": "coco", "images": scaled.len(), "ap": m.ap, "ap50": m.ap50,
-                    "ap75": m.ap75, "ar100": m.ar100, "at_threshold": fixed,
-                })
-            })
-        })
+        .detach(|| metrics::eval_dirs(&labels, &predictions, options).map(|e| e.to_json()))
         .map_err(|e| SoigError::new_err(format!("{e:#}")))?;
     to_python(py, &json)
-}
-
-/// The size of image `stem` in `dir` (PNG or JPEG), as `soig eval --images`.
-fn image_size_of(dir: &Path, stem: &str) -> anyhow::Result<(u32, u32)> {
-    let path = ["png", "jpg", "jpeg"]
-        .iter()
-        .map(|ext| dir.join(format!("{stem}.{ext}")))
-        .find(|p| p.is_file())
-        .ok_or_else(|| anyhow::anyhow!("no image for {stem} in {}", dir.display()))?;
-    image::image_dimensions(&path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
 /// Run the detectors on frame files (FITS or PNG) into `out`, as `soig detect`; returns the

@@ -37,6 +37,7 @@
 mod coco_eval;
 mod matching;
 mod numpy;
+mod eval;
 mod ultralytics_map;
 mod yolo_files;
 
@@ -44,6 +45,7 @@ mod yolo_files;
 mod cases;
 
 pub use coco_eval::{CocoMetrics, coco};
+pub use eval::{EvalError, EvalMode, EvalOptions, Evaluation, Scores, eval_dirs};
 pub use matching::{AtThreshold, ImageMatch, at_threshold, iou, match_image};
 pub use ultralytics_map::{UltralyticsMetrics, UltralyticsVersion, ultralytics, ultralytics_with};
 pub use yolo_files::{MetricsError, read_yolo_dirs, read_yolo_file};
