@@ -22,7 +22,7 @@ fn load(name: &str) -> (Experiment, Inputs) {
         .join("campaigns")
         .join(name);
     let c = Campaign::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    (soig::experiment::of(&c), experiment::inputs(&c).unwrap())
+    (experiment::of(&c), experiment::inputs(&c).unwrap())
 }
 
 /// Scene draw and render of one image, as `soig run` does it (no 8-bit product).

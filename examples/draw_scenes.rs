@@ -13,7 +13,7 @@ use std::hash::{Hash, Hasher};
 use std::path::Path;
 use std::time::Instant;
 
-use soig::{Campaign, Experiment};
+use soig::Campaign;
 
 fn main() -> Result<(), soig::Error> {
     let (mut args, mut sets) = (Vec::new(), Vec::new());

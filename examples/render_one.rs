@@ -8,7 +8,7 @@
 
 use std::path::Path;
 
-use soig::{Campaign, Experiment};
+use soig::Campaign;
 
 fn main() -> Result<(), soig::Error> {
     // NORAD 40649 from the paper's Table 1 (in no public catalogue) seen by an observer on the

@@ -4,19 +4,25 @@
 //!
 //! # Layers
 //!
-//! Imports go one way, top to bottom (no module imports one above it, and there is no cycle):
+//! The layers are the workspace's crates; each names only crates below it in its Cargo.toml, so
+//! an upward import does not compile (docs/architecture.md draws the graph):
 //!
 //! ```text
-//! verbs          merge (of shards)   pipeline (run, train)   study   compare   tables   detect_frames   convert   main.rs: the CLI
-//! config layer   campaign (file, defaults, compose, validate, resolve)  experiment (-> values)
-//! product        simulate (one image in memory)   artifacts (its files)   dataset   collect   train
-//!                shard (a share of the images)
-//! core           render -> scene -> sighting, sensor -> background     geometry (frames, label box)
-//!                enhance (+ clahe)   detect (streak, yolo)   metrics   report
-//! leaves         sky (orbit, frames, ephemeris, apparent, stars, projection, photometry, vec3, wcs)
-//!                imaging   rng   fits   frames   hash   python   plot   progress   input_file
-//! at the side    manifest   output (whole-or-nothing directories)   journal (resume)   error
+//! soig (this crate)  verbs: pipeline (run, train) merge study compare tables sweep convert
+//!                           launch detect_frames; the CLI in src/bin/soig/
+//!                    report
+//!                    product: artifacts dataset collect export star_trails light_curve shard
+//!                    config: campaign (file, defaults, compose, validate, resolve) experiment
+//!                    store: output (whole-or-nothing directories) journal (resume) manifest disk
+//! soig-sim           scene sighting sensor noise background render simulate
+//! soig-detect        streak yolo metrics               (sim and detect never see each other)
+//! soig-image         imaging geometry fits frames enhance psf hint
+//! soig-sky           orbit frames ephemeris apparent stars projection wcs photometry pointing motion
+//! soig-base          rng hash progress build_id input_file python
 //! ```
+//!
+//! The lower crates are re-exported here under their module names (`soig::sky`,
+//! `soig::render`, `soig::detect`, ...).
 //!
 //! The core never sees the campaign file: the config layer builds a [`Sensor`], a
 //! [`scene::Spec`], [`render::Settings`] and [`enhance::Settings`] once, gathered in an
@@ -27,10 +33,10 @@
 //! # Embedding
 //!
 //! ```no_run
-//! use soig::{Campaign, Experiment};
+//! use soig::Campaign;
 //!
 //! let campaign = Campaign::load("campaigns/quickstart.toml".as_ref())?;
-//! let experiment = crate::experiment::of(&campaign);
+//! let experiment = soig::experiment::of(&campaign);
 //! let inputs = soig::experiment::inputs(&campaign)?;
 //! let image = soig::simulate::image(&experiment, &inputs, 0)?;
 //! println!("{} at SNR {:.2}", image.exposure.truth.object, image.exposure.truth.snr);

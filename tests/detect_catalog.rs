@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use soig::campaign::Campaign;
 use soig::detect_frames::catalog::FrameSky;
-use soig::experiment::{self, Experiment};
+use soig::experiment;
 use soig::frames::Frame;
 
 mod common;
@@ -41,7 +41,7 @@ fn render(dir: &Path, mode: &str) -> (PathBuf, Campaign) {
 /// The stars of image `index`'s scene as a plain catalogue CSV (ra, dec, mag; no proper
 /// motion), 10 decimals (4e-7 arcsec; 1e-10 mag).
 fn write_catalog(c: &Campaign, index: u64, path: &Path) {
-    let x = soig::experiment::of(c);
+    let x = experiment::of(c);
     let inputs = experiment::inputs(c).unwrap();
     let scene = soig::scene::draw(&x.scene, &x.sensor, &inputs, x.seed, index).unwrap();
     let mut csv = String::from("ra,dec,mag\n");
@@ -65,7 +65,7 @@ fn write_catalog(c: &Campaign, index: u64, path: &Path) {
 fn prediction_gap_px(mode: &str) -> f64 {
     let tmp = tempfile::tempdir().unwrap();
     let (_, c) = render(tmp.path(), mode);
-    let x = soig::experiment::of(&c);
+    let x = experiment::of(&c);
     let inputs = experiment::inputs(&c).unwrap();
     let psf = x.sensor.psf_sigma_px();
     let (mut compared, mut gap) = (0, 0.0f64);

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use hifitime::{Duration, Epoch};
 use soig::campaign::Campaign;
-use soig::experiment::{self, Experiment};
+use soig::experiment;
 use soig::render::{self, Exposure};
 use soig::rng::{PixelPurpose, pixel_stream, poisson};
 use soig::scene::{self, Scene, TrajectorySample};
@@ -65,11 +65,11 @@ fn all_finite(e: &Exposure) {
 
 /// The sensor a campaign builds.
 fn sensor_of(c: &Campaign) -> Sensor {
-    soig::experiment::of(c).sensor
+    experiment::of(c).sensor
 }
 
 fn render_scene(c: &Campaign, s: &Scene, seed: u64) -> Exposure {
-    let x = soig::experiment::of(c);
+    let x = experiment::of(c);
     render::render(
         &x.sensor,
         &x.render,
@@ -310,7 +310,7 @@ fn ra_seam_is_continuous() {
 /// Draw and render `n` images; every accepted scene is finite and its image valid.
 fn draw_and_render(c: &Campaign, n: u64) -> Vec<(Scene, Exposure)> {
     let inputs = experiment::inputs(c).unwrap();
-    let x = soig::experiment::of(c);
+    let x = experiment::of(c);
     (0..n)
         .map(|i| {
             let s = scene::draw(&x.scene, &x.sensor, &inputs, c.resolved.seed, i)
@@ -862,7 +862,7 @@ fn magnitude_6_star_in_the_field() {
     );
     let peak = *e.electrons.iter().max().unwrap();
     assert!(peak > 500_000 && peak < u32::MAX / 100, "peak {peak}");
-    let settings = soig::experiment::of(&c).product.expect("enhance stage").enhance;
+    let settings = experiment::of(&c).product.expect("enhance stage").enhance;
     let png = soig::enhance::enhance(&e.adu, e.width, e.height, &settings);
     let centre = png.pixels[64 * w as usize + 64];
     let median = {

@@ -2,7 +2,6 @@
 
 use rand_chacha::ChaCha12Rng;
 use soig::campaign::Campaign;
-use soig::experiment::Experiment;
 use soig::geometry::{self, Fill, Frame, FrameKind, LABEL_SHARE};
 use soig::scene::Pointing;
 

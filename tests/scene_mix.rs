@@ -2,7 +2,7 @@
 //! and only the rest of the scene is retried, so a rarely visible object keeps its share.
 
 use rayon::prelude::*;
-use soig::experiment::{self, Experiment};
+use soig::experiment;
 use soig::scene;
 
 mod common;
@@ -42,7 +42,7 @@ fn paper_objects(name: &str, images: u32) -> CampaignToml {
 #[test]
 fn realised_mix_of_400_scenes_is_uniform_within_binomial_noise() {
     let c = paper_objects("mix", 400).load("mix.toml");
-    let x = soig::experiment::of(&c);
+    let x = experiment::of(&c);
     let inputs = experiment::inputs(&c).unwrap();
     let shown: Vec<usize> = (0..400u64)
         .into_par_iter()
@@ -67,7 +67,7 @@ fn realised_mix_of_400_scenes_is_uniform_within_binomial_noise() {
 #[test]
 fn weights_set_the_shares() {
     let c = paper_objects("weights", 4000).load("weights.toml");
-    let mut x = soig::experiment::of(&c);
+    let mut x = experiment::of(&c);
     assert_eq!(x.scene.debris_weights, vec![1.0; 4]);
     x.scene.debris_weights = vec![1.0, 2.0, 3.0, 4.0];
     let mut counts = [0usize; 4];
@@ -88,7 +88,7 @@ fn weights_are_read_and_checked() {
             .debris(&format!("{}\nweight = {w}", tle_object(40386)))
     };
     let c = with("2.5").load("w.toml");
-    assert_eq!(soig::experiment::of(&c).scene.debris_weights, vec![1.0, 2.5]);
+    assert_eq!(experiment::of(&c).scene.debris_weights, vec![1.0, 2.5]);
     for bad in ["0.0", "-1.0", "nan", "inf"] {
         let e = soig::campaign::Campaign::from_toml(&with(bad).text(), "w.toml".as_ref())
             .unwrap_err()
@@ -125,7 +125,7 @@ fn background_share_puts_that_share_of_images_on_frames() {
         .tables(&frames("share = 0.5\n"))
         .load("half.toml");
     let draw = |c: &soig::campaign::Campaign| -> Vec<scene::Scene> {
-        let x = soig::experiment::of(c);
+        let x = experiment::of(c);
         let inputs = experiment::inputs(c).unwrap();
         (0..200u64)
             .into_par_iter()

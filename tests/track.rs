@@ -2,7 +2,6 @@
 //! point on its pixel while the stars trail against its apparent motion.
 
 use soig::campaign::Campaign;
-use soig::experiment::Experiment;
 use soig::scene::Pointing;
 use soig::sky::{angle_deg, radec_unit};
 

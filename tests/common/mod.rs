@@ -279,7 +279,7 @@ pub fn digest(o: &Output) -> String {
 pub fn rendered(c: &Campaign, n: u64) -> Vec<ImageProducts> {
     let x = Experiment {
         product: None,
-        ..soig::experiment::of(c)
+        ..experiment::of(c)
     };
     let inputs = experiment::inputs(c).unwrap();
     (0..n)
