@@ -17,6 +17,7 @@
 //! `level_adu` is that level, `sigma` the frame's robust noise.
 
 mod fill;
+mod mask;
 mod prepare;
 mod trails;
 

@@ -6,6 +6,9 @@ use soig_image::imaging::robust_stats;
 use soig_base::rng::{PixelPurpose, pixel_stream};
 use rand::RngExt;
 
+use super::mask::{clipped_about, components, grow};
+use super::trails::{Rounds, trail_mask};
+
 /// A rectangle of a frame, 0-based, end-exclusive.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Region {
@@ -193,23 +196,13 @@ pub fn source_mask(pixels: &[f32], width: usize, height: usize) -> Vec<bool> {
             }
         }
     }
-    let lines = super::trails::trail_mask(pixels, width, height, super::trails::Rounds::First);
+    let lines = trail_mask(pixels, width, height, Rounds::First);
     grow(&trails, width, height, MASK_GROW_PX)
         .into_iter()
         .zip(outliers)
         .zip(lines)
         .map(|((t, o), l)| t || o || l)
         .collect()
-}
-
-/// A pixel's offset from `median`, clipped to +-`clip` (a non-finite pixel counts as the
-/// median): hot pixels then weigh no more than the faint trail pixels being looked for.
-pub(super) fn clipped_about(v: f32, median: f64, clip: f64) -> f64 {
-    if v.is_finite() {
-        (v as f64 - median).clamp(-clip, clip)
-    } else {
-        0.0
-    }
 }
 
 /// The mean over a (2r+1)^2 box, the box clipped at the frame's edges (summed-area table).
@@ -232,73 +225,6 @@ fn box_mean(v: &[f32], width: usize, height: usize, r: usize) -> Vec<f32> {
                 - sat[y1 * (width + 1) + x0]
                 + sat[y0 * (width + 1) + x0];
             out.push((s / ((x1 - x0) * (y1 - y0)) as f64) as f32);
-        }
-    }
-    out
-}
-
-/// The 8-connected components of the pixels above `threshold`, as pixel indices.
-pub(super) fn components(
-    v: &[f32],
-    width: usize,
-    height: usize,
-    threshold: f32,
-) -> Vec<Vec<usize>> {
-    let mut seen = vec![false; v.len()];
-    let mut out = Vec::new();
-    for start in 0..v.len() {
-        if seen[start] || v[start] <= threshold {
-            continue;
-        }
-        seen[start] = true;
-        let mut component = vec![start];
-        let mut next = 0;
-        while next < component.len() {
-            let i = component[next];
-            next += 1;
-            let (x, y) = ((i % width) as isize, (i / width) as isize);
-            for (dx, dy) in NEIGHBOURS {
-                let (u, w) = (x + dx, y + dy);
-                if u >= 0 && w >= 0 && (u as usize) < width && (w as usize) < height {
-                    let j = w as usize * width + u as usize;
-                    if !seen[j] && v[j] > threshold {
-                        seen[j] = true;
-                        component.push(j);
-                    }
-                }
-            }
-        }
-        out.push(component);
-    }
-    out
-}
-
-const NEIGHBOURS: [(isize, isize); 8] = [
-    (-1, -1),
-    (0, -1),
-    (1, -1),
-    (-1, 0),
-    (1, 0),
-    (-1, 1),
-    (0, 1),
-    (1, 1),
-];
-
-/// A mask grown by `g` pixels (a square structuring element).
-pub(super) fn grow(mask: &[bool], width: usize, height: usize, g: usize) -> Vec<bool> {
-    // Separable: grow the rows, then the columns.
-    let mut rows = vec![false; mask.len()];
-    for y in 0..height {
-        for x in 0..width {
-            let (a, b) = (x.saturating_sub(g), (x + g + 1).min(width));
-            rows[y * width + x] = mask[y * width + a..y * width + b].iter().any(|&m| m);
-        }
-    }
-    let mut out = vec![false; mask.len()];
-    for y in 0..height {
-        let (a, b) = (y.saturating_sub(g), (y + g + 1).min(height));
-        for x in 0..width {
-            out[y * width + x] = (a..b).any(|v| rows[v * width + x]);
         }
     }
     out

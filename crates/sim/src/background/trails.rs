@@ -7,7 +7,7 @@
 //! faintest arcs (~0.1 sigma per pixel, README) stay under it, while a line filter averages
 //! along the trail and shows them.
 
-use super::prepare::{clipped_about, components, grow};
+use super::mask::{clipped_about, components, grow};
 
 /// Pixels are clipped to this many (lower-side) sigma before filtering, as in `prepare`: a hot
 /// pixel then weighs no more than a trail pixel, and a bright trail no more than a faint one.

@@ -1,0 +1,328 @@
+//! The scene draw of one image (paper 3.2.1-3.2.3): its debris object by the campaign's
+//! weights, then the exposure, placement, background and light curve, retried on the scene
+//! stream until the visibility checks and the gate accept them. A later frame of a collect
+//! follows its first frame's plan, unjudged.
+
+use std::collections::BTreeMap;
+
+use hifitime::{Duration, Epoch};
+use rand::RngExt;
+use rand_chacha::ChaCha12Rng;
+
+use super::accepted::{Exposure, Object};
+use super::place::place;
+use super::pointing::point_sensor;
+use super::trajectory::{Shot, trajectory};
+use super::visibility::{gate_snr, visibility};
+use super::{CollectFrame, Inputs, NoScene, Pointing, Rejection, Scene, Spec, Tumble};
+use crate::background::{BackgroundModel, FrameChoice};
+use crate::sensor::Sensor;
+use crate::sighting::Sighting;
+use soig_base::rng::{Purpose, stream};
+use soig_sky::ephemeris::sun_position_km;
+use soig_sky::stars::Star;
+use soig_sky::{Vec3, radec_deg};
+
+/// The debris object of image `image`, by the spec's weights, from the image's own debris
+/// stream (so the retries of the scene draw never change which object an image shows).
+pub fn choose_debris(spec: &Spec, debris: usize, seed: u64, image: u64) -> usize {
+    pick_debris(spec, debris, &mut stream(seed, image, Purpose::Debris))
+}
+
+/// A debris index by the spec's weights, from `rng`.
+pub(super) fn pick_debris(spec: &Spec, debris: usize, rng: &mut ChaCha12Rng) -> usize {
+    let weight = |i: usize| spec.debris_weights.get(i).copied().unwrap_or(1.0);
+    let total: f64 = (0..debris).map(weight).sum();
+    let mut u = rng.random_range(0.0..total);
+    for i in 0..debris {
+        if u < weight(i) {
+            return i;
+        }
+        u -= weight(i);
+    }
+    // Rounding of the subtractions can leave u just above the last weight.
+    debris - 1
+}
+
+/// Draw the scene of image `image` of a campaign with this seed: the debris object first,
+/// then the rest, retried on the scene stream until the gate accepts it. In collects the
+/// streams are the collect's, the gate judges its first frame, and a later frame follows the
+/// first's pointing plan whatever it shows (the object may leave a fixed field or fade).
+pub fn draw(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    seed: u64,
+    image: u64,
+) -> Result<Scene, NoScene> {
+    let (collect, frame) = spec.collect_of(image);
+    let debris_index = choose_debris(spec, inputs.debris.len(), seed, collect);
+    // Drawn only in a mixed campaign, so that every other keeps its streams.
+    let on_frame = spec.frame_share >= 1.0
+        || stream(seed, collect, Purpose::BackgroundKind).random::<f64>() < spec.frame_share;
+    let rng = &mut stream(seed, collect, Purpose::Scene);
+    let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
+    let max = spec.gate.max_attempts;
+    let no_scene = |attempts: u32, rejections: BTreeMap<Rejection, u32>| {
+        NoScene::of(inputs, image, debris_index, attempts, rejections)
+    };
+    for attempt in 1..=max {
+        let d = draw_values(spec, inputs, on_frame, rng);
+        match try_draw(spec, sensor, inputs, image, debris_index, &d, Plan::First) {
+            Ok(first) => {
+                let later = if frame == 0 {
+                    None
+                } else {
+                    let plan = Plan::Later {
+                        frame,
+                        first: &first,
+                    };
+                    match try_draw(spec, sensor, inputs, image, debris_index, &d, plan) {
+                        Ok(s) => Some(s),
+                        // The collect was accepted by its first frame: no retry here.
+                        Err(reason) => {
+                            *rejections.entry(reason).or_default() += 1;
+                            return Err(no_scene(attempt, rejections));
+                        }
+                    }
+                };
+                // A collect's objects: drawn and judged on its first frame, then followed
+                // into this one.
+                let placed = match spec.objects {
+                    Some(count) => Some(
+                        (0..count.draw(seed, collect) as u64)
+                            .map(|k| place(spec, sensor, inputs, seed, (&first, later.as_ref()), k))
+                            .collect::<Result<Vec<_>, _>>()?,
+                    ),
+                    None => None,
+                };
+                let scene = later.unwrap_or(first);
+                let collect_frame = CollectFrame::of(spec, image, collect);
+                return Ok(scene.accept(attempt, rejections, collect_frame, placed));
+            }
+            Err(reason) => *rejections.entry(reason).or_default() += 1,
+        }
+    }
+    Err(no_scene(max, rejections))
+}
+
+/// The tumbling modulation of one object's draw.
+pub(super) fn draw_tumble(spec: &Spec, rng: &mut ChaCha12Rng) -> Option<Tumble> {
+    spec.tumble.map(|r| Tumble {
+        period_s: if r.period_max_s > r.period_min_s {
+            rng.random_range(r.period_min_s..=r.period_max_s)
+        } else {
+            r.period_min_s
+        },
+        amplitude: rng.random_range(0.0..=r.amplitude_max),
+        phase_rad: rng.random_range(0.0..std::f64::consts::TAU),
+    })
+}
+
+/// The random values of one draw attempt, in the scene stream's order.
+struct Draws {
+    exposure_s: f64,
+    start: Epoch,
+    area_m2: f64,
+    placement: (f64, f64),
+    background: Option<FrameChoice>,
+    tumble: Option<Tumble>,
+}
+
+/// Which frame of its collect a scene is: the first (a single image is one), judged by the
+/// gate, or a later one, which follows the first's pointing plan and is not judged.
+#[derive(Clone, Copy)]
+enum Plan<'a> {
+    First,
+    Later { frame: u64, first: &'a Scene },
+}
+
+fn draw_values(spec: &Spec, inputs: &Inputs, on_frame: bool, rng: &mut ChaCha12Rng) -> Draws {
+    let span_s = (spec.window_end - spec.window_start).to_seconds();
+    let exposure_s = if spec.exposure_max_s > spec.exposure_min_s {
+        rng.random_range(spec.exposure_min_s..=spec.exposure_max_s)
+    } else {
+        spec.exposure_min_s
+    };
+    let start = spec.window_start + Duration::from_seconds(rng.random_range(0.0..span_s));
+    let area_m2 = spec.area.draw(rng);
+    let placement = (
+        rng.random_range(-1.0..1.0) * spec.placement_fraction,
+        rng.random_range(-1.0..1.0) * spec.placement_fraction,
+    );
+    let background = match &inputs.background {
+        BackgroundModel::Frames(frames) if on_frame => {
+            let frame = rng.random_range(0..frames.len());
+            let f = &frames[frame];
+            Some(FrameChoice {
+                frame,
+                offset: (rng.random_range(0..f.width), rng.random_range(0..f.height)),
+            })
+        }
+        _ => None,
+    };
+    let tumble = draw_tumble(spec, rng);
+    Draws {
+        exposure_s,
+        start,
+        area_m2,
+        placement,
+        background,
+        tumble,
+    }
+}
+
+/// One draw of image `image`'s debris object, frame `plan` of its collect, with the draws
+/// `d`: its visibility at mid-exposure, the pointing, the field stars, the trajectory and the
+/// signal-to-noise gate, or the first reason it was rejected.
+fn try_draw(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    image: u64,
+    debris_index: usize,
+    d: &Draws,
+    plan: Plan,
+) -> Result<Scene, Rejection> {
+    let Draws {
+        exposure_s,
+        area_m2,
+        placement,
+        background,
+        tumble,
+        ..
+    } = *d;
+    let gated = matches!(plan, Plan::First);
+    // Frame k of a collect starts k (exposure + gap) after the first.
+    let offset_s = match plan {
+        Plan::First => 0.0,
+        Plan::Later { frame, .. } => frame as f64 * (exposure_s + spec.collect_gap_s),
+    };
+    let start = match plan {
+        Plan::First => d.start,
+        Plan::Later { .. } => d.start + Duration::from_seconds(offset_s),
+    };
+    let mid = start + Duration::from_seconds(exposure_s / 2.0);
+
+    // Visibility at mid-exposure (paper 3.2.2).
+    let sighting = Sighting::new(
+        &inputs.observer.propagator,
+        &inputs.debris[debris_index].propagator,
+        mid,
+        spec.apparent_positions,
+    );
+    let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
+    let sun = sun_position_km(mid);
+    // A later frame of a collect is not judged (`gated` false); in it the object may have
+    // entered the shadow, and then sends no light.
+    let (geometry, shadowed) = visibility(spec, sensor, &sight, (sun, mid), area_m2, gated)?;
+
+    let (ra_p, dec_p) = boresight(sensor, sight.direction, placement, plan, offset_s);
+    let (pointing, cone) = point_sensor(
+        spec,
+        sensor,
+        &sighting,
+        (start, mid, exposure_s),
+        (ra_p, dec_p),
+    )?;
+    let stars = field_stars(spec, sensor, inputs, (ra_p, dec_p, cone), mid, gated)?;
+
+    let mid_tan = sensor.projection(ra_p, dec_p);
+    let track = sighting
+        .track(start, exposure_s)
+        .ok_or(Rejection::PropagationFailed)?;
+    let trajectory = trajectory(
+        spec,
+        sensor,
+        &|t_s| track.at(t_s),
+        &Shot {
+            exposure_s,
+            sun,
+            area_m2,
+            tumble,
+            pointing: &pointing,
+            mid_tan: &mid_tan,
+            shadowed,
+        },
+    )?;
+
+    let snr = gate_snr(
+        spec,
+        sensor,
+        &trajectory,
+        exposure_s,
+        inputs.frame(background),
+        gated,
+    )?;
+
+    let ephemeris = sighting.ephemeris(start, exposure_s);
+    let debris = &inputs.debris[debris_index];
+    let exposure = Exposure {
+        image_index: image,
+        start,
+        exposure_s,
+        pointing,
+        stars,
+        background,
+    };
+    let object = Object {
+        debris_index,
+        debris_name: debris.name.clone(),
+        norad: debris.norad,
+        area_m2,
+        tumble,
+        geometry,
+        ephemeris,
+        trajectory,
+        snr,
+    };
+    Ok(Scene::assemble(exposure, object))
+}
+
+/// The boresight at mid-exposure, with the debris then in `direction`: the debris lands at a
+/// random place in the field (`placement`). A later frame keeps the first's plan: a fixed
+/// direction, the survey attitude running on (the first frame's rotation, continued, to
+/// `offset_s` after it), or the object held on its pixel.
+fn boresight(
+    sensor: &Sensor,
+    direction: Vec3,
+    placement: (f64, f64),
+    plan: Plan,
+    offset_s: f64,
+) -> (f64, f64) {
+    let (ra_mid, dec_mid) = radec_deg(direction);
+    let around_debris = sensor.projection(ra_mid, dec_mid);
+    let half_w = sensor.width_px as f64 / 2.0;
+    let half_h = sensor.height_px as f64 / 2.0;
+    let placed = around_debris.sky(
+        around_debris.cx - placement.0 * half_w,
+        around_debris.cy - placement.1 * half_h,
+    );
+    match plan {
+        Plan::Later { first, .. } => match &first.pointing {
+            Pointing::Fixed { ra_deg, dec_deg } => (*ra_deg, *dec_deg),
+            Pointing::Survey(t0) => t0.radec_at(t0.t_mid_s + offset_s),
+            Pointing::Track(_) => placed,
+        },
+        Plan::First => placed,
+    }
+}
+
+/// Field stars in the cone `(ra, dec, radius)` at mid-exposure; a star brighter than the limit
+/// spoils the image (paper 3.2.3).
+fn field_stars(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    (ra, dec, cone): (f64, f64, f64),
+    mid: Epoch,
+    gated: bool,
+) -> Result<Vec<Star>, Rejection> {
+    let field = inputs
+        .stars
+        .stars_in_cone(ra, dec, cone, sensor.mag_limit, mid);
+    if gated && field.iter().any(|s| s.mag < spec.gate.brightest_star_mag) {
+        return Err(Rejection::BrightStar);
+    }
+    Ok(field)
+}

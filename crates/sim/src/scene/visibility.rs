@@ -1,0 +1,140 @@
+//! The checks that reject a draw: visibility at mid-exposure (paper 3.2.2) and the expected
+//! signal-to-noise gate (paper 3.2.6).
+
+use hifitime::Epoch;
+use soig_sky::ephemeris::moon_position_km;
+use soig_sky::photometry::debris_magnitude;
+use soig_sky::{Vec3, angle_deg, norm, segment_hits_sphere, sub};
+
+use super::{EARTH_RADIUS_KM, Geometry, Rejection, SnrDefinition, Spec, TrajectorySample};
+use crate::background::RealFrame;
+use crate::sensor::Sensor;
+use crate::sighting::Sight;
+
+/// Visibility of the debris at mid-exposure (paper 3.2.2), its geometry then, and whether it
+/// is in the Earth's shadow. Ungated (a later frame of a collect, which the gate does not
+/// judge), every check passes and a shadowed object sends no light.
+pub(super) fn visibility(
+    spec: &Spec,
+    sensor: &Sensor,
+    sight: &Sight,
+    (sun, mid): (Vec3, Epoch),
+    area_m2: f64,
+    gated: bool,
+) -> Result<(Geometry, bool), Rejection> {
+    let (obs, deb) = (sight.observer_km, sight.debris_km);
+    let los = sub(deb, obs);
+    let moon = moon_position_km(mid);
+    let v = &spec.gate;
+    let earth_angle_deg = angle_deg(los, sub([0.0; 3], obs));
+    if gated && earth_angle_deg <= v.earth_min_deg {
+        return Err(Rejection::EarthAngle);
+    }
+    let sun_angle_deg = angle_deg(los, sub(sun, obs));
+    if gated && sun_angle_deg <= v.sun_min_deg {
+        return Err(Rejection::SunAngle);
+    }
+    let moon_angle_deg = angle_deg(los, sub(moon, obs));
+    if gated && moon_angle_deg <= v.moon_min_deg {
+        return Err(Rejection::MoonAngle);
+    }
+    if gated && segment_hits_sphere(obs, deb, EARTH_RADIUS_KM + v.earth_clearance_km) {
+        return Err(Rejection::ThroughEarth);
+    }
+    let shadowed = segment_hits_sphere(deb, sun, EARTH_RADIUS_KM);
+    if gated && shadowed {
+        return Err(Rejection::EarthShadow);
+    }
+    let phase_angle_deg = angle_deg(sub(sun, deb), sub(obs, deb));
+    let range_km = norm(los);
+    let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km);
+    if gated && (magnitude.is_nan() || magnitude > sensor.mag_limit) {
+        return Err(Rejection::TooFaint);
+    }
+    let geometry = Geometry {
+        range_km,
+        phase_angle_deg,
+        earth_angle_deg,
+        sun_angle_deg,
+        moon_angle_deg,
+        magnitude,
+    };
+    Ok((geometry, shadowed))
+}
+
+/// An object's expected signal-to-noise ratios (`expected_snr`).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Snr {
+    /// The one the gate judges, by its definition (one of the two below).
+    pub judged: f64,
+    /// Over the mean level of background plus bias, and over their standard deviation.
+    pub noise_level: f64,
+    pub noise_sigma: f64,
+}
+
+/// The signal-to-noise gate (paper 3.2.6). Ungated (a later frame of a collect), the ratios
+/// are computed and not judged.
+pub(super) fn gate_snr(
+    spec: &Spec,
+    sensor: &Sensor,
+    trajectory: &[TrajectorySample],
+    exposure_s: f64,
+    frame: Option<&RealFrame>,
+    gated: bool,
+) -> Result<Snr, Rejection> {
+    let snr_noise_level = expected_snr(
+        sensor,
+        trajectory,
+        sensor.noise_level_adu(exposure_s, frame),
+    );
+    let snr_noise_sigma = expected_snr(
+        sensor,
+        trajectory,
+        sensor.background_sigma_adu(exposure_s, frame),
+    );
+    let snr = match spec.gate.snr_definition {
+        SnrDefinition::NoiseLevel => snr_noise_level,
+        SnrDefinition::NoiseSigma => snr_noise_sigma,
+    };
+    if gated && snr < spec.gate.snr_min {
+        return Err(Rejection::LowSnr);
+    }
+    Ok(Snr {
+        judged: snr,
+        noise_level: snr_noise_level,
+        noise_sigma: snr_noise_sigma,
+    })
+}
+
+/// Expected debris signal over noise, the paper's acceptance gate (3.2.6): the mean debris ADU
+/// per footprint pixel over `noise_adu`, the per-pixel level of background plus bias (the
+/// paper's reading) or their standard deviation (see `SnrDefinition`). The footprint is the
+/// in-image streak length times the PSF FWHM, plus one FWHM square: `(L + w) w`. Computed from
+/// expected values, before any photon is traced.
+pub fn expected_snr(sensor: &Sensor, trajectory: &[TrajectorySample], noise_adu: f64) -> f64 {
+    let mut electrons = 0.0;
+    let mut length_px = 0.0;
+    let mut last: Option<(f64, f64)> = None;
+    for p in trajectory {
+        let (x, y) = (p.x_px, p.y_px);
+        if sensor.contains(x, y) {
+            electrons += p.expected_electrons;
+            if let Some((lx, ly)) = last {
+                length_px += ((x - lx).powi(2) + (y - ly).powi(2)).sqrt();
+            }
+            last = Some((x, y));
+        } else {
+            last = None;
+        }
+    }
+    let fwhm_px = sensor.psf_fwhm_px();
+    let footprint = (length_px + fwhm_px) * fwhm_px;
+    let signal_adu = electrons / sensor.gain_e_per_adu / footprint.max(1.0);
+    if noise_adu > 0.0 {
+        signal_adu / noise_adu
+    } else if signal_adu > 0.0 {
+        f64::INFINITY
+    } else {
+        0.0
+    }
+}
