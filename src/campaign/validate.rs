@@ -15,16 +15,37 @@ const MAX_LEVEL_ADU: f64 = 1e9;
 const MAX_AREA_M2: f64 = 1e4;
 
 /// Field-level checks that need no files. Returns (field path, message).
-pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
-    fn check(ok: bool, field: &str, msg: &str) -> Result<(), (String, String)> {
-        if ok {
-            Ok(())
-        } else {
-            Err((field.to_string(), msg.to_string()))
-        }
+pub(super) fn validate(c: &CampaignFile) -> Checked {
+    top(c)?;
+    exposure(c)?;
+    sensor(c)?;
+    photometry(c)?;
+    visibility(c)?;
+    enhance(c)?;
+    detect(c)
+}
+
+/// The first field that fails a check: (field path, message).
+type Checked = Result<(), (String, String)>;
+
+fn check(ok: bool, field: &str, msg: &str) -> Checked {
+    if ok {
+        Ok(())
+    } else {
+        Err((field.to_string(), msg.to_string()))
     }
-    let pos = |x: f64| x.is_finite() && x > 0.0;
-    let nonneg = |x: f64| x.is_finite() && x >= 0.0;
+}
+
+fn pos(x: f64) -> bool {
+    x.is_finite() && x > 0.0
+}
+
+fn nonneg(x: f64) -> bool {
+    x.is_finite() && x >= 0.0
+}
+
+/// The campaign as a whole: its name, output, image count, collects and objects per frame.
+fn top(c: &CampaignFile) -> Checked {
     check(!c.name.trim().is_empty(), "name", "must not be empty")?;
     if let Some(k) = &c.collect {
         check(
@@ -96,6 +117,11 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
             "must be in [0, 1]",
         )?;
     }
+    Ok(())
+}
+
+/// `[exposure]`: the exposure bounds.
+fn exposure(c: &CampaignFile) -> Checked {
     let e = &c.exposure;
     check(
         pos(e.min_s),
@@ -122,6 +148,11 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "pointing.placement_fraction",
         "must be in (0, 1]",
     )?;
+    Ok(())
+}
+
+/// `[sensor]` and the star budget it implies, and a catalogue's epoch.
+fn sensor(c: &CampaignFile) -> Checked {
     let s = &c.sensor;
     check(
         (16..=16384).contains(&s.width_px),
@@ -242,6 +273,11 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
             "must be a Julian year such as 2016.0",
         )?;
     }
+    Ok(())
+}
+
+/// `[photometry]` and the debris objects' weights.
+fn photometry(c: &CampaignFile) -> Checked {
     let p = &c.photometry;
     if !p.preset.is_paper() {
         for (field, set, default) in [
@@ -326,6 +362,11 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
             "makes the debris weights sum beyond the largest number (1.8e308): give smaller weights",
         )?;
     }
+    Ok(())
+}
+
+/// `[visibility]` and `[render]`.
+fn visibility(c: &CampaignFile) -> Checked {
     let v = &c.visibility;
     for (f, x) in [
         ("visibility.earth_min_deg", v.earth_min_deg),
@@ -379,6 +420,11 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "render.jitter_steps",
         "must be between 1 and 1000000",
     )?;
+    Ok(())
+}
+
+/// `[enhance]` and `[train]`.
+fn enhance(c: &CampaignFile) -> Checked {
     let en = &c.enhance;
     check(
         nonneg(en.clahe_clip_limit),
@@ -425,6 +471,11 @@ pub(super) fn validate(c: &CampaignFile) -> Result<(), (String, String)> {
         "train.time_hours",
         "must be positive",
     )?;
+    Ok(())
+}
+
+/// `[detect]`, `[split]` and `stages`.
+fn detect(c: &CampaignFile) -> Checked {
     let d = &c.detect;
     check(
         d.conf > 0.0 && d.conf <= 1.0,
