@@ -15,7 +15,8 @@
 //!                enhance (+ clahe)   detect (streak, yolo)   metrics   report
 //! leaves         sky (orbit, frames, ephemeris, apparent, stars, projection, photometry, vec3, wcs)
 //!                imaging   rng   fits   frames   hash   python   plot   progress   input_file
-//! at the side    manifest   output (whole-or-nothing directories)   journal (resume)   error
+//! at the side    store: fs (the file primitives), manifest, output (whole-or-nothing
+//!                directories), journal (resume), disk (free space)   error
 //! ```
 //!
 //! The core never sees the campaign file: the config layer builds a [`Sensor`], a
@@ -55,6 +56,8 @@ pub use pipeline::{RunOptions, RunSummary, run, run_with, train};
 pub use progress::{Progress, Silent};
 pub use sensor::Sensor;
 pub use simulate::{Experiment, ImageProducts};
+// The store's modules under their old paths: `soig::output`, `soig::manifest`, ...
+pub use store::{disk, journal, manifest, output};
 
 pub(crate) mod artifacts;
 pub mod campaign;
@@ -63,21 +66,18 @@ pub mod compare;
 pub mod convert;
 pub mod dataset;
 pub mod detect_frames;
-pub mod disk;
 pub mod error;
 pub mod experiment;
 pub mod export;
-pub mod journal;
 pub mod launch;
 pub mod light_curve;
-pub mod manifest;
 pub mod merge;
-pub mod output;
 pub mod pipeline;
 pub(crate) mod plot;
 pub mod report;
 pub mod shard;
 pub mod star_trails;
+pub mod store;
 pub mod study;
 pub mod summary;
 pub mod sweep;
