@@ -154,3 +154,61 @@ fn temporary(path: &Path) -> anyhow::Result<PathBuf> {
         std::process::id()
     )))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::os::unix::fs::PermissionsExt;
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut n: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        n.sort();
+        n
+    }
+
+    #[test]
+    fn a_failed_write_leaves_the_old_file_and_no_temporary() {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = tmp.path().join("a.txt");
+        write(&path, "old").unwrap();
+        let e = write_by(&path, |temp| {
+            fill(temp, b"half")?;
+            anyhow::bail!("no space left on device")
+        })
+        .unwrap_err();
+        assert!(format!("{e:#}").contains("a.txt"), "{e:#}");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
+        assert_eq!(names(tmp.path()), ["a.txt"]);
+        write(&path, "new").unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
+        assert_eq!(names(tmp.path()), ["a.txt"]);
+    }
+
+    #[test]
+    fn create_never_writes_over_a_file() {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = tmp.path().join("mine.txt");
+        create(&path, "soig").unwrap();
+        assert!(create(&path, "again").is_err());
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "soig");
+    }
+
+    #[test]
+    fn replace_keeps_the_permissions_and_follows_a_link() {
+        let tmp = tempfile::tempdir().unwrap();
+        let real = tmp.path().join("README.md");
+        write(&real, "old").unwrap();
+        std::fs::set_permissions(&real, std::fs::Permissions::from_mode(0o640)).unwrap();
+        let link = tmp.path().join("link.md");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        replace(&link, "new").unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().is_symlink());
+        assert_eq!(std::fs::read_to_string(&real).unwrap(), "new");
+        let mode = std::fs::metadata(&real).unwrap().permissions().mode();
+        assert_eq!(mode & 0o777, 0o640);
+        assert_eq!(names(tmp.path()), ["README.md", "link.md"]);
+    }
+}
