@@ -1,9 +1,13 @@
 #!/usr/bin/env bash
-# The test command: set-up (idempotent), then every test. ONNX Runtime and the export readers
-# are required here, so the detector and export tests can never pass by skipping.
+# The test command: set-up (idempotent), clippy (warnings are errors), then every test. ONNX
+# Runtime and the export readers are required here, so the detector and export tests can never
+# pass by skipping.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+# Lints first, every warning an error: clippy.toml lets only the store (src/store/) create,
+# replace or delete files, so a writer that bypasses the output-safety rules fails here.
+cargo clippy --workspace --release --locked -- -D warnings
 # --release: the tests reuse the dependencies the quickstart's release build compiled (the test
 # profile would build every one of them again).
 SOIG_REQUIRE_ONNXRUNTIME=1 SOIG_REQUIRE_EXPORT_READERS=1 cargo test --release --locked "$@"

@@ -16,6 +16,7 @@ use crate::render::{Exposure, FrameTruth};
 use crate::scene::{Pointing, Scene};
 use crate::sensor::Sensor;
 use crate::simulate::ImageProducts;
+use crate::store;
 
 /// What the FITS headers say of the run that made them.
 pub struct Provenance {
@@ -97,17 +98,16 @@ pub fn write_image(
     if artifacts.star_list {
         files.push(format!("truth/{stem}_stars.csv"));
         let path = dir.join("truth").join(format!("{stem}_stars.csv"));
-        let mut w =
-            csv::Writer::from_path(&path).with_context(|| format!("writing {}", path.display()))?;
+        let mut w = csv::Writer::from_writer(Vec::new());
         for s in &exposure.stars {
             w.serialize(s)?;
         }
-        w.flush()?;
+        store::fs::create(&path, w.into_inner().map_err(|e| e.into_error())?)?;
     }
     if artifacts.light_curve {
         files.push(format!("truth/{stem}_light_curve.csv"));
         let path = dir.join("truth").join(format!("{stem}_light_curve.csv"));
-        crate::light_curve::write(&path, &products.scene.shown())?;
+        store::fs::create(&path, crate::light_curve::csv(&products.scene.shown())?)?;
     }
     let truth_path = dir.join("truth").join(format!("{stem}.json"));
     let truth = match (&exposure.objects, &products.scene.placed) {
@@ -120,7 +120,7 @@ pub fn write_image(
         ))?,
         _ => serde_json::to_string_pretty(&exposure.truth)?,
     };
-    std::fs::write(&truth_path, truth + "\n")?;
+    store::fs::create(&truth_path, truth + "\n")?;
 
     files.push(format!("truth/{stem}.json"));
     let Some(product) = &products.product else {
@@ -135,8 +135,8 @@ pub fn write_image(
         .collect();
     let (png_rel, label_rel) = dataset_paths(index, subset);
     let png_path = dir.join(&png_rel);
-    enhance::write_png(&png_path, &product.png)?;
-    std::fs::write(dir.join(&label_rel), label_line)?;
+    store::fs::create(&png_path, enhance::png_bytes(&product.png))?;
+    store::fs::create(&dir.join(&label_rel), label_line)?;
     files.extend([png_rel, label_rel]);
     // Pixel-edge coordinates: pixel i spans [i, i + 1).
     let edges = product

@@ -118,13 +118,13 @@ pub fn write_manifests(
         });
     }
     let out = dir.join("collects");
-    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    crate::store::fs::create_dir_all(&out)?;
     for (c, mut m) in collects {
         // Frame k starts k (exposure + gap) after the first: frame order is time order.
         m.frames.sort_by_key(|f| f.frame);
         let path = out.join(format!("collect_{c:06}.json"));
         let text = serde_json::to_string_pretty(&m)? + "\n";
-        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+        crate::store::fs::create(&path, text)?;
     }
     Ok(())
 }

@@ -20,6 +20,7 @@ use serde::Serialize;
 
 use crate::enhance::{self, Gray8, Settings};
 use crate::frames::{Frame, RegionPixels, ready_for_enhancement};
+use crate::store::fs;
 
 /// One converted frame.
 #[derive(Clone, Debug, Serialize)]
@@ -69,7 +70,7 @@ pub fn run(
     let mut converted = Vec::new();
     // One frame in memory at a time; a bad input fails the staged output, so none is left.
     let digest = crate::output::write_replacing(out, &keep_refs, |dir| {
-        std::fs::create_dir_all(dir)?;
+        fs::create_dir_all(dir)?;
         for p in inputs {
             let frame = Frame::read(p)?;
             if matches!(frame.pixels, RegionPixels::Gray(_)) {
@@ -104,7 +105,7 @@ fn convert(
     let png = format!("{}.png", stem(&frame.path));
     let started = Instant::now();
     let img: Gray8 = enhance::enhance(&values, w, h, settings);
-    enhance::write_png(&dir.join(&png), &img).map_err(|e| anyhow::anyhow!("writing {png}: {e}"))?;
+    fs::create(&dir.join(&png), enhance::png_bytes(&img))?;
     Ok(Converted {
         // The name only: the digest does not depend on where soig was started.
         file: frame
@@ -133,8 +134,8 @@ fn write_records(
 ) -> anyhow::Result<String> {
     let timing: std::collections::BTreeMap<&str, f64> =
         frames.iter().map(|f| (f.png.as_str(), f.seconds)).collect();
-    std::fs::write(
-        dir.join("timing.json"),
+    fs::create(
+        &dir.join("timing.json"),
         serde_json::to_string_pretty(&timing)? + "\n",
     )?;
     let record = serde_json::json!({

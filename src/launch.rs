@@ -12,6 +12,7 @@ use anyhow::Context;
 use serde_json::{Value, json};
 
 use crate::shard::Shard;
+use crate::store::fs;
 
 /// What the jobs run: `soig run CAMPAIGN --set ...` as `shards` shards, merged into `out`.
 pub struct Launch {
@@ -444,19 +445,17 @@ pub fn write(dir: &Path, files: &[File], keep: &[&Path]) -> anyhow::Result<()> {
             );
         }
     }
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    fs::create_dir_all(dir)?;
     for f in files {
         written.insert(f.name.to_string(), sha(f.text.as_bytes()));
     }
-    std::fs::write(&record, serde_json::to_string_pretty(&written)? + "\n")
-        .with_context(|| format!("writing {}", record.display()))?;
+    fs::write(&record, serde_json::to_string_pretty(&written)? + "\n")?;
     for f in files {
         let path = dir.join(f.name);
-        std::fs::write(&path, &f.text).with_context(|| format!("writing {}", path.display()))?;
         if f.executable {
-            use std::os::unix::fs::PermissionsExt;
-            std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755))
-                .with_context(|| format!("making {} executable", path.display()))?;
+            fs::write_executable(&path, &f.text)?;
+        } else {
+            fs::write(&path, &f.text)?;
         }
     }
     Ok(())

@@ -13,7 +13,8 @@
 //!                    report
 //!                    product: artifacts dataset collect export star_trails light_curve shard
 //!                    config: campaign (file, defaults, compose, validate, resolve) experiment
-//!                    store: output (whole-or-nothing directories) journal (resume) manifest disk
+//!                    store: fs (the file primitives: the only code that writes) output
+//!                           (whole-or-nothing directories) journal (resume) manifest disk
 //! soig-sim           scene sighting sensor noise background render simulate
 //! soig-detect        streak yolo metrics               (sim and detect never see each other)
 //! soig-image         imaging geometry fits frames enhance psf hint
@@ -61,6 +62,8 @@ pub use pipeline::{RunOptions, RunSummary, run, run_with, train};
 pub use progress::{Progress, Silent};
 pub use sensor::Sensor;
 pub use simulate::{Experiment, ImageProducts};
+// The store's modules under their old paths: `soig::output`, `soig::manifest`, ...
+pub use store::{disk, journal, manifest, output};
 
 pub(crate) mod artifacts;
 pub mod campaign;
@@ -69,21 +72,18 @@ pub mod compare;
 pub mod convert;
 pub mod dataset;
 pub mod detect_frames;
-pub mod disk;
 pub mod error;
 pub mod experiment;
 pub mod export;
-pub mod journal;
 pub mod launch;
 pub mod light_curve;
-pub mod manifest;
 pub mod merge;
-pub mod output;
 pub mod pipeline;
 pub(crate) mod plot;
 pub mod report;
 pub mod shard;
 pub mod star_trails;
+pub mod store;
 pub mod study;
 pub mod summary;
 pub mod sweep;

@@ -12,9 +12,6 @@
 //! PSF). The renderer's samples, so a fast streak sampled finer than
 //! `render.trajectory_samples` has as many rows as it was sampled with.
 
-use std::path::Path;
-
-use anyhow::Context;
 use hifitime::Duration;
 use serde::Serialize;
 
@@ -36,11 +33,10 @@ struct Row<'a> {
     y_px: f64,
 }
 
-/// Write the light curves of the objects an image shows (`Scene::shown`, in their order) to
-/// `path`; an image with no object gets the header alone.
-pub fn write(path: &Path, objects: &[&Scene]) -> anyhow::Result<()> {
-    let mut w =
-        csv::Writer::from_path(path).with_context(|| format!("writing {}", path.display()))?;
+/// The CSV of the light curves of the objects an image shows (`Scene::shown`, in their order);
+/// an image with no object gets the header alone.
+pub fn csv(objects: &[&Scene]) -> anyhow::Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
     if objects.is_empty() {
         // The header is written with the first row; an empty image has none.
         w.write_record([
@@ -55,18 +51,15 @@ pub fn write(path: &Path, objects: &[&Scene]) -> anyhow::Result<()> {
             "electrons",
             "x_px",
             "y_px",
-        ])
-        .with_context(|| format!("writing {}", path.display()))?;
+        ])?;
     }
     for scene in objects {
-        rows(&mut w, path, scene)?;
+        rows(&mut w, scene)?;
     }
-    w.flush()
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+    Ok(w.into_inner().map_err(|e| e.into_error())?)
 }
 
-fn rows(w: &mut csv::Writer<std::fs::File>, path: &Path, scene: &Scene) -> anyhow::Result<()> {
+fn rows(w: &mut csv::Writer<Vec<u8>>, scene: &Scene) -> anyhow::Result<()> {
     let slice_s = scene.exposure_s / scene.trajectory.len() as f64;
     for (k, s) in scene.trajectory.iter().enumerate() {
         w.serialize(Row {
@@ -81,8 +74,7 @@ fn rows(w: &mut csv::Writer<std::fs::File>, path: &Path, scene: &Scene) -> anyho
             electrons: s.expected_electrons,
             x_px: s.x_px,
             y_px: s.y_px,
-        })
-        .with_context(|| format!("writing {}", path.display()))?;
+        })?;
     }
     Ok(())
 }

@@ -16,6 +16,7 @@ use crate::output::write_replacing;
 use crate::pipeline::{self, RunSummary};
 use crate::progress::Progress;
 use crate::shard::{RECORDS, Section, Shard, TIMING};
+use crate::store;
 
 /// One shard output, checked.
 struct Part {
@@ -314,12 +315,7 @@ fn differing(a: &BTreeMap<String, String>, b: &BTreeMap<String, String>) -> Stri
 /// Hard-link `from` to `to` (no copy of a large dataset), copying across file systems.
 fn link_or_copy(from: &Path, to: &Path) -> anyhow::Result<()> {
     if let Some(parent) = to.parent() {
-        std::fs::create_dir_all(parent)
-            .with_context(|| format!("cannot create {}", parent.display()))?;
+        store::fs::create_dir_all(parent)?;
     }
-    if std::fs::hard_link(from, to).is_err() {
-        std::fs::copy(from, to)
-            .with_context(|| format!("cannot copy {} to {}", from.display(), to.display()))?;
-    }
-    Ok(())
+    store::fs::link_or_copy(from, to)
 }

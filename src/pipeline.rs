@@ -29,6 +29,7 @@ use crate::report::{self, DetectorRun, ObjectFacts, TestImage};
 use crate::scene::{Pointing, Rejection};
 use crate::shard::Shard;
 use crate::simulate;
+use crate::store;
 pub use crate::train::{Chunk, parse_budget};
 use crate::train::{TRAIN_DIR, find_python, fit, volatile_files};
 
@@ -455,7 +456,7 @@ fn render(
         }
     }
     for d in &dirs {
-        std::fs::create_dir_all(d).with_context(|| format!("cannot create {}", d.display()))?;
+        store::fs::create_dir_all(d)?;
     }
 
     let x = crate::experiment::of(campaign);
@@ -600,8 +601,8 @@ pub(crate) fn finish(
         .collect();
 
     if dataset_stage {
-        std::fs::write(
-            dir.join("data.yaml"),
+        store::fs::create(
+            &dir.join("data.yaml"),
             dataset::data_yaml(&c.name, &campaign.hash),
         )?;
     }

@@ -18,7 +18,7 @@ pub fn register_font() {
     });
 }
 
-/// A `w` x `h` chart drawn by `draw` on white, saved as an RGB PNG at `path`.
+/// A `w` x `h` chart drawn by `draw` on white, written as an RGB PNG at `path` (atomically).
 pub fn png(
     path: &Path,
     (w, h): (u32, u32),
@@ -33,6 +33,12 @@ pub fn png(
         root.present()?;
     }
     let img = image::RgbImage::from_raw(w, h, buf).expect("buffer size");
-    img.save(path)?;
-    Ok(())
+    crate::store::fs::write(path, rgb_png(&img)?)
+}
+
+/// The PNG of `img`, the bytes `RgbImage::save` writes (the PNG encoder's defaults).
+pub fn rgb_png(img: &image::RgbImage) -> anyhow::Result<Vec<u8>> {
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, image::ImageFormat::Png)?;
+    Ok(bytes.into_inner())
 }

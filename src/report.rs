@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::detect::Detection;
 use crate::metrics::{self, AtThreshold, CocoMetrics, ImageEval, UltralyticsMetrics};
+use crate::store::fs;
 
 /// Files of the report that hold run-dependent timing: present, but not hashed.
 pub const VOLATILE: [&str; 2] = ["report/timing.md", "report/timing.json"];
@@ -225,17 +226,17 @@ pub fn write(
     progress: &dyn crate::progress::Progress,
 ) -> anyhow::Result<()> {
     let rdir = dir.join("report");
-    std::fs::create_dir_all(rdir.join("previews"))?;
+    fs::create_dir_all(&rdir.join("previews"))?;
     let mut detectors = Vec::new();
     let mut curves = Vec::new();
-    let mut csv_rows = csv::Writer::from_path(rdir.join("detections.csv"))?;
+    let mut csv_rows = csv::Writer::from_writer(Vec::new());
     csv_rows.write_record([
         "image", "detector", "x1", "y1", "x2", "y2", "score", "class",
     ])?;
     progress.start("report", runs.len() as u64);
     for run in runs {
         let pdir = rdir.join("predictions").join(&run.name);
-        std::fs::create_dir_all(&pdir)?;
+        fs::create_dir_all(&pdir)?;
         for (img, dets) in images.iter().zip(&run.detections) {
             let mut text = String::new();
             for d in dets {
@@ -251,7 +252,7 @@ pub fn write(
                     d.class.to_string(),
                 ])?;
             }
-            std::fs::write(pdir.join(format!("{}.txt", img.stem)), text)?;
+            fs::create(&pdir.join(format!("{}.txt", img.stem)), text)?;
         }
         let (m, u, _, _) = detector_metrics(images, run, conf);
         curves.push((
@@ -265,15 +266,18 @@ pub fn write(
         progress.advance();
     }
     progress.finish();
-    csv_rows.flush()?;
+    fs::create(
+        &rdir.join("detections.csv"),
+        csv_rows.into_inner().map_err(|e| e.into_error())?,
+    )?;
 
     let facts: Vec<Vec<ObjectFacts>> = images.iter().map(|i| i.facts.clone()).collect();
     let efficiencies: Vec<Efficiency> = runs
         .iter()
         .map(|run| efficiency::efficiency(&run.name, &evals(images, run), &facts, conf))
         .collect();
-    std::fs::write(
-        rdir.join("efficiency.json"),
+    fs::create(
+        &rdir.join("efficiency.json"),
         serde_json::to_string_pretty(&efficiencies)? + "\n",
     )?;
     efficiency::write_csv(&rdir.join("efficiency.csv"), &efficiencies)?;
@@ -288,13 +292,13 @@ pub fn write(
         objects: images.iter().map(|i| i.truth.len()).sum(),
         detectors,
     };
-    std::fs::write(
-        rdir.join("report.json"),
+    fs::create(
+        &rdir.join("report.json"),
         serde_json::to_string_pretty(&report)? + "\n",
     )?;
 
     // Tables 3 and 5: one row per test set (and geometry) and detector.
-    let mut table = csv::Writer::from_path(rdir.join("metrics.csv"))?;
+    let mut table = csv::Writer::from_writer(Vec::new());
     table.write_record([
         "test_set",
         "detector",
@@ -321,7 +325,10 @@ pub fn write(
             format!("{:.4}", d.at_threshold.recall),
         ])?;
     }
-    table.flush()?;
+    fs::create(
+        &rdir.join("metrics.csv"),
+        table.into_inner().map_err(|e| e.into_error())?,
+    )?;
     figures::pr_plot(&rdir.join("pr_curve.png"), &curves)?;
 
     // Table 6: conversion and detection time per image (volatile).
@@ -330,19 +337,19 @@ pub fn write(
         .iter()
         .map(|r| (r.name.clone(), Timing::of(&r.seconds)))
         .collect();
-    std::fs::write(
-        rdir.join("timing.json"),
+    fs::create(
+        &rdir.join("timing.json"),
         serde_json::to_string_pretty(&serde_json::json!({
             "conversion_per_image": conversion,
             "detection_per_image": detection.iter().map(|(n, t)| (n.clone(), t)).collect::<std::collections::BTreeMap<_, _>>(),
         }))? + "\n",
     )?;
-    std::fs::write(
-        rdir.join("report.md"),
+    fs::create(
+        &rdir.join("report.md"),
         markdown(&report, &efficiencies, conf),
     )?;
-    std::fs::write(
-        rdir.join("timing.md"),
+    fs::create(
+        &rdir.join("timing.md"),
         timing_markdown(&conversion, &detection),
     )?;
     Ok(())

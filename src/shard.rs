@@ -167,8 +167,8 @@ pub(crate) fn seal(
         }
         lines += &(serde_json::to_string(&r)? + "\n");
     }
-    std::fs::write(dir.join(RECORDS), lines)?;
-    std::fs::write(dir.join(TIMING), serde_json::to_string(&timing)? + "\n")?;
+    crate::store::fs::create(&dir.join(RECORDS), lines)?;
+    crate::store::fs::create(&dir.join(TIMING), serde_json::to_string(&timing)? + "\n")?;
     let images = shard.images(u64::from(campaign.resolved.images));
     let campaign_dir = std::path::absolute(&campaign.base_dir)
         .with_context(|| format!("cannot resolve {}", campaign.base_dir.display()))?;

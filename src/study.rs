@@ -20,6 +20,7 @@ use crate::render::expected::expected_flux;
 use crate::render::{Jitter, RenderMethod, render_with_jitter};
 use crate::rng::{PixelPurpose, pixel_stream};
 use crate::scene::{self, Inputs, MAX_TRAJECTORY_SAMPLES, Scene};
+use crate::store::fs;
 
 /// The reference takes this many times the campaign's trajectory samples and jitter steps.
 const REFERENCE_REFINEMENT: u32 = 10;
@@ -381,7 +382,7 @@ fn write(
     ref_samples: usize,
     ref_steps: usize,
 ) -> anyhow::Result<()> {
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    fs::create_dir_all(out)?;
     let params = serde_json::json!({
         "campaign": campaign.resolved.name,
         "campaign_hash": campaign.hash,
@@ -396,11 +397,11 @@ fn write(
         },
         "photon_seeds": "stream(campaign seed + 1 + k, image, photons), k < seeds",
     });
-    std::fs::write(
-        out.join("study.json"),
+    fs::create(
+        &out.join("study.json"),
         serde_json::to_string_pretty(&params)? + "\n",
     )?;
-    let mut errors = csv::Writer::from_path(out.join("errors.csv"))?;
+    let mut errors = csv::Writer::from_writer(Vec::new());
     for r in rows {
         errors.serialize(ErrorRow {
             knob: &r.knob,
@@ -414,14 +415,20 @@ fn write(
             label_box_error_px: r.label_box_error_px,
         })?;
     }
-    errors.flush()?;
-    let mut all = csv::Writer::from_path(out.join("study.csv"))?;
+    fs::create(
+        &out.join("errors.csv"),
+        errors.into_inner().map_err(|e| e.into_error())?,
+    )?;
+    let mut all = csv::Writer::from_writer(Vec::new());
     for r in rows {
         all.serialize(r)?;
     }
-    all.flush()?;
-    std::fs::write(
-        out.join("study.md"),
+    fs::create(
+        &out.join("study.csv"),
+        all.into_inner().map_err(|e| e.into_error())?,
+    )?;
+    fs::create(
+        &out.join("study.md"),
         table(campaign, opts, rows, ref_samples, ref_steps),
     )?;
     plot(&out.join("study.png"), rows)?;

@@ -19,6 +19,7 @@ use crate::campaign::Campaign;
 use crate::hash::sha256_file;
 use crate::manifest;
 use crate::progress::Progress;
+use crate::store::fs;
 
 /// The training driver, shipped inside the binary so a run records exactly what trained it.
 pub const TRAIN_PY: &str = include_str!("../python/train.py");
@@ -127,15 +128,15 @@ pub fn fit(
         resumable_chunks(&tdir)? + 1
     } else {
         if tdir.exists() {
-            std::fs::remove_dir_all(&tdir)?;
+            fs::remove_dir_all(&tdir)?;
         }
         1
     };
-    std::fs::create_dir_all(&tdir)?;
+    fs::create_dir_all(&tdir)?;
     let script = tdir.join("train.py");
     // A resumed chunk runs the script the schedule started with, in case this binary differs.
     if !chunk.resume {
-        std::fs::write(&script, TRAIN_PY)?;
+        fs::write(&script, TRAIN_PY)?;
     } else if std::fs::read_to_string(&script)? != TRAIN_PY {
         bail!(
             "{} is not this soig's train.py: resume with the soig that started the schedule",
@@ -216,7 +217,7 @@ pub fn fit(
         format!("train-chunk-{chunk_no}.log")
     };
     let log_path = tdir.join(&log_name);
-    let log = std::fs::File::create(&log_path)?;
+    let log = fs::create_log(&log_path)?;
     progress.note(&format!(
         "soig train: {} {} (log: {})",
         python.display(),
@@ -265,7 +266,7 @@ pub fn fit(
         .map(PathBuf::from)
         .ok_or_else(|| anyhow::anyhow!("{} names no ONNX model", summary_path.display()))?;
     let model = tdir.join("model.onnx");
-    std::fs::copy(&onnx, &model).with_context(|| format!("copying {}", onnx.display()))?;
+    fs::copy(&onnx, &model)?;
     // The model is checked by loading it the way the detect stage will.
     crate::detect::yolo::YoloDetector::load(&model, Default::default())
         .with_context(|| format!("the exported model {} does not load", model.display()))?;

@@ -228,6 +228,23 @@ fn export_refuses_an_output_that_does_not_verify_and_a_folder_inside_it() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("lies inside the output"));
     assert!(!out.join("x").exists());
+    // A folder holding a user's file is not written into: the export goes whole into a new
+    // (or empty) folder, never over a file of the user's.
+    let mine = tmp.path().join("mine");
+    std::fs::create_dir_all(mine.join("coco")).unwrap();
+    std::fs::write(mine.join("coco/test.json"), "the user's").unwrap();
+    let o = soig(&[
+        "export",
+        out.to_str().unwrap(),
+        "--out",
+        mine.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("refusing to overwrite it"));
+    assert_eq!(
+        std::fs::read_to_string(mine.join("coco/test.json")).unwrap(),
+        "the user's"
+    );
     std::fs::write(out.join("labels/test/extra.txt"), "0 0.5 0.5 0.1 0.1\n").unwrap();
     let o = soig(&[
         "export",

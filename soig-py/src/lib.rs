@@ -472,7 +472,7 @@ fn detect_files<'py>(
 }
 
 /// Write a 2-D array as the frame file `soig detect` reads: float32 values as a FITS, uint8
-/// grey levels as a PNG.
+/// grey levels as a PNG; atomically (an old file at `path` is replaced whole or kept).
 #[pyfunction]
 fn write_frame(array: &Bound<'_, PyAny>, path: PathBuf) -> PyResult<()> {
     if let Ok(a) = array.extract::<PyReadonlyArray2<'_, u8>>() {
@@ -482,16 +482,24 @@ fn write_frame(array: &Bound<'_, PyAny>, path: PathBuf) -> PyResult<()> {
             height: h,
             pixels: a.as_array().iter().copied().collect(),
         };
-        return soig::enhance::write_png(&path, &g)
-            .map_err(|e| SoigError::new_err(format!("{}: {e}", path.display())));
+        return soig::store::fs::write(&path, soig::enhance::png_bytes(&g))
+            .map_err(|e| SoigError::new_err(format!("{e:#}")));
     }
     let a: PyReadonlyArray2<'_, f32> = array.extract().map_err(|_| {
         PyValueError::new_err("a frame is a 2-D numpy array of float32 values or uint8 grey levels")
     })?;
     let [h, w] = [a.shape()[0], a.shape()[1]];
     let v: Vec<f32> = a.as_array().iter().copied().collect();
-    soig::fits::write_image(&path, w, h, soig::fits::Pixels::F32(&v), &Vec::new())
-        .map_err(|e| SoigError::new_err(format!("{}: {e}", path.display())))
+    soig::store::fs::write_by(&path, |temp| {
+        Ok(soig::fits::write_image(
+            temp,
+            w,
+            h,
+            soig::fits::Pixels::F32(&v),
+            &Vec::new(),
+        )?)
+    })
+    .map_err(|e| SoigError::new_err(format!("{e:#}")))
 }
 
 #[pymodule]

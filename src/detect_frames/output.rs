@@ -11,6 +11,7 @@ use image::{Rgb, RgbImage};
 use super::{FrameResult, Options, Which};
 use crate::enhance::Gray8;
 use crate::manifest::Manifest;
+use crate::store::fs;
 
 /// Preview colours: streak boxes red, YOLO boxes yellow, streak ends green, and what lies
 /// outside the sky region (prescan, overscan) a dark blue.
@@ -41,9 +42,9 @@ fn detectors(opts: &Options) -> Vec<&'static str> {
 
 /// The folders of `dir` that frames' files go into.
 pub(super) fn prepare(dir: &Path, opts: &Options) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir.join("previews"))?;
+    fs::create_dir_all(&dir.join("previews"))?;
     for d in detectors(opts) {
-        std::fs::create_dir_all(dir.join("predictions").join(d))?;
+        fs::create_dir_all(&dir.join("predictions").join(d))?;
     }
     Ok(())
 }
@@ -58,16 +59,17 @@ pub(super) fn write_frame(
     let name = stem(Path::new(&f.file));
     for d in detectors(opts) {
         let path = dir.join("predictions").join(d).join(format!("{name}.txt"));
-        std::fs::write(path, yolo_txt(f, d))?;
+        fs::create(&path, yolo_txt(f, d))?;
     }
-    preview(f, enhanced).save(dir.join("previews").join(format!("{name}.png")))?;
+    let path = dir.join("previews").join(format!("{name}.png"));
+    fs::create(&path, crate::plot::rgb_png(&preview(f, enhanced))?)?;
     Ok(())
 }
 
 /// Every frame's rows and records, the settings, and the manifest; returns its digest.
 pub(super) fn finish(dir: &Path, frames: &[FrameResult], opts: &Options) -> anyhow::Result<String> {
     let ran = detectors(opts);
-    std::fs::write(dir.join("detections.csv"), csv(frames))?;
+    fs::create(&dir.join("detections.csv"), csv(frames))?;
     let mut settings = serde_json::json!({
         "command": "detect",
         "detectors": ran,
@@ -104,8 +106,8 @@ pub(super) fn finish(dir: &Path, frames: &[FrameResult], opts: &Options) -> anyh
         "settings": settings,
         "frames": frames,
     });
-    std::fs::write(
-        dir.join("detections.json"),
+    fs::create(
+        &dir.join("detections.json"),
         serde_json::to_string_pretty(&json)? + "\n",
     )?;
     let hash = crate::hash::hash_json(&settings);

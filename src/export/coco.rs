@@ -196,12 +196,11 @@ pub fn write(output: &Path, dest: &Path) -> anyhow::Result<Vec<PathBuf>> {
             output.display()
         );
     }
-    std::fs::create_dir_all(dest).with_context(|| format!("creating {}", dest.display()))?;
+    crate::store::fs::create_dir_all(dest)?;
     let mut written = Vec::new();
     let mut put = |name: String, json: String| -> anyhow::Result<()> {
         let path = dest.join(name);
-        std::fs::write(&path, json + "\n")
-            .with_context(|| format!("writing {}", path.display()))?;
+        crate::store::fs::create(&path, json + "\n")?;
         written.push(path);
         Ok(())
     };

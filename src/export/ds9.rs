@@ -134,10 +134,9 @@ pub fn write(output: &Path, dest: &Path) -> anyhow::Result<Vec<PathBuf>> {
     let mut put = |rel: String, body: String| -> anyhow::Result<()> {
         let path = dest.join(rel);
         if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent)
-                .with_context(|| format!("creating {}", parent.display()))?;
+            crate::store::fs::create_dir_all(parent)?;
         }
-        std::fs::write(&path, body).with_context(|| format!("writing {}", path.display()))?;
+        crate::store::fs::create(&path, body)?;
         written.push(path);
         Ok(())
     };

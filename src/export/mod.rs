@@ -118,7 +118,8 @@ pub fn write(output: &Path, dest: &Path, formats: Formats) -> anyhow::Result<Vec
 
 /// `soig export`: check that `output` is a soig output whose files match its manifest, then
 /// write its exports into `dest`, which must lie outside it (a file added to an output would
-/// make it fail `soig verify`).
+/// make it fail `soig verify`). `dest` is written whole or not at all, as a run's output, and
+/// only where no user's file is (it must not exist, or be empty).
 pub fn export_output(output: &Path, dest: &Path, formats: Formats) -> anyhow::Result<Vec<PathBuf>> {
     let (_, problems) = crate::manifest::verify(output)?;
     if let Some(first) = problems.first() {
@@ -135,5 +136,5 @@ pub fn export_output(output: &Path, dest: &Path, formats: Formats) -> anyhow::Re
             output.display()
         );
     }
-    write(output, dest, formats)
+    crate::output::write_replacing(dest, &[output], |dir| write(output, dir, formats))
 }

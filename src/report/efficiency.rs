@@ -370,9 +370,9 @@ pub fn half_recall(bins: &[Bin]) -> HalfRecall {
     }
 }
 
-/// The bins of every detector as CSV rows.
+/// The bins of every detector as CSV rows, written as new file `path`.
 pub fn write_csv(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
-    let mut w = csv::Writer::from_path(path)?;
+    let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
         "detector",
         "quantity",
@@ -401,8 +401,7 @@ pub fn write_csv(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
             }
         }
     }
-    w.flush()?;
-    Ok(())
+    crate::store::fs::create(path, w.into_inner().map_err(|e| e.into_error())?)
 }
 
 /// Recall (solid) and precision (dashed) of each detector against each quantity, one panel

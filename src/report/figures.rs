@@ -123,7 +123,8 @@ pub(super) fn previews(
         let top = (cy - side / 2.0).clamp(0.0, (h - side).max(0.0)) as u32;
         let s = side.min(w).min(h) as u32;
         let crop = image::imageops::crop_imm(&rgb, left, top, s, s).to_image();
-        crop.save(dir.join(format!("{}_{kind}_{}.png", run.name, img.stem)))?;
+        let path = dir.join(format!("{}_{kind}_{}.png", run.name, img.stem));
+        crate::store::fs::create(&path, crate::plot::rgb_png(&crop)?)?;
     }
     Ok(())
 }

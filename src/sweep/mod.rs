@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 pub use file::{Experiment, ExperimentFile};
 
 use crate::progress::Progress;
+use crate::store::fs;
 
 /// The result of `soig experiment`.
 pub struct Finished {
@@ -34,7 +35,7 @@ pub fn run(
     progress: &dyn Progress,
 ) -> anyhow::Result<Finished> {
     check_output(experiment, out)?;
-    std::fs::create_dir_all(out)?;
+    fs::create_dir_all(out)?;
     let outcomes = run::run_points(experiment, out, progress)?;
     let summary = summary::Summary::new(experiment, &outcomes);
     summary.write_csv(&out.join("summary.csv"))?;
@@ -66,12 +67,12 @@ pub fn run(
         md += &format!("\n![{p}](plots/{p})\n");
     }
     md += &format!("\ndigest {}\n", manifest.digest);
-    std::fs::write(out.join("summary.md"), md)?;
-    std::fs::write(
-        out.join(MANIFEST),
+    fs::write(&out.join("summary.md"), md)?;
+    fs::write(
+        &out.join(MANIFEST),
         serde_json::to_string_pretty(&manifest)? + "\n",
     )?;
-    std::fs::write(out.join("digest.txt"), format!("{}\n", manifest.digest))?;
+    fs::write(&out.join("digest.txt"), format!("{}\n", manifest.digest))?;
     Ok(Finished {
         out: out.to_path_buf(),
         digest: manifest.digest.clone(),

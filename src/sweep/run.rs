@@ -12,6 +12,7 @@ use super::file::{Experiment, Point, Setting};
 use crate::hash::hash_json;
 use crate::progress::Progress;
 use crate::report::{Efficiency, HalfRecall, Report};
+use crate::store::fs;
 
 /// What one point gave.
 #[derive(Debug, Serialize)]
@@ -47,7 +48,7 @@ pub fn run_points(
     progress: &dyn Progress,
 ) -> anyhow::Result<Vec<Outcome>> {
     let points_dir = out.join("points");
-    std::fs::create_dir_all(&points_dir)?;
+    fs::create_dir_all(&points_dir)?;
     let times_path = out.join(TIMES);
     let mut times: Times = std::fs::read_to_string(&times_path)
         .ok()
@@ -85,7 +86,7 @@ pub fn run_points(
         }
         outcomes.push(o);
     }
-    std::fs::write(&times_path, serde_json::to_string_pretty(&times)? + "\n")?;
+    fs::write(&times_path, serde_json::to_string_pretty(&times)? + "\n")?;
     Ok(outcomes)
 }
 

@@ -9,6 +9,7 @@ use plotters::prelude::*;
 
 use super::file::{Experiment, Figure};
 use super::run::Outcome;
+use crate::store;
 
 /// A point of the summary: the replicates of one set of parameter values.
 pub struct Row {
@@ -90,7 +91,7 @@ impl Summary {
     }
 
     pub fn write_csv(&self, path: &Path) -> anyhow::Result<()> {
-        let mut w = csv::Writer::from_path(path)?;
+        let mut w = csv::Writer::from_writer(Vec::new());
         let mut header: Vec<String> = self.fields.clone();
         header.push("replicates".into());
         for c in &self.columns {
@@ -112,8 +113,7 @@ impl Summary {
             }
             w.write_record(&rec)?;
         }
-        w.flush()?;
-        Ok(())
+        store::fs::write(path, w.into_inner().map_err(|e| e.into_error())?)
     }
 
     pub fn markdown(&self) -> String {
@@ -141,9 +141,9 @@ impl Summary {
     pub fn plots(&self, dir: &Path) -> anyhow::Result<Vec<String>> {
         // Plots of an earlier run of a different experiment must not linger.
         if dir.is_dir() {
-            std::fs::remove_dir_all(dir)?;
+            store::fs::remove_dir_all(dir)?;
         }
-        std::fs::create_dir_all(dir)?;
+        store::fs::create_dir_all(dir)?;
         let mut files = Vec::new();
         for (a, field) in self.fields.iter().enumerate() {
             let xs: Option<Vec<f64>> = self.rows.iter().map(|r| r.values[a].parse().ok()).collect();

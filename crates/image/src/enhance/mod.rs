@@ -4,8 +4,6 @@
 
 pub mod clahe;
 
-use std::io::Write;
-
 use image::ImageEncoder;
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 
@@ -289,11 +287,6 @@ pub fn png_bytes(img: &Gray8) -> Vec<u8> {
         )
         .expect("encoding to memory cannot fail");
     out
-}
-
-/// Write PNG bytes to a file.
-pub fn write_png(path: &std::path::Path, img: &Gray8) -> std::io::Result<()> {
-    std::fs::File::create(path)?.write_all(&png_bytes(img))
 }
 
 #[cfg(test)]

@@ -32,6 +32,7 @@ use std::sync::Mutex;
 
 use anyhow::{Context, bail};
 
+use super::fs;
 use crate::manifest::{MANIFEST, Manifest};
 
 /// Staging directories (with whether they are resumable) and locks (false) of this process,
@@ -87,8 +88,7 @@ fn write_staged<T>(
     let parent = target
         .parent()
         .context("an output directory needs a parent")?;
-    std::fs::create_dir_all(parent)
-        .with_context(|| format!("cannot create {}", parent.display()))?;
+    fs::create_dir_all(parent)?;
 
     let lock = Lock::take(parent, &name, output)?;
     restore_set_aside(parent, &name, &target, resume);
@@ -98,20 +98,15 @@ fn write_staged<T>(
     let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
     let resumed = take_stale_staging(parent, &name, resume)?;
     match resumed {
-        Some(old) if old != staging => std::fs::rename(&old, &staging).with_context(|| {
-            format!(
-                "cannot take over {} as {}",
-                old.display(),
-                staging.display()
-            )
-        })?,
+        Some(old) if old != staging => fs::rename(&old, &staging)
+            .with_context(|| format!("cannot take over {}", old.display()))?,
         _ => {}
     }
     register(&staging, resume.is_some());
     let result = match write(&staging) {
         Ok(value) => put_in_place(&staging, &target, output, &name).map(|()| value),
         Err(e) => {
-            let _ = std::fs::remove_dir_all(&staging);
+            let _ = fs::remove_dir_all(&staging);
             Err(e)
         }
     };
@@ -125,26 +120,22 @@ fn write_staged<T>(
 fn put_in_place(staging: &Path, target: &Path, output: &Path, name: &str) -> anyhow::Result<()> {
     if std::fs::symlink_metadata(target).is_err() {
         crate::journal::abort_if_testing("rename");
-        return std::fs::rename(staging, target)
-            .with_context(|| format!("cannot move {} to {}", staging.display(), output.display()));
+        return fs::rename(staging, target);
     }
     let aside = target.with_file_name(format!(".{name}.old-{}", std::process::id()));
-    std::fs::rename(target, &aside).with_context(|| {
+    fs::rename(target, &aside).with_context(|| {
         format!(
-            "cannot move the old {} aside to {} (nothing was replaced; the new output is left in {})",
+            "cannot move the old {} aside (nothing was replaced; the new output is left in {})",
             output.display(),
-            aside.display(),
             staging.display()
         )
     })?;
     crate::journal::abort_if_testing("rename");
-    if let Err(e) = std::fs::rename(staging, target) {
-        let restored = std::fs::rename(&aside, target).is_ok();
-        let _ = std::fs::remove_dir_all(staging);
+    if let Err(e) = fs::rename(staging, target) {
+        let restored = fs::rename(&aside, target).is_ok();
+        let _ = fs::remove_dir_all(staging);
         bail!(
-            "cannot move {} to {}: {e}; {}",
-            staging.display(),
-            output.display(),
+            "{e:#}; {}",
             if restored {
                 "the old output is back in place".to_string()
             } else {
@@ -152,8 +143,7 @@ fn put_in_place(staging: &Path, target: &Path, output: &Path, name: &str) -> any
             }
         );
     }
-    std::fs::remove_dir_all(&aside)
-        .with_context(|| format!("cannot remove the old output {}", aside.display()))
+    fs::remove_dir_all(&aside).context("cannot remove the old output")
 }
 
 /// An old output `.NAME.old-PID` left by a run killed while it replaced `target`: put back when
@@ -173,7 +163,7 @@ fn restore_set_aside(parent: &Path, name: &str, target: &Path, resume: Option<&R
             continue;
         }
         let message = if std::fs::symlink_metadata(target).is_err() {
-            match std::fs::rename(&path, target) {
+            match fs::rename(&path, target) {
                 Ok(()) => format!(
                     "put back the old output {} that a killed run had moved aside",
                     target.display()
@@ -181,7 +171,7 @@ fn restore_set_aside(parent: &Path, name: &str, target: &Path, resume: Option<&R
                 Err(_) => continue,
             }
         } else {
-            let _ = std::fs::remove_dir_all(&path);
+            let _ = fs::remove_dir_all(&path);
             format!(
                 "removed {}, an old output a killed run had already replaced",
                 path.display()
@@ -315,9 +305,9 @@ pub fn interrupt() -> Vec<PathBuf> {
                 kept.push(p);
             }
         } else if p.is_dir() {
-            let _ = std::fs::remove_dir_all(&p);
+            let _ = fs::remove_dir_all(&p);
         } else {
-            let _ = std::fs::remove_file(&p);
+            let _ = fs::remove_file(&p);
         }
     }
     kept
@@ -447,7 +437,7 @@ fn take_stale_staging(
     }
     let chosen = matching.into_iter().max_by_key(size);
     for p in stale.iter().filter(|p| Some(*p) != chosen.as_ref()) {
-        let _ = std::fs::remove_dir_all(p);
+        let _ = fs::remove_dir_all(p);
         if let Some(r) = resume {
             (r.note)(&format!(
                 "removed {}, left by a soig process that is gone, which this run cannot resume",
@@ -467,6 +457,7 @@ fn take_stale_staging(
 
 /// Open `path` for reading and writing, created if missing, refusing anything but a regular
 /// file (a FIFO would block, a link could point anywhere).
+#[allow(clippy::disallowed_methods)] // the store's lock file: opened with its own flags
 fn open_lock_file(path: &Path) -> std::io::Result<std::fs::File> {
     let f = std::fs::OpenOptions::new()
         .read(true)
@@ -560,7 +551,7 @@ impl Lock {
 impl Drop for Lock {
     fn drop(&mut self) {
         unregister(&self.path);
-        let _ = std::fs::remove_file(&self.path);
+        let _ = fs::remove_file(&self.path);
     }
 }
 

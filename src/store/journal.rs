@@ -30,6 +30,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use sha2::Digest;
 
+use super::fs;
 use crate::hash::sha256_file;
 use crate::manifest::{self, MANIFEST, Manifest};
 
@@ -177,15 +178,14 @@ impl Journal {
             .iter()
             .flat_map(|r| r.files.keys().map(String::as_str))
             .collect();
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        fs::create_dir_all(dir)?;
         let mut present =
             manifest::list_files(dir).with_context(|| format!("cannot list {}", dir.display()))?;
         present.push(MANIFEST.into());
         for rel in present.iter().filter(|rel| !keep.contains(rel.as_str())) {
             let path = dir.join(rel);
             if path.exists() {
-                std::fs::remove_file(&path)
-                    .with_context(|| format!("cannot remove {}", path.display()))?;
+                fs::remove_file(&path)?;
             }
         }
         let mut text = line(&Header {
@@ -194,15 +194,9 @@ impl Journal {
         for r in &kept {
             text += &line(r)?;
         }
-        let temp = dir.join(format!("{FILE}.new"));
-        write_synced(&temp, text.as_bytes())?;
         let path = dir.join(FILE);
-        std::fs::rename(&temp, &path)
-            .with_context(|| format!("cannot write {}", path.display()))?;
-        let file = std::fs::OpenOptions::new()
-            .append(true)
-            .open(&path)
-            .with_context(|| format!("cannot open {}", path.display()))?;
+        fs::write(&path, text)?;
+        let file = open_to_append(&path)?;
         Ok((
             Journal {
                 file: Mutex::new(file),
@@ -235,8 +229,7 @@ pub fn hash_files(dir: &Path, files: &[String]) -> anyhow::Result<BTreeMap<Strin
 
 /// Remove the journal of `dir` (the last step before the staging directory moves into place).
 pub fn remove(dir: &Path) -> anyhow::Result<()> {
-    let path = dir.join(FILE);
-    std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))
+    fs::remove_file(&dir.join(FILE))
 }
 
 /// A journal line: the JSON of `value`, a space and the JSON's sha256.
@@ -336,13 +329,13 @@ pub fn safe_relative(rel: &str) -> bool {
             .all(|p| !p.is_empty() && p != "." && p != "..")
 }
 
-/// Write `bytes` to `path` and sync them to disk.
-fn write_synced(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let mut f =
-        std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
-    f.write_all(bytes)
-        .and_then(|()| f.sync_all())
-        .with_context(|| format!("cannot write {}", path.display()))
+/// Open the journal `path` to append its lines.
+#[allow(clippy::disallowed_methods)] // the store's journal: appended to, line by line
+fn open_to_append(path: &Path) -> anyhow::Result<std::fs::File> {
+    std::fs::OpenOptions::new()
+        .append(true)
+        .open(path)
+        .with_context(|| format!("cannot open {}", path.display()))
 }
 
 /// Test hook, for the tests of resumption only: when the environment variable

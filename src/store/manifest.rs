@@ -70,10 +70,9 @@ fn is_ultralytics_cache(rel: &str) -> bool {
 /// All files under `dir` except the manifest and a run's journal (a staging directory's), as
 /// sorted relative paths.
 pub fn list_files(dir: &Path) -> std::io::Result<Vec<String>> {
-    let journal_copy = format!("{JOURNAL}.new");
     Ok(list_all_files(dir)?
         .into_iter()
-        .filter(|rel| rel != JOURNAL && *rel != journal_copy)
+        .filter(|rel| rel != JOURNAL)
         .collect())
 }
 
@@ -174,9 +173,10 @@ impl Manifest {
         self.digest = digest_of(self);
     }
 
-    pub fn write(&self, dir: &Path) -> std::io::Result<()> {
+    /// Write the manifest into `dir`, atomically (an output trained in place keeps a whole one).
+    pub fn write(&self, dir: &Path) -> anyhow::Result<()> {
         let text = serde_json::to_string_pretty(self).expect("manifest serialises") + "\n";
-        std::fs::write(dir.join(MANIFEST), text)
+        super::fs::write(&dir.join(MANIFEST), text)
     }
 
     pub fn read(dir: &Path) -> Result<Manifest, Error> {
