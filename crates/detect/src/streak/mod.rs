@@ -233,8 +233,8 @@ pub fn detect_streaks_among_stars(
     union(first, second, trail, &p)
 }
 
-/// The first pass alone (the trails known by their direction only): the candidates and the segments dropped on the way,
-/// with why.
+/// The first pass alone (the trails known by their direction only): the candidates and the
+/// segments dropped on the way, with why.
 fn detect(
     pixels: &[u8],
     width: usize,

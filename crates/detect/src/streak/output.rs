@@ -7,6 +7,9 @@ use super::segment::Seg;
 use super::{Candidate, Detection};
 use soig_image::geometry::BoxPx;
 
+/// The reference image area of the confidence: 1024 x 1024 pixels.
+const MEGAPIXEL: f64 = 1_048_576.0;
+
 /// Confidence in [0, 1): the probability that noise alone gives no candidate as significant
 /// in an image of `area_px` pixels, under a Gumbel model of the most significant noise candidate
 /// (the maximum of many nearly Gaussian tests has a Gumbel tail): noise candidates of SNR >= s
@@ -22,9 +25,6 @@ pub(super) fn confidence(snr: f64, elongation: f64, area_px: f64, p: &Sanitized)
     let shape = 1.0 - (-(elongation - 1.0).max(0.0) / p.elongation_scale).exp();
     ((-expected).exp() * shape).clamp(0.0, 1.0)
 }
-
-/// The reference image area of the confidence: 1024 x 1024 pixels.
-const MEGAPIXEL: f64 = 1_048_576.0;
 
 /// The candidate of the kept segment `s` of score `score`, boxed.
 pub(super) fn candidate(maps: &Maps, s: &Seg, score: f64) -> Candidate {

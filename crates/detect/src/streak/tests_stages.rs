@@ -164,7 +164,10 @@ fn local_seeds_find_a_line() {
             .iter()
             .any(|(c, _)| c.theta.abs() < 0.1 && (c.cy - 64.0).abs() < 1.0 && c.half_len > 20.0),
         "{:?}",
-        seeds.iter().map(|(c, _)| (c.cx, c.cy, c.theta)).collect::<Vec<_>>()
+        seeds
+            .iter()
+            .map(|(c, _)| (c.cx, c.cy, c.theta))
+            .collect::<Vec<_>>()
     );
 }
 
@@ -175,7 +178,10 @@ fn fragments_refine_onto_the_streak() {
     let world = World::new(streak_map(3.0, 64.0, 30, 90));
     let s = refined(&world.maps()).expect("a level");
     assert!(s.theta.abs() < 0.01 && (s.cy - 64.0).abs() < 0.3, "{s:?}");
-    assert!((s.length - 61.0).abs() < 4.0 && (s.cx - 60.0).abs() < 2.0, "{s:?}");
+    assert!(
+        (s.length - 61.0).abs() < 4.0 && (s.cx - 60.0).abs() < 2.0,
+        "{s:?}"
+    );
     assert!(s.snr > 6.5 && s.elongation > 2.5, "{s:?}");
 
     let empty = World::new(vec![0.0; W * H]);
@@ -205,7 +211,11 @@ fn merge_joins_collinear_pieces() {
         elongation: 5.0,
         contrast: true,
     };
-    let merged = merge(&world.maps(), vec![piece(45.0, 30.0), piece(78.0, 24.0)], &no_star);
+    let merged = merge(
+        &world.maps(),
+        vec![piece(45.0, 30.0), piece(78.0, 24.0)],
+        &no_star,
+    );
     assert_eq!(merged.len(), 1, "{merged:?}");
     assert!(merged[0].length > 55.0, "{merged:?}");
 }
@@ -266,7 +276,10 @@ fn reach_follows_the_streak_and_the_box_holds_it() {
 
     let c = candidate(&world.maps(), &followed, 0.75);
     let d = c.detection;
-    assert!(d.x1 <= 21.0 && d.x2 >= 104.0 && d.y1 < 64.0 && d.y2 > 65.0, "{d:?}");
+    assert!(
+        d.x1 <= 21.0 && d.x2 >= 104.0 && d.y1 < 64.0 && d.y2 > 65.0,
+        "{d:?}"
+    );
     assert_eq!(d.score, 0.75);
 }
 
