@@ -133,34 +133,14 @@ mod trails;
 mod union;
 mod unit_noise;
 
-use super::Detection;
 pub use explain::{Dropped, Reason, Seeds};
+pub use output::Candidate;
 use params::Sanitized;
 pub use params::StreakParams;
 use pass::pass;
 pub use sky::StarTrail;
 use union::union;
 use unit_noise::unit_noise_map;
-
-/// One detected streak.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Candidate {
-    /// Box (pixel-edge coordinates), score in [0, 1) and class.
-    pub detection: Detection,
-    /// The half-level ends of the streak, in the box's pixel-edge coordinates (pixel `i` spans
-    /// `[i, i + 1]`, so a pixel centre is at `i + 0.5`), not clipped to the image.
-    pub ends: [[f64; 2]; 2],
-    /// Length between the half-level ends, pixels.
-    pub length_px: f64,
-    /// Axis orientation, degrees from +x towards +y (image rows down), in [0, 180).
-    pub orientation_deg: f64,
-    /// sqrt(l1 / l2) of the z-weighted second moments around the segment.
-    pub elongation: f64,
-    /// Background-subtracted grey levels summed within 3 PSF sigmas of the segment.
-    pub flux: f64,
-    /// Matched-filter signal-to-noise ratio of the whole streak.
-    pub snr: f64,
-}
 
 /// Detect streaks in an 8-bit image (`pixels` row-major, `width * height` values).
 /// `star_trail_angle_deg`: in survey images the known direction of star trails (from the

@@ -1,10 +1,10 @@
-//! Step 7, output: the score of a candidate and its box in the generator's label convention.
+//! Step 7, output: the candidate, its score and its box in the generator's label convention.
 
 use super::fit::fitted_box;
 use super::maps::Maps;
 use super::params::Sanitized;
 use super::segment::Seg;
-use super::{Candidate, Detection};
+use crate::Detection;
 use soig_image::geometry::BoxPx;
 
 /// The reference image area of the confidence: 1024 x 1024 pixels.
@@ -24,6 +24,26 @@ pub(super) fn confidence(snr: f64, elongation: f64, area_px: f64, p: &Sanitized)
         * std::f64::consts::LN_2;
     let shape = 1.0 - (-(elongation - 1.0).max(0.0) / p.elongation_scale).exp();
     ((-expected).exp() * shape).clamp(0.0, 1.0)
+}
+
+/// One detected streak.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Candidate {
+    /// Box (pixel-edge coordinates), score in [0, 1) and class.
+    pub detection: Detection,
+    /// The half-level ends of the streak, in the box's pixel-edge coordinates (pixel `i` spans
+    /// `[i, i + 1]`, so a pixel centre is at `i + 0.5`), not clipped to the image.
+    pub ends: [[f64; 2]; 2],
+    /// Length between the half-level ends, pixels.
+    pub length_px: f64,
+    /// Axis orientation, degrees from +x towards +y (image rows down), in [0, 180).
+    pub orientation_deg: f64,
+    /// sqrt(l1 / l2) of the z-weighted second moments around the segment.
+    pub elongation: f64,
+    /// Background-subtracted grey levels summed within 3 PSF sigmas of the segment.
+    pub flux: f64,
+    /// Matched-filter signal-to-noise ratio of the whole streak.
+    pub snr: f64,
 }
 
 /// The candidate of the kept segment `s` of score `score`, boxed.

@@ -2,7 +2,6 @@
 //! subtracts everything along the trails' direction (a survey image) and drops what lies
 //! along it; the star-aware pass subtracts the predicted trails and drops what they explain.
 
-use super::Candidate;
 use super::accept::accept;
 use super::explain::{Dropped, Seeds};
 use super::explain_away::explain_away;
@@ -10,7 +9,7 @@ use super::flatten::flatten;
 use super::fragments::fragments;
 use super::maps::Maps;
 use super::merge::merge;
-use super::output::candidate;
+use super::output::{Candidate, candidate};
 use super::params::Sanitized;
 use super::radon::long_line_components;
 use super::reach::reach;

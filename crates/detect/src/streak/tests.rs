@@ -3,6 +3,7 @@
 
 use super::segment::angle_diff_deg;
 use super::*;
+use crate::Detection;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};

@@ -1,6 +1,7 @@
 //! One contract test per stage of a pass, each on a small synthetic map: what the stage
 //! promises, on input where the answer is known.
 
+use super::Candidate;
 use super::accept::accept;
 use super::explain::{Reason, Seeds};
 use super::explain_away::explain_away;
@@ -17,7 +18,7 @@ use super::seeds::{line_noise, local_seeds};
 use super::segment::Seg;
 use super::star_test::StarTest;
 use super::unit_noise::unit_noise_map;
-use super::{Candidate, Detection};
+use crate::Detection;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};

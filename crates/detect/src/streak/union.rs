@@ -3,7 +3,7 @@
 //! streaks the first missed, or a box of the same streak that scores higher and is as long.
 //! Then one streak keeps one box, the longest.
 
-use super::Candidate;
+use super::output::Candidate;
 use super::params::Sanitized;
 use super::segment::{angle_diff_deg, point_segment_distance};
 
