@@ -145,42 +145,7 @@ pub fn ultralytics_with(images: &[ImageEval], version: UltralyticsVersion) -> Ul
     let n_truth: usize = images.iter().map(|im| im.truth.len()).sum();
     let n_detections: usize = images.iter().map(|im| im.detections.len()).sum();
 
-    // Per-detection statistics in validator order (image order, NMS order within an image).
-    let mut tp: Vec<[bool; 10]> = Vec::new();
-    let mut conf: Vec<f32> = Vec::new();
-    let mut pred_cls: Vec<u32> = Vec::new();
-    let mut target_cls: Vec<u32> = Vec::new();
-    for im in images {
-        im.check();
-        target_cls.extend_from_slice(&im.truth_class);
-        let mut dets: Vec<(f32, &Detection)> =
-            im.detections.iter().map(|d| (d.score as f32, d)).collect();
-        dets.sort_by(|a, b| cmp_desc(a.0 as f64, b.0 as f64));
-        let correct = if im.truth.is_empty() || dets.is_empty() {
-            vec![[false; 10]; dets.len()]
-        } else {
-            let iou: Vec<Vec<f32>> = im
-                .truth
-                .iter()
-                .zip(&im.truth_class)
-                .map(|(t, &tc)| {
-                    dets.iter()
-                        .map(|(_, d)| {
-                            if d.class == tc {
-                                ultra_box_iou(t, &det_box(d))
-                            } else {
-                                0.0
-                            }
-                        })
-                        .collect()
-                })
-                .collect();
-            ultra_match(&iou, dets.len(), version)
-        };
-        tp.extend(correct);
-        conf.extend(dets.iter().map(|(c, _)| *c));
-        pred_cls.extend(dets.iter().map(|(_, d)| d.class));
-    }
+    let (tp, conf, pred_cls, target_cls) = detection_stats(images, version);
 
     let zero = |px: Vec<f64>| UltralyticsMetrics {
         precision: 0.0,
@@ -306,6 +271,50 @@ pub fn ultralytics_with(images: &[ImageEval], version: UltralyticsVersion) -> Ul
         n_truth,
         n_detections,
     }
+}
+
+/// Per-detection statistics in validator order (image order, NMS order within an image):
+/// each detection's matches at the 10 IoU thresholds, its confidence and class, and the
+/// truth classes.
+type Stats = (Vec<[bool; 10]>, Vec<f32>, Vec<u32>, Vec<u32>);
+
+fn detection_stats(images: &[ImageEval], version: UltralyticsVersion) -> Stats {
+    let mut tp: Vec<[bool; 10]> = Vec::new();
+    let mut conf: Vec<f32> = Vec::new();
+    let mut pred_cls: Vec<u32> = Vec::new();
+    let mut target_cls: Vec<u32> = Vec::new();
+    for im in images {
+        im.check();
+        target_cls.extend_from_slice(&im.truth_class);
+        let mut dets: Vec<(f32, &Detection)> =
+            im.detections.iter().map(|d| (d.score as f32, d)).collect();
+        dets.sort_by(|a, b| cmp_desc(a.0 as f64, b.0 as f64));
+        let correct = if im.truth.is_empty() || dets.is_empty() {
+            vec![[false; 10]; dets.len()]
+        } else {
+            let iou: Vec<Vec<f32>> = im
+                .truth
+                .iter()
+                .zip(&im.truth_class)
+                .map(|(t, &tc)| {
+                    dets.iter()
+                        .map(|(_, d)| {
+                            if d.class == tc {
+                                ultra_box_iou(t, &det_box(d))
+                            } else {
+                                0.0
+                            }
+                        })
+                        .collect()
+                })
+                .collect();
+            ultra_match(&iou, dets.len(), version)
+        };
+        tp.extend(correct);
+        conf.extend(dets.iter().map(|(c, _)| *c));
+        pred_cls.extend(dets.iter().map(|(_, d)| d.class));
+    }
+    (tp, conf, pred_cls, target_cls)
 }
 
 /// Ultralytics `compute_ap`: returns `(ap, mpre, mrec)`.

@@ -1,7 +1,7 @@
 //! Step 1, background and noise: sigma-clipped histogram median and MAD-sigma per mesh cell,
 //! the mesh 3x3 median filtered, then interpolated bilinearly between cell centres.
 
-use super::Sanitized;
+use super::params::Sanitized;
 use super::stats::{Hist, median_of};
 
 /// Sigma-clipped median and MAD-sigma of a cell histogram.

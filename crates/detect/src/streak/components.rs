@@ -2,7 +2,7 @@
 //! threshold with compatible orientations, kept by size and peak, with their centroid, axis and
 //! extent from the second moments.
 
-use super::Sanitized;
+use super::params::Sanitized;
 
 /// A kept component: centroid, axis orientation (rad) and half extent along it.
 pub(super) struct Component {

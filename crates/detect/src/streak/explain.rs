@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use super::refine::Seg;
+use super::segment::Seg;
 
 /// The stage that produced a segment: step 3's local line filters or step 3b's long lines.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]

@@ -10,7 +10,8 @@
 //! the stretch; along the axis the flux falls to half where the exposure (the segment) ends. So
 //! each end is where the centre-line profile crosses the level measured beside the line.
 
-use super::refine::{Ctx, Seg};
+use super::maps::Maps;
+use super::segment::Seg;
 use soig_image::geometry::{BoxPx, LABEL_SHARE};
 use soig_image::psf::DebrisFlux;
 
@@ -40,226 +41,224 @@ struct Fit {
     t1: f64,
 }
 
-impl Ctx<'_> {
-    /// The label box of the fitted streak in pixel-edge coordinates (pixel `i` spans
-    /// `[i, i + 1]`), clipped to the image; None when no fit is possible (the caller keeps the
-    /// padded box).
-    pub(super) fn fitted_box(&self, s: &Seg) -> Option<BoxPx> {
-        let fit = self.fit(s)?;
-        let psf = self.p.psf_sigma;
-        let (ux, uy) = s.dir();
-        let (nx, ny) = (-uy, ux);
-        // Samples every quarter pixel from end to end (the renderer's nodes are closer, but
-        // a quarter pixel moves no 99 % box by a measurable amount).
-        let n = ((fit.t1 - fit.t0) / 0.25).ceil().max(1.0) as usize;
-        let dt = (fit.t1 - fit.t0) / n as f64;
-        let samples: Vec<(f64, f64, f64)> = (0..n)
-            .map(|k| {
-                let t = fit.t0 + (k as f64 + 0.5) * dt;
-                let (off, bright) = fit.at(t);
-                let (x, y) = (s.cx + t * ux + off * nx, s.cy + t * uy + off * ny);
-                (bright * dt, x, y)
-            })
-            .collect();
-        let b = DebrisFlux::of_samples(&samples, psf, self.w, self.h).label_box(LABEL_SHARE)?;
-        let (w, h) = (self.w as f64, self.h as f64);
-        Some(BoxPx {
-            x_min: (b.x_min + 0.5).clamp(0.0, w),
-            y_min: (b.y_min + 0.5).clamp(0.0, h),
-            x_max: (b.x_max + 0.5).clamp(0.0, w),
-            y_max: (b.y_max + 0.5).clamp(0.0, h),
+/// The label box of the fitted streak in pixel-edge coordinates (pixel `i` spans
+/// `[i, i + 1]`), clipped to the image; None when no fit is possible (the caller keeps the
+/// padded box).
+pub(super) fn fitted_box(maps: &Maps, s: &Seg) -> Option<BoxPx> {
+    let fit = fit(maps, s)?;
+    let psf = maps.p.psf_sigma;
+    let (ux, uy) = s.dir();
+    let (nx, ny) = (-uy, ux);
+    // Samples every quarter pixel from end to end (the renderer's nodes are closer, but
+    // a quarter pixel moves no 99 % box by a measurable amount).
+    let n = ((fit.t1 - fit.t0) / 0.25).ceil().max(1.0) as usize;
+    let dt = (fit.t1 - fit.t0) / n as f64;
+    let samples: Vec<(f64, f64, f64)> = (0..n)
+        .map(|k| {
+            let t = fit.t0 + (k as f64 + 0.5) * dt;
+            let (off, bright) = fit.at(t);
+            let (x, y) = (s.cx + t * ux + off * nx, s.cy + t * uy + off * ny);
+            (bright * dt, x, y)
         })
-    }
+        .collect();
+    let b = DebrisFlux::of_samples(&samples, psf, maps.w, maps.h).label_box(LABEL_SHARE)?;
+    let (w, h) = (maps.w as f64, maps.h as f64);
+    Some(BoxPx {
+        x_min: (b.x_min + 0.5).clamp(0.0, w),
+        y_min: (b.y_min + 0.5).clamp(0.0, h),
+        x_max: (b.x_max + 0.5).clamp(0.0, w),
+        y_max: (b.y_max + 0.5).clamp(0.0, h),
+    })
+}
 
-    /// The smoothed map's cross-section sigma: the PSF smoothed by the detector's Gaussian
-    /// of the same width.
-    fn z_sigma(&self) -> f64 {
-        std::f64::consts::SQRT_2 * self.p.psf_sigma
-    }
+/// The smoothed map's cross-section sigma: the PSF smoothed by the detector's Gaussian
+/// of the same width.
+fn z_sigma(maps: &Maps) -> f64 {
+    std::f64::consts::SQRT_2 * maps.p.psf_sigma
+}
 
-    /// Two passes: pieces and ends on the refined segment, then pieces again between the ends
-    /// found and the ends again (a refined segment can reach 20 px beyond a bright streak's
-    /// end, and pieces there hold no streak).
-    fn fit(&self, s: &Seg) -> Option<Fit> {
-        let (ux, uy) = s.dir();
-        let (lo, hi) = self.t_range(s.cx, s.cy, ux, uy);
-        if lo > hi {
+/// Two passes: pieces and ends on the refined segment, then pieces again between the ends
+/// found and the ends again (a refined segment can reach 20 px beyond a bright streak's
+/// end, and pieces there hold no streak).
+fn fit(maps: &Maps, s: &Seg) -> Option<Fit> {
+    let (ux, uy) = s.dir();
+    let (lo, hi) = maps.t_range(s.cx, s.cy, ux, uy);
+    if lo > hi {
+        return None;
+    }
+    let half = 0.5 * s.length;
+    let mut fit = Fit {
+        pieces: Vec::new(),
+        t0: -half,
+        t1: half,
+    };
+    for _ in 0..2 {
+        fit.pieces = pieces(maps, s, fit.t0.max(lo), fit.t1.min(hi));
+        if fit.pieces.is_empty() {
             return None;
         }
-        let half = 0.5 * s.length;
-        let mut fit = Fit {
-            pieces: Vec::new(),
-            t0: -half,
-            t1: half,
-        };
-        for _ in 0..2 {
-            fit.pieces = self.pieces(s, fit.t0.max(lo), fit.t1.min(hi));
-            if fit.pieces.is_empty() {
-                return None;
-            }
-            let t1 = self.end(s, &fit, 1.0, (lo, hi));
-            let t0 = -self.end(s, &fit, -1.0, (lo, hi));
-            (fit.t0, fit.t1) = (t0, t1);
-            if fit.t1 <= fit.t0 {
-                return None;
-            }
+        let t1 = end(maps, s, &fit, 1.0, (lo, hi));
+        let t0 = -end(maps, s, &fit, -1.0, (lo, hi));
+        (fit.t0, fit.t1) = (t0, t1);
+        if fit.t1 <= fit.t0 {
+            return None;
         }
-        Some(fit)
     }
+    Some(fit)
+}
 
-    /// Centre line and brightness, piece by piece over [ta, tb] along the axis: lateral
-    /// offset (centroid of the mean cross-section of z) and brightness (z summed across).
-    /// A piece too faint for a centroid, or far fainter than the streak (beyond its end, or
-    /// a masked star on it), takes its neighbours' offset.
-    fn pieces(&self, s: &Seg, ta: f64, tb: f64) -> Vec<(f64, f64, f64)> {
-        let (ux, uy) = s.dir();
-        let (nx, ny) = (-uy, ux);
-        let sz = self.z_sigma();
-        let at = |t: f64, v: f64| self.z_at(s.cx + t * ux + v * nx, s.cy + t * uy + v * ny);
-        let length = tb - ta;
-        if length <= 0.0 {
-            return Vec::new();
-        }
-        // At least three pieces where they can be 6 px long: a short streak bends with the
-        // jitter too, and one straight piece boxes it a pixel off.
-        let n_pieces = ((length / PIECE_PX).floor() as usize)
-            .max(((length / 6.0).floor() as usize).min(3))
-            .max(1);
-        let piece = length / n_pieces as f64;
-        let reach = (3.0 * sz).ceil() as i64;
-        let offs: Vec<f64> = (-2 * reach..=2 * reach).map(|i| i as f64 * 0.5).collect();
-        let mut pieces = Vec::with_capacity(n_pieces);
-        for k in 0..n_pieces {
-            let start = ta + k as f64 * piece;
-            let ts: Vec<f64> = (0..piece.round().max(1.0) as usize)
-                .map(|i| start + i as f64 + 0.5)
-                .collect();
-            let prof: Vec<f64> = offs
-                .iter()
-                .map(|&v| ts.iter().map(|&t| at(t, v)).sum::<f64>() / ts.len() as f64)
-                .collect();
-            let imax = (0..prof.len())
-                .max_by(|&a, &b| prof[a].total_cmp(&prof[b]))
-                .unwrap_or(0);
-            let v0 = offs[imax];
-            // Centroid of the positive part within 1.5 sigma of the peak.
-            let (mut sw, mut sv) = (0.0, 0.0);
-            for (&v, &p) in offs.iter().zip(&prof) {
-                if (v - v0).abs() <= 1.5 * sz && p > 0.0 {
-                    sw += p;
-                    sv += p * v;
-                }
-            }
-            // The noise sd of a piece's mean: z has unit noise, correlated over about
-            // 2 sqrt(pi) sigma along the axis.
-            let sd = (2.0 * std::f64::consts::PI.sqrt() * sz / ts.len() as f64)
-                .sqrt()
-                .min(1.0);
-            let off = if prof[imax] > 3.0 * sd && sw > 0.0 {
-                sv / sw
-            } else {
-                f64::NAN
-            };
-            // Summed within 2 sigma of the centre line (of the axis where none is measured):
-            // the refined axis can be tilted by a degree or two.
-            let centre = if off.is_finite() { off } else { 0.0 };
-            let bright: f64 = offs
-                .iter()
-                .zip(&prof)
-                .filter(|(v, _)| (*v - centre).abs() <= 2.0 * sz)
-                .map(|(_, &p)| 0.5 * p)
-                .sum();
-            pieces.push((start + 0.5 * piece, off, bright));
-        }
-        let mut bright: Vec<f64> = pieces.iter().map(|p| p.2).collect();
-        let med = super::stats::median_of(&mut bright).max(1e-6);
-        for p in &mut pieces {
-            if p.2 < 0.3 * med {
-                p.1 = f64::NAN;
-            }
-            // Kept positive and bounded: a dip is not an end, a star on the line no peak.
-            p.2 = p.2.clamp(0.1 * med, 10.0 * med);
-        }
-        // Offsets missing: the nearest measured one (none measured: the refined axis).
-        let known: Vec<(f64, f64)> = pieces
-            .iter()
-            .filter(|p| p.1.is_finite())
-            .map(|p| (p.0, p.1))
+/// Centre line and brightness, piece by piece over [ta, tb] along the axis: lateral
+/// offset (centroid of the mean cross-section of z) and brightness (z summed across).
+/// A piece too faint for a centroid, or far fainter than the streak (beyond its end, or
+/// a masked star on it), takes its neighbours' offset.
+fn pieces(maps: &Maps, s: &Seg, ta: f64, tb: f64) -> Vec<(f64, f64, f64)> {
+    let (ux, uy) = s.dir();
+    let (nx, ny) = (-uy, ux);
+    let sz = z_sigma(maps);
+    let at = |t: f64, v: f64| maps.z_at(s.cx + t * ux + v * nx, s.cy + t * uy + v * ny);
+    let length = tb - ta;
+    if length <= 0.0 {
+        return Vec::new();
+    }
+    // At least three pieces where they can be 6 px long: a short streak bends with the
+    // jitter too, and one straight piece boxes it a pixel off.
+    let n_pieces = ((length / PIECE_PX).floor() as usize)
+        .max(((length / 6.0).floor() as usize).min(3))
+        .max(1);
+    let piece = length / n_pieces as f64;
+    let reach = (3.0 * sz).ceil() as i64;
+    let offs: Vec<f64> = (-2 * reach..=2 * reach).map(|i| i as f64 * 0.5).collect();
+    let mut pieces = Vec::with_capacity(n_pieces);
+    for k in 0..n_pieces {
+        let start = ta + k as f64 * piece;
+        let ts: Vec<f64> = (0..piece.round().max(1.0) as usize)
+            .map(|i| start + i as f64 + 0.5)
             .collect();
-        for p in &mut pieces {
-            if !p.1.is_finite() {
-                p.1 = known
-                    .iter()
-                    .min_by(|a, b| (a.0 - p.0).abs().total_cmp(&(b.0 - p.0).abs()))
-                    .map_or(0.0, |k| k.1);
+        let prof: Vec<f64> = offs
+            .iter()
+            .map(|&v| ts.iter().map(|&t| at(t, v)).sum::<f64>() / ts.len() as f64)
+            .collect();
+        let imax = (0..prof.len())
+            .max_by(|&a, &b| prof[a].total_cmp(&prof[b]))
+            .unwrap_or(0);
+        let v0 = offs[imax];
+        // Centroid of the positive part within 1.5 sigma of the peak.
+        let (mut sw, mut sv) = (0.0, 0.0);
+        for (&v, &p) in offs.iter().zip(&prof) {
+            if (v - v0).abs() <= 1.5 * sz && p > 0.0 {
+                sw += p;
+                sv += p * v;
             }
         }
-        pieces
-    }
-
-    /// The end of the streak on the side `sign` (+1: towards +t) as a distance from the
-    /// centre along `sign`: where the centre-line profile crosses the level seen `HALF_WIDTH`
-    /// sigmas beside the line near that end (see the module docs), looked for around the
-    /// current end (`fit`). An end not reached inside the image (`lo`..`hi` along the axis)
-    /// lies beyond it: the streak leaves the frame.
-    fn end(&self, s: &Seg, fit: &Fit, sign: f64, (lo, hi): (f64, f64)) -> f64 {
-        let (ux, uy) = s.dir();
-        let (nx, ny) = (-uy, ux);
-        let sz = self.z_sigma();
-        let at = |t: f64, v: f64| {
-            let (off, _) = fit.at(t);
-            self.z_at(
-                s.cx + t * ux + (v + off) * nx,
-                s.cy + t * uy + (v + off) * ny,
-            )
-        };
-        // Distances from the centre along `sign`: this end, the other end, the border.
-        let (near, far) = if sign > 0.0 {
-            (fit.t1, -fit.t0)
+        // The noise sd of a piece's mean: z has unit noise, correlated over about
+        // 2 sqrt(pi) sigma along the axis.
+        let sd = (2.0 * std::f64::consts::PI.sqrt() * sz / ts.len() as f64)
+            .sqrt()
+            .min(1.0);
+        let off = if prof[imax] > 3.0 * sd && sw > 0.0 {
+            sv / sw
         } else {
-            (-fit.t0, fit.t1)
+            f64::NAN
         };
-        let border = if sign > 0.0 { hi } else { -lo };
-        // The level beside the line, over the stretch inside this end.
-        let margin = (3.0 * sz).min(0.25 * (near + far));
-        let inner_b = (near - margin).min(border);
-        let inner_a = (inner_b - SEARCH_IN_PX).max(margin - far);
-        let vh = HALF_WIDTH * sz;
-        let (mut level, mut count) = (0.0, 0.0);
-        let mut d = inner_a;
-        while d <= inner_b {
-            let t = sign * d;
-            if t >= lo && t <= hi {
-                level += 0.5 * (at(t, vh) + at(t, -vh));
-                count += 1.0;
-            }
-            d += 1.0;
-        }
-        if count == 0.0 || level <= 0.0 {
-            return near;
-        }
-        let level = level / count;
-        // Change point: the distance maximising the cumulative excess of the profile over
-        // the level, outwards from inside the streak (robust to noise and to dips).
-        let start = (near - SEARCH_IN_PX).max(0.5 * (near - far)).min(border);
-        let stop = (near + SEARCH_OUT_PX).min(border);
-        let (mut acc, mut best, mut best_d) = (0.0, 0.0, start);
-        let (mut d, mut last) = (start, start);
-        while d <= stop {
-            acc += (at(sign * d, 0.0) - level).min(level) * STEP_PX;
-            if acc > best {
-                best = acc;
-                best_d = d + 0.5 * STEP_PX;
-            }
-            last = d;
-            d += STEP_PX;
-        }
-        // Still above the level at the image's border: the streak goes on beyond it.
-        if best_d >= last && last >= border - STEP_PX {
-            return border + 5.0 * self.p.psf_sigma;
-        }
-        best_d
+        // Summed within 2 sigma of the centre line (of the axis where none is measured):
+        // the refined axis can be tilted by a degree or two.
+        let centre = if off.is_finite() { off } else { 0.0 };
+        let bright: f64 = offs
+            .iter()
+            .zip(&prof)
+            .filter(|(v, _)| (*v - centre).abs() <= 2.0 * sz)
+            .map(|(_, &p)| 0.5 * p)
+            .sum();
+        pieces.push((start + 0.5 * piece, off, bright));
     }
+    let mut bright: Vec<f64> = pieces.iter().map(|p| p.2).collect();
+    let med = super::stats::median_of(&mut bright).max(1e-6);
+    for p in &mut pieces {
+        if p.2 < 0.3 * med {
+            p.1 = f64::NAN;
+        }
+        // Kept positive and bounded: a dip is not an end, a star on the line no peak.
+        p.2 = p.2.clamp(0.1 * med, 10.0 * med);
+    }
+    // Offsets missing: the nearest measured one (none measured: the refined axis).
+    let known: Vec<(f64, f64)> = pieces
+        .iter()
+        .filter(|p| p.1.is_finite())
+        .map(|p| (p.0, p.1))
+        .collect();
+    for p in &mut pieces {
+        if !p.1.is_finite() {
+            p.1 = known
+                .iter()
+                .min_by(|a, b| (a.0 - p.0).abs().total_cmp(&(b.0 - p.0).abs()))
+                .map_or(0.0, |k| k.1);
+        }
+    }
+    pieces
+}
+
+/// The end of the streak on the side `sign` (+1: towards +t) as a distance from the
+/// centre along `sign`: where the centre-line profile crosses the level seen `HALF_WIDTH`
+/// sigmas beside the line near that end (see the module docs), looked for around the
+/// current end (`fit`). An end not reached inside the image (`lo`..`hi` along the axis)
+/// lies beyond it: the streak leaves the frame.
+fn end(maps: &Maps, s: &Seg, fit: &Fit, sign: f64, (lo, hi): (f64, f64)) -> f64 {
+    let (ux, uy) = s.dir();
+    let (nx, ny) = (-uy, ux);
+    let sz = z_sigma(maps);
+    let at = |t: f64, v: f64| {
+        let (off, _) = fit.at(t);
+        maps.z_at(
+            s.cx + t * ux + (v + off) * nx,
+            s.cy + t * uy + (v + off) * ny,
+        )
+    };
+    // Distances from the centre along `sign`: this end, the other end, the border.
+    let (near, far) = if sign > 0.0 {
+        (fit.t1, -fit.t0)
+    } else {
+        (-fit.t0, fit.t1)
+    };
+    let border = if sign > 0.0 { hi } else { -lo };
+    // The level beside the line, over the stretch inside this end.
+    let margin = (3.0 * sz).min(0.25 * (near + far));
+    let inner_b = (near - margin).min(border);
+    let inner_a = (inner_b - SEARCH_IN_PX).max(margin - far);
+    let vh = HALF_WIDTH * sz;
+    let (mut level, mut count) = (0.0, 0.0);
+    let mut d = inner_a;
+    while d <= inner_b {
+        let t = sign * d;
+        if t >= lo && t <= hi {
+            level += 0.5 * (at(t, vh) + at(t, -vh));
+            count += 1.0;
+        }
+        d += 1.0;
+    }
+    if count == 0.0 || level <= 0.0 {
+        return near;
+    }
+    let level = level / count;
+    // Change point: the distance maximising the cumulative excess of the profile over
+    // the level, outwards from inside the streak (robust to noise and to dips).
+    let start = (near - SEARCH_IN_PX).max(0.5 * (near - far)).min(border);
+    let stop = (near + SEARCH_OUT_PX).min(border);
+    let (mut acc, mut best, mut best_d) = (0.0, 0.0, start);
+    let (mut d, mut last) = (start, start);
+    while d <= stop {
+        acc += (at(sign * d, 0.0) - level).min(level) * STEP_PX;
+        if acc > best {
+            best = acc;
+            best_d = d + 0.5 * STEP_PX;
+        }
+        last = d;
+        d += STEP_PX;
+    }
+    // Still above the level at the image's border: the streak goes on beyond it.
+    if best_d >= last && last >= border - STEP_PX {
+        return border + 5.0 * maps.p.psf_sigma;
+    }
+    best_d
 }
 
 impl Fit {

@@ -1,4 +1,4 @@
-//! Step 3a, the measured noise of the line filter. The white-noise model of `lines` holds for
+//! Step 3a, the measured noise of the line filter. The white-noise model (`digital_line`) holds for
 //! synthetic images, but a real sensor's noise (a dark frame's hot pixels, column structure and
 //! row-to-row correlation, stretched by the enhancement) makes line sums vary more than it
 //! predicts: on the semisynthetic dark-frame images a 51 px sum of pure noise reached "6
@@ -10,8 +10,8 @@
 
 use std::f64::consts::PI;
 
-use super::Sanitized;
-use super::lines::{model_sd, slope};
+use super::digital_line::{model_sd, slope};
+use super::params::Sanitized;
 use super::stats::median_of;
 
 /// About this many sample centres per filter: the MAD of 4096 Gaussian values has a relative

@@ -1,8 +1,14 @@
-//! Step 7, output: the score of a candidate and its box in the generator's label convention.
+//! Step 7, output: the candidate, its score and its box in the generator's label convention.
 
-use super::refine::{Ctx, Seg};
-use super::{Candidate, Detection, Sanitized};
+use super::fit::fitted_box;
+use super::maps::Maps;
+use super::params::Sanitized;
+use super::segment::Seg;
+use crate::Detection;
 use soig_image::geometry::BoxPx;
+
+/// The reference image area of the confidence: 1024 x 1024 pixels.
+const MEGAPIXEL: f64 = 1_048_576.0;
 
 /// Confidence in [0, 1): the probability that noise alone gives no candidate as significant
 /// in an image of `area_px` pixels, under a Gumbel model of the most significant noise candidate
@@ -20,51 +26,67 @@ pub(super) fn confidence(snr: f64, elongation: f64, area_px: f64, p: &Sanitized)
     ((-expected).exp() * shape).clamp(0.0, 1.0)
 }
 
-/// The reference image area of the confidence: 1024 x 1024 pixels.
-const MEGAPIXEL: f64 = 1_048_576.0;
+/// One detected streak.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Candidate {
+    /// Box (pixel-edge coordinates), score in [0, 1) and class.
+    pub detection: Detection,
+    /// The half-level ends of the streak, in the box's pixel-edge coordinates (pixel `i` spans
+    /// `[i, i + 1]`, so a pixel centre is at `i + 0.5`), not clipped to the image.
+    pub ends: [[f64; 2]; 2],
+    /// Length between the half-level ends, pixels.
+    pub length_px: f64,
+    /// Axis orientation, degrees from +x towards +y (image rows down), in [0, 180).
+    pub orientation_deg: f64,
+    /// sqrt(l1 / l2) of the z-weighted second moments around the segment.
+    pub elongation: f64,
+    /// Background-subtracted grey levels summed within 3 PSF sigmas of the segment.
+    pub flux: f64,
+    /// Matched-filter signal-to-noise ratio of the whole streak.
+    pub snr: f64,
+}
 
-impl Ctx<'_> {
-    pub(super) fn candidate(&self, s: &Seg, score: f64) -> Candidate {
-        let p = self.p;
-        let (a, b) = s.ends();
-        let (ux, uy) = s.dir();
-        let along = p.pad_along * p.psf_sigma;
-        let across = p.pad_across * p.psf_sigma;
-        // Support of an ellipse (semi-axes along/across) in the x and y directions.
-        let ex = ((along * ux).powi(2) + (across * uy).powi(2)).sqrt();
-        let ey = ((along * uy).powi(2) + (across * ux).powi(2)).sqrt();
-        let (w, h) = (self.w as f64, self.h as f64);
-        // The fitted streak's label box (`fit`); the padded segment where it cannot be fitted.
-        let padded = BoxPx {
-            x_min: (a.0.min(b.0) - ex + 0.5).clamp(0.0, w),
-            y_min: (a.1.min(b.1) - ey + 0.5).clamp(0.0, h),
-            x_max: (a.0.max(b.0) + ex + 0.5).clamp(0.0, w),
-            y_max: (a.1.max(b.1) + ey + 0.5).clamp(0.0, h),
-        };
-        let boxed = self.fitted_box(s).unwrap_or(padded);
-        let detection = Detection {
-            x1: boxed.x_min,
-            y1: boxed.y_min,
-            x2: boxed.x_max,
-            y2: boxed.y_max,
-            score,
-            class: p.class,
-        };
-        Candidate {
-            detection,
-            ends: [[a.0 + 0.5, a.1 + 0.5], [b.0 + 0.5, b.1 + 0.5]],
-            length_px: s.length,
-            orientation_deg: s.theta.to_degrees().rem_euclid(180.0),
-            elongation: s.elongation,
-            flux: s.flux,
-            snr: s.snr,
-        }
+/// The candidate of the kept segment `s` of score `score`, boxed.
+pub(super) fn candidate(maps: &Maps, s: &Seg, score: f64) -> Candidate {
+    let p = maps.p;
+    let (a, b) = s.ends();
+    let (ux, uy) = s.dir();
+    let along = p.pad_along * p.psf_sigma;
+    let across = p.pad_across * p.psf_sigma;
+    // Support of an ellipse (semi-axes along/across) in the x and y directions.
+    let ex = ((along * ux).powi(2) + (across * uy).powi(2)).sqrt();
+    let ey = ((along * uy).powi(2) + (across * ux).powi(2)).sqrt();
+    let (w, h) = (maps.w as f64, maps.h as f64);
+    // The fitted streak's label box (`fit`); the padded segment where it cannot be fitted.
+    let padded = BoxPx {
+        x_min: (a.0.min(b.0) - ex + 0.5).clamp(0.0, w),
+        y_min: (a.1.min(b.1) - ey + 0.5).clamp(0.0, h),
+        x_max: (a.0.max(b.0) + ex + 0.5).clamp(0.0, w),
+        y_max: (a.1.max(b.1) + ey + 0.5).clamp(0.0, h),
+    };
+    let boxed = fitted_box(maps, s).unwrap_or(padded);
+    let detection = Detection {
+        x1: boxed.x_min,
+        y1: boxed.y_min,
+        x2: boxed.x_max,
+        y2: boxed.y_max,
+        score,
+        class: p.class,
+    };
+    Candidate {
+        detection,
+        ends: [[a.0 + 0.5, a.1 + 0.5], [b.0 + 0.5, b.1 + 0.5]],
+        length_px: s.length,
+        orientation_deg: s.theta.to_degrees().rem_euclid(180.0),
+        elongation: s.elongation,
+        flux: s.flux,
+        snr: s.snr,
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::StreakParams;
+    use super::super::params::StreakParams;
     use super::*;
 
     #[test]

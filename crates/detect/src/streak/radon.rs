@@ -15,10 +15,10 @@
 //! correlated structure raises the threshold instead of making lines. What it finds are only
 //! seeds: the full-resolution refinement, merging and SNR tests of steps 5-7 decide.
 
-use super::Sanitized;
 use super::components::{Component, components};
 use super::lines::line_filter;
 use super::noise::LineNoise;
+use super::params::Sanitized;
 use super::stats::map_stats;
 
 /// Binning factors, and the line-filter length (binned pixels) at each.

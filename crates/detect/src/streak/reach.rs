@@ -19,7 +19,9 @@
 //! thus followed across a trail only as far as it shows again beyond it (or beside it, where the
 //! trail is fainter), by at least `MIN_GAIN_PX` of excess.
 
-use super::refine::{Ctx, Point, Seg};
+use super::maps::Maps;
+use super::refine::flux_and_elongation;
+use super::segment::{Point, Seg};
 use super::stats::median_of;
 
 /// Length of a piece, pixels: 16 samples of the smoothed map average its noise to about 0.7.
@@ -40,121 +42,119 @@ const MIN_GAIN_PX: f64 = 16.0;
 /// ... and the walk stops where it has lost this many pieces' worth since the best end.
 const GIVE_UP_PIECES: f64 = 4.0;
 
-impl Ctx<'_> {
-    /// `s` with each end moved outwards to where the streak followed beyond it ends (see the
-    /// module docs); `s` itself where no end moves, or outside the star-aware pass.
-    pub(super) fn reach(&self, s: &Seg) -> Seg {
-        if self.removed.is_none() {
-            return *s;
-        }
-        let (ux, uy) = s.dir();
-        let (nx, ny) = (-uy, ux);
-        // The streak's level: the median along it (its ends stopped where trails hide it).
-        let mut along: Vec<f64> = s
-            .axis_points()
-            .map(|(x, y)| self.cross_mean(x, y, nx, ny))
-            .collect();
-        let level = median_of(&mut along);
-        if level <= 0.0 {
-            return *s;
-        }
-        let (a, b) = s.ends();
-        let (a2, b2) = (
-            self.follow(a, (-ux, -uy), level),
-            self.follow(b, (ux, uy), level),
-        );
-        if a2 == a && b2 == b {
-            return *s;
-        }
-        let length = (b2.0 - a2.0).hypot(b2.1 - a2.1);
-        let mut r = Seg {
-            cx: 0.5 * (a2.0 + b2.0),
-            cy: 0.5 * (a2.1 + b2.1),
-            theta: (b2.1 - a2.1).atan2(b2.0 - a2.0),
-            length,
-            ..*s
+/// `s` with each end moved outwards to where the streak followed beyond it ends (see the
+/// module docs); `s` itself where no end moves, or outside the star-aware pass.
+pub(super) fn reach(maps: &Maps, s: &Seg) -> Seg {
+    if maps.removed.is_none() {
+        return *s;
+    }
+    let (ux, uy) = s.dir();
+    let (nx, ny) = (-uy, ux);
+    // The streak's level: the median along it (its ends stopped where trails hide it).
+    let mut along: Vec<f64> = s
+        .axis_points()
+        .map(|(x, y)| maps.cross_mean(x, y, nx, ny))
+        .collect();
+    let level = median_of(&mut along);
+    if level <= 0.0 {
+        return *s;
+    }
+    let (a, b) = s.ends();
+    let (a2, b2) = (
+        follow(maps, a, (-ux, -uy), level),
+        follow(maps, b, (ux, uy), level),
+    );
+    if a2 == a && b2 == b {
+        return *s;
+    }
+    let length = (b2.0 - a2.0).hypot(b2.1 - a2.1);
+    let mut r = Seg {
+        cx: 0.5 * (a2.0 + b2.0),
+        cy: 0.5 * (a2.1 + b2.1),
+        theta: (b2.1 - a2.1).atan2(b2.0 - a2.0),
+        length,
+        ..*s
+    };
+    (r.flux, r.elongation) = flux_and_elongation(maps, &r);
+    r
+}
+
+/// The end of a streak of `level` followed from its end `e` outwards along `u`.
+fn follow(maps: &Maps, e: Point, u: (f64, f64), level: f64) -> Point {
+    let (nx, ny) = (-u.1, u.0);
+    let cap = 1.5 * level;
+    // Lateral offset of the streak from the line through `e` along `u`, and the pieces
+    // since it was last seen.
+    let (mut off, mut missed) = (0.0, 0.0);
+    let (mut acc, mut best, mut best_end) = (0.0, 0.0, e);
+    let mut start = 0.0;
+    loop {
+        // The piece's k-th sample (1 px apart) at lateral offset `o`.
+        let at = |o: f64, k: usize| {
+            let t = start + k as f64 + 0.5;
+            (e.0 + t * u.0 + o * nx, e.1 + t * u.1 + o * ny)
         };
-        (r.flux, r.elongation) = self.flux_and_elongation(&r);
-        r
-    }
-
-    /// The end of a streak of `level` followed from its end `e` outwards along `u`.
-    fn follow(&self, e: Point, u: (f64, f64), level: f64) -> Point {
-        let (nx, ny) = (-u.1, u.0);
-        let cap = 1.5 * level;
-        // Lateral offset of the streak from the line through `e` along `u`, and the pieces
-        // since it was last seen.
-        let (mut off, mut missed) = (0.0, 0.0);
-        let (mut acc, mut best, mut best_end) = (0.0, 0.0, e);
-        let mut start = 0.0;
-        loop {
-            // The piece's k-th sample (1 px apart) at lateral offset `o`.
-            let at = |o: f64, k: usize| {
-                let t = start + k as f64 + 0.5;
-                (e.0 + t * u.0 + o * nx, e.1 + t * u.1 + o * ny)
-            };
-            let n = PIECE_PX as usize;
-            let (x1, y1) = at(off, n - 1);
-            if x1 < 0.0 || y1 < 0.0 || x1 > (self.w - 1) as f64 || y1 > (self.h - 1) as f64 {
-                break;
-            }
-            let mean = |o: f64| {
-                (0..n)
-                    .map(|k| {
-                        let (x, y) = at(o, k);
-                        self.z_at(x, y)
-                    })
-                    .sum::<f64>()
-                    / n as f64
-            };
-            let across = (ACROSS_PX * (1.0 + missed)).min(MAX_ACROSS_PX);
-            let n_across = (across / ACROSS_STEP_PX).round() as i64;
-            let offsets = (-n_across..=n_across).map(|j| off + j as f64 * ACROSS_STEP_PX);
-            let (o_best, m) =
-                offsets
-                    .clone()
-                    .map(|o| (o, mean(o)))
-                    .fold(
-                        (off, f64::NEG_INFINITY),
-                        |b, c| if c.1 > b.1 { c } else { b },
-                    );
-            // Hidden where the trails hide any line the streak may take (whole pixels apart).
-            let hidden = offsets.step_by((1.0 / ACROSS_STEP_PX) as usize).any(|o| {
-                let mut removed: Vec<f64> = (0..n).map(|k| self.removed_at(at(o, k))).collect();
-                median_of(&mut removed) >= HIDDEN_SHARE * level
-            });
-            let gain = (m.min(cap) - 0.5 * level) * PIECE_PX;
-            if !hidden && m >= 0.5 * level {
-                (off, missed) = (o_best, 0.0);
-            } else {
-                missed += 1.0;
-            }
-            acc += if hidden { gain.max(0.0) } else { gain };
-            if acc > best {
-                best = acc;
-                let (x, y) = at(off, n - 1);
-                best_end = (x + 0.5 * u.0, y + 0.5 * u.1);
-            }
-            start += PIECE_PX;
-            if acc < best - GIVE_UP_PIECES * PIECE_PX * 0.5 * level {
-                break;
-            }
+        let n = PIECE_PX as usize;
+        let (x1, y1) = at(off, n - 1);
+        if x1 < 0.0 || y1 < 0.0 || x1 > (maps.w - 1) as f64 || y1 > (maps.h - 1) as f64 {
+            break;
         }
-        if best >= MIN_GAIN_PX * 0.5 * level {
-            best_end
+        let mean = |o: f64| {
+            (0..n)
+                .map(|k| {
+                    let (x, y) = at(o, k);
+                    maps.z_at(x, y)
+                })
+                .sum::<f64>()
+                / n as f64
+        };
+        let across = (ACROSS_PX * (1.0 + missed)).min(MAX_ACROSS_PX);
+        let n_across = (across / ACROSS_STEP_PX).round() as i64;
+        let offsets = (-n_across..=n_across).map(|j| off + j as f64 * ACROSS_STEP_PX);
+        let (o_best, m) =
+            offsets
+                .clone()
+                .map(|o| (o, mean(o)))
+                .fold(
+                    (off, f64::NEG_INFINITY),
+                    |b, c| if c.1 > b.1 { c } else { b },
+                );
+        // Hidden where the trails hide any line the streak may take (whole pixels apart).
+        let hidden = offsets.step_by((1.0 / ACROSS_STEP_PX) as usize).any(|o| {
+            let mut removed: Vec<f64> = (0..n).map(|k| removed_at(maps, at(o, k))).collect();
+            median_of(&mut removed) >= HIDDEN_SHARE * level
+        });
+        let gain = (m.min(cap) - 0.5 * level) * PIECE_PX;
+        if !hidden && m >= 0.5 * level {
+            (off, missed) = (o_best, 0.0);
         } else {
-            e
+            missed += 1.0;
+        }
+        acc += if hidden { gain.max(0.0) } else { gain };
+        if acc > best {
+            best = acc;
+            let (x, y) = at(off, n - 1);
+            best_end = (x + 0.5 * u.0, y + 0.5 * u.1);
+        }
+        start += PIECE_PX;
+        if acc < best - GIVE_UP_PIECES * PIECE_PX * 0.5 * level {
+            break;
         }
     }
+    if best >= MIN_GAIN_PX * 0.5 * level {
+        best_end
+    } else {
+        e
+    }
+}
 
-    /// What the trails' subtraction removed at the pixel nearest `q` (0 outside the image).
-    fn removed_at(&self, (x, y): Point) -> f64 {
-        let (i, j) = (x.round(), y.round());
-        match self.removed {
-            Some(r) if i >= 0.0 && j >= 0.0 && i < self.w as f64 && j < self.h as f64 => {
-                r[j as usize * self.w + i as usize] as f64
-            }
-            _ => 0.0,
+/// What the trails' subtraction removed at the pixel nearest `q` (0 outside the image).
+fn removed_at(maps: &Maps, (x, y): Point) -> f64 {
+    let (i, j) = (x.round(), y.round());
+    match maps.removed {
+        Some(r) if i >= 0.0 && j >= 0.0 && i < maps.w as f64 && j < maps.h as f64 => {
+            r[j as usize * maps.w + i as usize] as f64
         }
+        _ => 0.0,
     }
 }

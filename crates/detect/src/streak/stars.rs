@@ -3,7 +3,7 @@
 
 use std::f64::consts::PI;
 
-use super::Sanitized;
+use super::params::Sanitized;
 use soig_image::imaging::bilinear;
 
 /// Zero the smoothed map around round compact sources (stars): local maxima of `z` of at least

@@ -1,7 +1,9 @@
 //! End-to-end tests of [`detect_streaks`] on synthetic images (stars, trails, streaks with erf
 //! ends, 8-bit quantised noise) scored against the generator's label box.
 
+use super::segment::angle_diff_deg;
 use super::*;
+use crate::Detection;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};

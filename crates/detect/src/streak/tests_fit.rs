@@ -4,6 +4,7 @@
 //! and detected; the label is the renderer's `truth.label_box_px` (99 % of the debris flux).
 
 use super::*;
+use crate::Detection;
 use soig_image::enhance;
 use soig_sim::render::{RenderMethod, Settings, render};
 use soig_base::rng::{PixelPurpose, pixel_stream};

@@ -1,8 +1,8 @@
 //! Step 2, star-trail removal (survey images): structures along the known trail direction are
 //! subtracted before the line filter, so that a debris streak crossing a trail keeps its signal.
 
-use super::Sanitized;
 use super::lines::transpose;
+use super::params::Sanitized;
 use super::smooth::corr;
 use super::stats::map_stats;
 

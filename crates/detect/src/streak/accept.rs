@@ -1,0 +1,133 @@
+//! Step 7, acceptance: a merged segment becomes a candidate if it is long, elongated and
+//! significant enough, is no star's, and has no gap; a candidate is scored by its confidence.
+
+use super::explain::{Dropped, Reason, Seeds};
+use super::maps::Maps;
+use super::output::confidence;
+use super::segment::Seg;
+use super::stats::median_of;
+
+/// The gap test: a chunk of a candidate whose mean contrast is below this fraction of the
+/// candidate's level ...
+const GAP_LEVEL: f64 = 0.5;
+/// ... by more than this many of the chunk's noise sigmas is a gap (see [`gap`]).
+const GAP_SIGMA: f64 = 2.5;
+
+/// The merged segments that pass the acceptance tests, with their confidence, best first (ties
+/// by position), and those that fail, with why. `is_star`: whether the star trails explain a
+/// segment.
+pub(super) fn accept(
+    maps: &Maps,
+    merged: Vec<(Seg, Seeds)>,
+    is_star: &dyn Fn(&Seg) -> bool,
+) -> (Vec<(Seg, Seeds, f64)>, Vec<Dropped>) {
+    let p = maps.p;
+    let (mut cands, mut dropped) = (Vec::new(), Vec::new());
+    for (s, seeds) in merged {
+        let failed = if s.length < p.min_length {
+            Some(Reason::TooShort {
+                length_px: s.length,
+                limit: p.min_length,
+            })
+        } else if s.elongation < p.min_elongation {
+            Some(Reason::NotElongated {
+                elongation: s.elongation,
+                limit: p.min_elongation,
+            })
+        } else if s.snr < p.min_snr {
+            Some(Reason::LowSnr {
+                snr: s.snr,
+                limit: p.min_snr,
+            })
+        } else if is_star(&s) {
+            Some(Reason::StarTrail)
+        } else {
+            gap(maps, &s).map(|g| Reason::Gap {
+                chunk: g.chunk,
+                chunks: g.chunks,
+                level: g.level,
+                sigma: g.sigma,
+            })
+        };
+        match failed {
+            Some(r) => dropped.push(Dropped::of_seg(&s, seeds, r)),
+            None => {
+                let score = confidence(s.snr, s.elongation, (maps.w * maps.h) as f64, p);
+                cands.push((s, seeds, score));
+            }
+        }
+    }
+    cands.sort_by(|a: &(Seg, Seeds, f64), b| {
+        b.2.total_cmp(&a.2)
+            .then(a.0.cx.total_cmp(&b.0.cx))
+            .then(a.0.cy.total_cmp(&b.0.cy))
+    });
+    (cands, dropped)
+}
+
+/// A chunk of a candidate that holds no streak: which one, its level as a fraction of the
+/// candidate's, and how many noise sigmas below that level it lies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Gap {
+    pub(super) chunk: usize,
+    pub(super) chunks: usize,
+    pub(super) level: f64,
+    pub(super) sigma: f64,
+}
+
+/// The first gap of `s`, if any. A streak is there along its whole length; a chain of
+/// stars or of star blobs (the jitter-smeared stars of fixed-pointing images, two or three
+/// in a row make a short "streak" of SNR 9-12) is not. The contrast profile is cut into
+/// chunks, as many as keep each chunk's SNR about 4 ((snr / 4)^2, 2 to 8), and a chunk whose
+/// mean is below `GAP_LEVEL` of the segment's median and `GAP_SIGMA` of its own noise below
+/// it is a gap. A tumbling debris' brightness varies by at most a factor of 3 (1.15 mag in
+/// 160 test images), so its faintest chunk stays above half the median but for noise; the
+/// sigma test keeps faint streaks, whose chunks are noisy, from failing by chance (0.6 % a
+/// chunk). On 100 fixed-pointing synthetic images it drops 52 of 63 false boxes at
+/// confidence 0.5 and no streak; on 60 semisynthetic ones all 3 and no streak.
+pub(super) fn gap(maps: &Maps, s: &Seg) -> Option<Gap> {
+    let (ux, uy) = s.dir();
+    let (nx, ny) = (-uy, ux);
+    let taps = maps.contrast_taps();
+    // Samples under a subtracted star trail are left out: a streak crossing a bright trail
+    // shows less there (the 8-bit stretch), which is no gap (a debris streak 5 degrees off
+    // the trails, SNR 200, crossed one over 1/8 of its length and was dropped).
+    let under = |x: f64, y: f64| {
+        let (i, j) = (x.round(), y.round());
+        maps.under_trails.is_some_and(|m| {
+            i >= 0.0
+                && j >= 0.0
+                && i < maps.w as f64
+                && j < maps.h as f64
+                && m[j as usize * maps.w + i as usize]
+        })
+    };
+    let vals: Vec<f64> = s
+        .axis_points()
+        .filter(|&(x, y)| !under(x, y))
+        .map(|(x, y)| maps.contrast(&taps, x, y, nx, ny))
+        .collect();
+    let n = vals.len();
+    if n < 4 {
+        return None;
+    }
+    let level = median_of(&mut vals.clone());
+    if level <= 0.0 {
+        return None;
+    }
+    let k = ((s.snr / 4.0).powi(2).floor().max(0.0) as usize)
+        .clamp(2, 8)
+        .min(n / 2);
+    (0..k).find_map(|c| {
+        let (a, b) = (c * n / k, (c + 1) * n / k);
+        let m = (b - a) as f64;
+        let mean = vals[a..b].iter().sum::<f64>() / m;
+        let sd = maps.contrast_sum_sd(&taps, s.theta, b - a) / m;
+        (mean < GAP_LEVEL * level && level - mean > GAP_SIGMA * sd).then_some(Gap {
+            chunk: c,
+            chunks: k,
+            level: mean / level,
+            sigma: (level - mean) / sd,
+        })
+    })
+}

@@ -1,0 +1,102 @@
+//! What a pass's later stages read, passed to each explicitly: the image, its background, the
+//! smoothed unit-noise map, the line filter's measured noise and, in the star-aware pass, where
+//! the predicted trails were subtracted. Its methods sample the maps: profile samples across an
+//! axis and the noise of their sums.
+
+use super::noise::LineNoise;
+use super::params::Sanitized;
+use super::smooth::corr;
+use soig_image::imaging::bilinear;
+
+/// The maps of one pass (see the module docs).
+pub(super) struct Maps<'a> {
+    pub(super) w: usize,
+    pub(super) h: usize,
+    pub(super) pixels: &'a [u8],
+    pub(super) bg: &'a [f32],
+    pub(super) z: &'a [f32],
+    pub(super) p: &'a Sanitized,
+    /// The line filter's measured noise, which inflates the white-noise sd of profile sums.
+    pub(super) noise: &'a LineNoise,
+    /// The star-aware pass: the pixels under a subtracted star trail, and what was subtracted
+    /// at each (see `Sky::subtract`).
+    pub(super) under_trails: Option<&'a [bool]>,
+    pub(super) removed: Option<&'a [f32]>,
+}
+
+impl Maps<'_> {
+    /// z at (x, y), bilinear between pixel centres.
+    pub(super) fn z_at(&self, x: f64, y: f64) -> f64 {
+        bilinear(self.z, self.w, self.h, x, y) as f64
+    }
+
+    /// Profile sample: the mean of z at lateral offsets -1, 0, 1 along the normal (nx, ny).
+    pub(super) fn cross_mean(&self, x: f64, y: f64, nx: f64, ny: f64) -> f64 {
+        (self.z_at(x - nx, y - ny) + self.z_at(x, y) + self.z_at(x + nx, y + ny)) / 3.0
+    }
+
+    /// Lateral taps (offset along the normal, weight) of a contrast sample: the profile sample
+    /// (offsets -1, 0, 1) less the mean of side bands beyond the streak's smoothed
+    /// cross-section (z falls below 1 % of its peak by 3 sqrt(2) psf_sigma), six pixels on
+    /// each side. A line through a patch of raised background (a dark frame's warm region, the
+    /// halo of a bright object) has its sides raised too and no contrast; a streak keeps its
+    /// level.
+    pub(super) fn contrast_taps(&self) -> Vec<(f64, f64)> {
+        let d = (3.0 * std::f64::consts::SQRT_2 * self.p.psf_sigma).ceil() + 1.0;
+        let mut taps: Vec<(f64, f64)> = (-1..=1).map(|u| (u as f64, 1.0 / 3.0)).collect();
+        for k in 0..6 {
+            let off = d + k as f64;
+            taps.push((off, -1.0 / 12.0));
+            taps.push((-off, -1.0 / 12.0));
+        }
+        taps
+    }
+
+    /// Contrast sample at (x, y) with the normal (nx, ny) (see [`Maps::contrast_taps`]).
+    pub(super) fn contrast(&self, taps: &[(f64, f64)], x: f64, y: f64, nx: f64, ny: f64) -> f64 {
+        taps.iter()
+            .map(|&(u, a)| a * self.z_at(x + u * nx, y + u * ny))
+            .sum()
+    }
+
+    /// Range of t for which (cx, cy) + t (ux, uy) lies inside the pixel-centre rectangle.
+    pub(super) fn t_range(&self, cx: f64, cy: f64, ux: f64, uy: f64) -> (f64, f64) {
+        let mut lo = f64::NEG_INFINITY;
+        let mut hi = f64::INFINITY;
+        for (c, u, max) in [(cx, ux, (self.w - 1) as f64), (cy, uy, (self.h - 1) as f64)] {
+            if u.abs() < 1e-12 {
+                if c < 0.0 || c > max {
+                    return (1.0, 0.0);
+                }
+            } else {
+                let (a, b) = ((0.0 - c) / u, (max - c) / u);
+                lo = lo.max(a.min(b));
+                hi = hi.min(a.max(b));
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Noise sd of the sum of `n` consecutive contrast samples (`taps`) along orientation
+    /// `theta`: the white-noise model (z has unit noise, correlated through the Gaussian), times
+    /// the line filter's measured excess ([`LineNoise::for_sum`]).
+    pub(super) fn contrast_sum_sd(&self, taps: &[(f64, f64)], theta: f64, n: usize) -> f64 {
+        let sp = self.p.psf_sigma;
+        let c = |dt: f64| -> f64 {
+            let mut s = 0.0;
+            for &(u, a) in taps {
+                for &(v, b) in taps {
+                    s += a * b * corr(dt * dt + (u - v) * (u - v), sp);
+                }
+            }
+            s
+        };
+        let nf = n as f64;
+        let mut var = nf * c(0.0);
+        let dmax = ((12.0 * sp).ceil() as usize).min(n.saturating_sub(1));
+        for d in 1..=dmax {
+            var += 2.0 * (nf - d as f64) * c(d as f64);
+        }
+        var.max(1e-12).sqrt() * self.noise.for_sum(theta, n)
+    }
+}

@@ -1,0 +1,90 @@
+//! One pass of the detector from the unit-noise map on, its stages in order. The first pass
+//! subtracts everything along the trails' direction (a survey image) and drops what lies
+//! along it; the star-aware pass subtracts the predicted trails and drops what they explain.
+
+use super::accept::accept;
+use super::explain::{Dropped, Seeds};
+use super::explain_away::explain_away;
+use super::flatten::flatten;
+use super::fragments::fragments;
+use super::maps::Maps;
+use super::merge::merge;
+use super::output::{Candidate, candidate};
+use super::params::Sanitized;
+use super::radon::long_line_components;
+use super::reach::reach;
+use super::seeds::{line_noise, local_seeds};
+use super::segment::Seg;
+use super::sky::{Sky, StarTrail};
+use super::star_test::StarTest;
+
+/// The candidates of one pass on the background `bg` and unit-noise map `z` of `pixels`, and
+/// the segments dropped on the way, with why. `trail`: the trails' direction (degrees) of a
+/// survey image; `stars`: the predicted trails, for the star-aware pass.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn pass(
+    pixels: &[u8],
+    w: usize,
+    h: usize,
+    p: &Sanitized,
+    bg: Vec<f32>,
+    z: Vec<f32>,
+    trail: Option<f64>,
+    stars: Option<&[StarTrail]>,
+) -> (Vec<Candidate>, Vec<Dropped>) {
+    let trail = trail.filter(|a| a.is_finite());
+    // The predicted trails and the map before any is subtracted, which the star test reads.
+    let sky = stars.map(|t| (Sky::new(t, &z, w, h, p), z.clone()));
+    let flat = flatten(z, w, h, p, trail, sky.as_ref().map(|(s, _)| s));
+    let noise = line_noise(&flat.zc, w, h, p);
+    let local = local_seeds(&flat.zc, w, h, p, &noise);
+    let long = long_line_components(&flat.zc, w, h, p);
+    let maps = Maps {
+        w,
+        h,
+        pixels,
+        bg: &bg,
+        z: &flat.z,
+        p,
+        noise: &noise,
+        under_trails: flat.under_trails.as_deref(),
+        removed: flat.removed.as_deref(),
+    };
+    let star_test = match (&sky, trail) {
+        (Some((sky, z_sky)), _) => StarTest::Predicted(sky, z_sky),
+        (None, Some(a)) => StarTest::Along(a),
+        (None, None) => StarTest::Round,
+    };
+    let is_star = |s: &Seg| star_test.explains(s, w, h, p);
+    // Profiles by contrast (see `refine`), except for the local seeds of survey images, where
+    // parallel star trails fall in the side bands (a false candidate at confidence 0.66 in
+    // `survey_trails_rejected_and_debris_found`).
+    let (local_frags, mut dropped) =
+        fragments(&maps, &local, trail.is_none(), Seeds::Local, &is_star);
+    let (long_frags, d) = fragments(&maps, &long, true, Seeds::LongLine, &is_star);
+    dropped.extend(d);
+    // The two stages' fragments are merged apart: a long-line fragment overlapping a local
+    // one (the same streak, its ends less sharp) would otherwise re-refine it into a segment
+    // that can fail where the local one passed. Where both find a streak, explaining away
+    // keeps the better scoring one.
+    let mut merged: Vec<(Seg, Seeds)> = merge(&maps, local_frags, &is_star)
+        .into_iter()
+        .map(|s| (s, Seeds::Local))
+        .collect();
+    merged.extend(
+        merge(&maps, long_frags, &is_star)
+            .into_iter()
+            .map(|s| (s, Seeds::LongLine)),
+    );
+    let (cands, d) = accept(&maps, merged, &is_star);
+    dropped.extend(d);
+    let (kept, d) = explain_away(&maps, cands);
+    dropped.extend(d);
+    // Boxes; in the star-aware pass each streak is first followed across the trails that
+    // hide it (`reach`).
+    let found = kept
+        .into_iter()
+        .map(|(s, score)| candidate(&maps, &reach(&maps, &s), score))
+        .collect();
+    (found, dropped)
+}

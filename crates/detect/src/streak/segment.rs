@@ -1,0 +1,61 @@
+//! The geometry every stage shares: a refined segment and the distances and angles between
+//! segments.
+
+/// A point (x, y) in pixel-centre coordinates.
+pub(super) type Point = (f64, f64);
+
+/// A refined segment: centre, orientation (rad), length and measurements.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Seg {
+    pub(super) cx: f64,
+    pub(super) cy: f64,
+    pub(super) theta: f64,
+    pub(super) length: f64,
+    pub(super) snr: f64,
+    pub(super) flux: f64,
+    pub(super) elongation: f64,
+    /// Its profile was read as the contrast (kept when it is merged).
+    pub(super) contrast: bool,
+}
+
+impl Seg {
+    pub(super) fn dir(&self) -> (f64, f64) {
+        (self.theta.cos(), self.theta.sin())
+    }
+    pub(super) fn ends(&self) -> ((f64, f64), (f64, f64)) {
+        let (ux, uy) = self.dir();
+        let hl = 0.5 * self.length;
+        (
+            (self.cx - hl * ux, self.cy - hl * uy),
+            (self.cx + hl * ux, self.cy + hl * uy),
+        )
+    }
+    /// The axis points 1 px apart from the centre, whole steps only (the profile samples).
+    pub(super) fn axis_points(&self) -> impl Iterator<Item = (f64, f64)> + use<> {
+        let (ux, uy) = self.dir();
+        let (cx, cy) = (self.cx, self.cy);
+        let hl = 0.5 * self.length;
+        let ta = (-hl + 0.5).ceil() as i64;
+        let tb = (hl - 0.5).floor() as i64;
+        (ta..=tb).map(move |t| (cx + t as f64 * ux, cy + t as f64 * uy))
+    }
+}
+
+/// Distance from `p` to the segment `a`-`b`.
+pub(super) fn point_segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let l2 = dx * dx + dy * dy;
+    let t = if l2 > 0.0 {
+        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (ex, ey) = (a.0 + t * dx - p.0, a.1 + t * dy - p.1);
+    (ex * ex + ey * ey).sqrt()
+}
+
+/// Absolute difference of two axis orientations in degrees, modulo 180 (result in [0, 90]).
+pub(super) fn angle_diff_deg(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(180.0);
+    d.min(180.0 - d)
+}

@@ -1,0 +1,327 @@
+//! One contract test per stage of a pass, each on a small synthetic map: what the stage
+//! promises, on input where the answer is known.
+
+use super::Candidate;
+use super::accept::accept;
+use super::explain::{Reason, Seeds};
+use super::explain_away::explain_away;
+use super::flatten::flatten;
+use super::fragments::fragments;
+use super::maps::Maps;
+use super::merge::merge;
+use super::noise::LineNoise;
+use super::output::candidate;
+use super::params::{Sanitized, StreakParams};
+use super::reach::reach;
+use super::refine::{Seed, refine};
+use super::seeds::{line_noise, local_seeds};
+use super::segment::Seg;
+use super::star_test::StarTest;
+use super::unit_noise::unit_noise_map;
+use crate::Detection;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+const W: usize = 128;
+const H: usize = 128;
+/// The smoothed map's cross-section sigma at the default PSF (sqrt(2) 1.5 px).
+const SE: f64 = 2.121_320_343_559_642_4;
+
+fn params() -> Sanitized {
+    Sanitized::new(&StreakParams::default())
+}
+
+/// A unit-noise-free map holding a horizontal streak of `amp` on row `y` from `x0` to `x1`
+/// (inclusive), with the smoothed map's Gaussian cross-section.
+fn streak_map(amp: f64, y: f64, x0: usize, x1: usize) -> Vec<f32> {
+    let mut z = vec![0f32; W * H];
+    for yy in 0..H {
+        let d = yy as f64 - y;
+        let v = (amp * (-d * d / (2.0 * SE * SE)).exp()) as f32;
+        for x in x0..=x1 {
+            z[yy * W + x] = v;
+        }
+    }
+    z
+}
+
+/// What the later stages read, around a given map `z`.
+struct World {
+    pixels: Vec<u8>,
+    bg: Vec<f32>,
+    z: Vec<f32>,
+    p: Sanitized,
+    noise: LineNoise,
+    removed: Option<Vec<f32>>,
+}
+
+impl World {
+    fn new(z: Vec<f32>) -> World {
+        let p = params();
+        let noise = LineNoise::white(&p);
+        World {
+            pixels: vec![0; W * H],
+            bg: vec![0.0; W * H],
+            z,
+            p,
+            noise,
+            removed: None,
+        }
+    }
+
+    fn maps(&self) -> Maps<'_> {
+        Maps {
+            w: W,
+            h: H,
+            pixels: &self.pixels,
+            bg: &self.bg,
+            z: &self.z,
+            p: &self.p,
+            noise: &self.noise,
+            under_trails: None,
+            removed: self.removed.as_deref(),
+        }
+    }
+}
+
+/// The streak of `streak_map(3.0, 64.0, 30, 90)` refined from a seed a little off its axis.
+fn refined(maps: &Maps) -> Option<Seg> {
+    refine(
+        maps,
+        &Seed {
+            cx: 60.0,
+            cy: 64.5,
+            theta: 0.05,
+            half: 25.0,
+            shrink: 10.0,
+            ext: 51.0,
+            contrast: true,
+        },
+    )
+}
+
+fn no_star(_: &Seg) -> bool {
+    false
+}
+
+/// Steps 1-2: the background follows a gradient across the image, and the map left has unit
+/// noise about zero.
+#[test]
+fn unit_noise_map_removes_a_gradient_and_has_unit_noise() {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let noise = Normal::new(0.0, 4.0).unwrap();
+    let pixels: Vec<u8> = (0..W * H)
+        .map(|i| (50.0 + 0.5 * (i % W) as f64 + noise.sample(&mut rng)).round() as u8)
+        .collect();
+    // Cells of 16 px: the 3x3 median of a mesh of 2 x 2 cells would flatten the gradient.
+    let p = Sanitized {
+        mesh: 16,
+        ..params()
+    };
+    let (bg, z) = unit_noise_map(&pixels, W, H, &p);
+    for x in [40, 64, 90] {
+        let b = bg[64 * W + x] as f64;
+        assert!((b - (50.0 + 0.5 * x as f64)).abs() < 2.0, "x {x}: {b}");
+    }
+    let mut v: Vec<f64> = z.iter().map(|&v| v as f64).collect();
+    let med = super::stats::median_of(&mut v);
+    let sd = super::stats::map_stats(&z, W, H).1;
+    assert!(med.abs() < 0.2 && (sd - 1.0).abs() < 0.05, "{med} {sd}");
+}
+
+/// Step 2: a round star is masked, a trail along the given direction subtracted, and the
+/// clipped copy stays within the clip (zero-mean).
+#[test]
+fn flatten_masks_a_star_and_removes_a_trail() {
+    let p = params();
+    let mut z = streak_map(5.0, 32.0, 0, W - 1);
+    for y in 0..H {
+        for x in 0..W {
+            let d2 = (x as f64 - 64.0).powi(2) + (y as f64 - 96.0).powi(2);
+            z[y * W + x] += (20.0 * (-d2 / (2.0 * SE * SE)).exp()) as f32;
+        }
+    }
+    let flat = flatten(z, W, H, &p, Some(0.0), None);
+    assert_eq!(flat.z[96 * W + 64], 0.0, "the star is masked");
+    assert!(flat.z[32 * W + 64].abs() < 0.5, "{}", flat.z[32 * W + 64]);
+    let clip = p.clip as f32 + 0.1;
+    assert!(flat.zc.iter().all(|v| v.abs() <= clip));
+    assert!(flat.under_trails.is_none() && flat.removed.is_none());
+}
+
+/// Steps 3-4: a faint line gives a component along it.
+#[test]
+fn local_seeds_find_a_line() {
+    let p = Sanitized {
+        calibrate_noise: false,
+        ..params()
+    };
+    let zc = streak_map(3.0, 64.0, 20, 108);
+    let noise = line_noise(&zc, W, H, &p);
+    let seeds = local_seeds(&zc, W, H, &p, &noise);
+    assert!(
+        seeds
+            .iter()
+            .any(|(c, _)| c.theta.abs() < 0.1 && (c.cy - 64.0).abs() < 1.0 && c.half_len > 20.0),
+        "{:?}",
+        seeds
+            .iter()
+            .map(|(c, _)| (c.cx, c.cy, c.theta))
+            .collect::<Vec<_>>()
+    );
+}
+
+/// Step 5: a seed a little off a streak's axis refines onto it, ends at its ends; a seed on an
+/// empty map is dropped, with why.
+#[test]
+fn fragments_refine_onto_the_streak() {
+    let world = World::new(streak_map(3.0, 64.0, 30, 90));
+    let s = refined(&world.maps()).expect("a level");
+    assert!(s.theta.abs() < 0.01 && (s.cy - 64.0).abs() < 0.3, "{s:?}");
+    assert!(
+        (s.length - 61.0).abs() < 4.0 && (s.cx - 60.0).abs() < 2.0,
+        "{s:?}"
+    );
+    assert!(s.snr > 6.5 && s.elongation > 2.5, "{s:?}");
+
+    let empty = World::new(vec![0.0; W * H]);
+    let comp = super::components::Component {
+        cx: 60.0,
+        cy: 64.0,
+        theta: 0.0,
+        half_len: 25.0,
+    };
+    let (frags, dropped) = fragments(&empty.maps(), &[(comp, 51.0)], true, Seeds::Local, &no_star);
+    assert!(frags.is_empty());
+    assert_eq!(dropped.len(), 1);
+    assert_eq!(dropped[0].reason, Reason::NoLevel);
+}
+
+/// Step 6: two pieces of one streak merge into one segment spanning it.
+#[test]
+fn merge_joins_collinear_pieces() {
+    let world = World::new(streak_map(3.0, 64.0, 30, 90));
+    let piece = |cx: f64, length: f64| Seg {
+        cx,
+        cy: 64.0,
+        theta: 0.0,
+        length,
+        snr: 10.0,
+        flux: 0.0,
+        elongation: 5.0,
+        contrast: true,
+    };
+    let merged = merge(
+        &world.maps(),
+        vec![piece(45.0, 30.0), piece(78.0, 24.0)],
+        &no_star,
+    );
+    assert_eq!(merged.len(), 1, "{merged:?}");
+    assert!(merged[0].length > 55.0, "{merged:?}");
+}
+
+/// Step 7: a streak passes and is scored; a piece too short fails with why.
+#[test]
+fn accept_scores_a_streak_and_drops_a_short_one() {
+    let world = World::new(streak_map(3.0, 64.0, 30, 90));
+    let s = refined(&world.maps()).unwrap();
+    let short = Seg { length: 10.0, ..s };
+    let merged = vec![(short, Seeds::Local), (s, Seeds::Local)];
+    let (cands, dropped) = accept(&world.maps(), merged, &no_star);
+    assert_eq!(cands.len(), 1);
+    assert!(cands[0].2 > 0.0 && cands[0].2 <= 1.0, "{}", cands[0].2);
+    assert!(matches!(dropped[0].reason, Reason::TooShort { .. }));
+    // The star test drops it.
+    let (cands, dropped) = accept(&world.maps(), vec![(s, Seeds::Local)], &|_: &Seg| true);
+    assert!(cands.is_empty() && dropped[0].reason == Reason::StarTrail);
+}
+
+/// Step 7: of one streak found twice, the better scoring is kept and the other explained away.
+#[test]
+fn explain_away_drops_a_duplicate() {
+    let world = World::new(streak_map(3.0, 64.0, 30, 90));
+    let s = refined(&world.maps()).unwrap();
+    let cands = vec![(s, Seeds::Local, 0.9), (s, Seeds::LongLine, 0.8)];
+    let (kept, dropped) = explain_away(&world.maps(), cands);
+    assert_eq!(kept.len(), 1);
+    assert_eq!(kept[0].1, 0.9);
+    assert_eq!(dropped.len(), 1);
+    assert_eq!(
+        (dropped[0].seeds, dropped[0].reason),
+        (Seeds::LongLine, Reason::Duplicate)
+    );
+}
+
+/// Boxes: outside the star-aware pass a segment is not followed; in it, a segment covering
+/// part of a streak is followed to the streak's end; the box holds the streak.
+#[test]
+fn reach_follows_the_streak_and_the_box_holds_it() {
+    let mut world = World::new(streak_map(3.0, 64.0, 20, 110));
+    let part = Seg {
+        cx: 40.0,
+        cy: 64.0,
+        theta: 0.0,
+        length: 40.0,
+        snr: 10.0,
+        flux: 0.0,
+        elongation: 5.0,
+        contrast: true,
+    };
+    let same = reach(&world.maps(), &part);
+    assert_eq!((same.cx, same.length), (part.cx, part.length));
+    world.removed = Some(vec![0.0; W * H]);
+    let followed = reach(&world.maps(), &part);
+    let far_end = followed.cx + 0.5 * followed.length;
+    assert!((far_end - 110.5).abs() < 8.0, "{followed:?}");
+
+    let c = candidate(&world.maps(), &followed, 0.75);
+    let d = c.detection;
+    assert!(
+        d.x1 <= 21.0 && d.x2 >= 104.0 && d.y1 < 64.0 && d.y2 > 65.0,
+        "{d:?}"
+    );
+    assert_eq!(d.score, 0.75);
+}
+
+/// The star test: along the trails' direction (within the tolerance) is a star's; no trails,
+/// nothing is.
+#[test]
+fn star_test_by_direction() {
+    let p = params();
+    let seg = |deg: f64| Seg {
+        cx: 64.0,
+        cy: 64.0,
+        theta: deg.to_radians(),
+        length: 60.0,
+        snr: 10.0,
+        flux: 0.0,
+        elongation: 5.0,
+        contrast: true,
+    };
+    let along = StarTest::Along(30.0);
+    assert!(along.explains(&seg(32.0), W, H, &p));
+    assert!(along.explains(&seg(210.0), W, H, &p));
+    assert!(!along.explains(&seg(45.0), W, H, &p));
+    assert!(!StarTest::Round.explains(&seg(30.0), W, H, &p));
+}
+
+/// A candidate from (x0, y0) to (x1, y1), pixel-edge coordinates, of score `score`.
+pub(super) fn cand(x0: f64, y0: f64, x1: f64, y1: f64, score: f64) -> Candidate {
+    Candidate {
+        detection: Detection {
+            x1: x0.min(x1),
+            y1: y0.min(y1),
+            x2: x0.max(x1),
+            y2: y0.max(y1),
+            score,
+            class: 0,
+        },
+        ends: [[x0, y0], [x1, y1]],
+        length_px: (x1 - x0).hypot(y1 - y0),
+        orientation_deg: (y1 - y0).atan2(x1 - x0).to_degrees().rem_euclid(180.0),
+        elongation: 5.0,
+        flux: 100.0,
+        snr: 20.0,
+    }
+}
