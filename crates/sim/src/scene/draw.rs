@@ -10,6 +10,7 @@ use rand::RngExt;
 use rand_chacha::ChaCha12Rng;
 
 use super::accepted::{Exposure, Object};
+use super::object_draws::{draw_tumble, pick_debris};
 use super::place::place;
 use super::pointing::point_sensor;
 use super::trajectory::{Shot, trajectory};
@@ -27,21 +28,6 @@ use soig_sky::{Vec3, radec_deg};
 /// stream (so the retries of the scene draw never change which object an image shows).
 pub fn choose_debris(spec: &Spec, debris: usize, seed: u64, image: u64) -> usize {
     pick_debris(spec, debris, &mut stream(seed, image, Purpose::Debris))
-}
-
-/// A debris index by the spec's weights, from `rng`.
-pub(super) fn pick_debris(spec: &Spec, debris: usize, rng: &mut ChaCha12Rng) -> usize {
-    let weight = |i: usize| spec.debris_weights.get(i).copied().unwrap_or(1.0);
-    let total: f64 = (0..debris).map(weight).sum();
-    let mut u = rng.random_range(0.0..total);
-    for i in 0..debris {
-        if u < weight(i) {
-            return i;
-        }
-        u -= weight(i);
-    }
-    // Rounding of the subtractions can leave u just above the last weight.
-    debris - 1
 }
 
 /// Draw the scene of image `image` of a campaign with this seed: the debris object first,
@@ -104,19 +90,6 @@ pub fn draw(
         }
     }
     Err(no_scene(max, rejections))
-}
-
-/// The tumbling modulation of one object's draw.
-pub(super) fn draw_tumble(spec: &Spec, rng: &mut ChaCha12Rng) -> Option<Tumble> {
-    spec.tumble.map(|r| Tumble {
-        period_s: if r.period_max_s > r.period_min_s {
-            rng.random_range(r.period_min_s..=r.period_max_s)
-        } else {
-            r.period_min_s
-        },
-        amplitude: rng.random_range(0.0..=r.amplitude_max),
-        phase_rad: rng.random_range(0.0..std::f64::consts::TAU),
-    })
 }
 
 /// The random values of one draw attempt, in the scene stream's order.

@@ -11,11 +11,13 @@
 //!
 //! - `spec`: the values a draw reads; `accepted`: the scene it gives; `rejection`: why not;
 //! - `draw`: one image's draw and its retries; `place`: the extra objects of a frame;
+//!   `object_draws`: which debris object and its tumble, for both;
 //! - `pointing`: where the sensor points; `trajectory`: the debris path over the exposure;
 //!   `visibility`: the checks and the signal-to-noise gate.
 
 mod accepted;
 mod draw;
+mod object_draws;
 mod place;
 mod pointing;
 mod rejection;

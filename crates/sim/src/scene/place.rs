@@ -8,7 +8,7 @@ use hifitime::{Duration, Epoch};
 use rand::RngExt;
 
 use super::accepted::{Exposure, Object};
-use super::draw::{draw_tumble, pick_debris};
+use super::object_draws::{draw_tumble, pick_debris};
 use super::trajectory::{Shot, trajectory};
 use super::visibility::{gate_snr, visibility};
 use super::{CollectFrame, Inputs, MAX_OBJECTS_PER_FRAME, NoScene, Rejection, Scene, Spec, Tumble};
