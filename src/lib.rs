@@ -72,6 +72,7 @@ pub mod compare;
 pub mod convert;
 pub mod dataset;
 pub mod detect_frames;
+mod detect_stage;
 pub mod error;
 pub mod experiment;
 pub mod export;

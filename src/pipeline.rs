@@ -10,22 +10,20 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::Context;
 use rayon::prelude::*;
 
 use crate::artifacts::{self, Provenance, WrittenPng};
-use crate::campaign::{Campaign, PointingMode, Stage};
+use crate::campaign::{Campaign, Stage};
 use crate::dataset::{self, Subset};
-use crate::detect::Detection;
-use crate::detect::streak::{StreakParams, detect_streaks_among_stars};
-use crate::detect::yolo::{YoloDetector, YoloParams};
+use crate::detect::yolo::YoloDetector;
+use crate::detect_stage::{Written, detect_and_report, yolo_params};
 use crate::experiment;
 use crate::geometry::FrameKind;
 use crate::journal::{self, Identity, Journal, PngRecord, Record};
 use crate::manifest::{self, MANIFEST, Manifest};
 use crate::output::{Resume, write_resumable};
 use crate::progress::Progress;
-use crate::report::{self, DetectorRun, ObjectFacts, TestImage};
+use crate::report;
 use crate::scene::{Pointing, Rejection};
 use crate::shard::Shard;
 use crate::simulate;
@@ -700,219 +698,4 @@ fn rejection_fields(reason: Rejection) -> &'static str {
             "`exposure.max_s` (track pointing follows the debris' apparent motion)"
         }
     }
-}
-
-/// The YOLO detector's settings of a campaign.
-fn yolo_params(campaign: &Campaign) -> YoloParams {
-    let d = &campaign.resolved.detect;
-    YoloParams {
-        conf: d.conf,
-        iou: d.iou,
-        max_det: d.max_det as usize,
-        ..YoloParams::default()
-    }
-}
-
-/// What an image left for the detect stage.
-struct Written {
-    index: u64,
-    subset: Option<Subset>,
-    png: Option<WrittenPng>,
-    /// FITS -> PNG conversion time (frame, enhancement, encoding), seconds; None when a shard
-    /// did not record it.
-    conversion_s: Option<f64>,
-    /// Direction of star trails in the PNG (survey), degrees.
-    trail_angle_deg: Option<f64>,
-}
-
-/// Run the detectors on the test split (every image when there is no split) and write the
-/// report. YOLO's sessions run one thread each: ONNX Runtime's own pool slows ~3x beside a
-/// busy rayon pool.
-fn detect_and_report(
-    campaign: &Campaign,
-    dir: &Path,
-    written: &[Written],
-    dataset_digest: &str,
-    model: Option<&Path>,
-    progress: &dyn Progress,
-) -> anyhow::Result<()> {
-    let c = &campaign.resolved;
-    let chosen: Vec<&Written> = written
-        .iter()
-        .filter(|w| w.png.is_some() && matches!(w.subset, None | Some(Subset::Test)))
-        .collect();
-    let images: Vec<TestImage> = chosen
-        .iter()
-        .map(|w| -> anyhow::Result<TestImage> {
-            let png = w.png.as_ref().expect("filtered");
-            let stem = png
-                .path
-                .file_stem()
-                .unwrap_or_default()
-                .to_string_lossy()
-                .into_owned();
-            let sidecar = dir.join("truth").join(format!("{stem}.json"));
-            let facts = ObjectFacts::read(&sidecar)?;
-            if facts.len() != png.labels.len() {
-                anyhow::bail!(
-                    "{}: {} labelled objects, its image's record has {} label boxes",
-                    sidecar.display(),
-                    facts.len(),
-                    png.labels.len()
-                );
-            }
-            Ok(TestImage {
-                stem,
-                png: png.path.clone(),
-                width: png.width,
-                height: png.height,
-                truth: png.labels.clone(),
-                facts,
-            })
-        })
-        .collect::<anyhow::Result<_>>()?;
-    let load = |img: &TestImage| -> anyhow::Result<Vec<u8>> {
-        Ok(image::open(&img.png)
-            .with_context(|| format!("reading {}", img.png.display()))?
-            .to_luma8()
-            .into_raw())
-    };
-    let mut runs = Vec::new();
-    if c.detect.classical {
-        let params: &StreakParams = &c.detect.streak;
-        // Survey images: the catalogued stars' trails, predicted as the images were drawn.
-        // Track images get the trail direction alone: the star-aware pass recovers debris
-        // moving along the trails, and a tracked object does not move; its prediction misses
-        // trails bent by the pointing jitter (up to 8 px at the ends of 300 px trails, which it
-        // then reported as debris in the track quickstart; with the direction alone, none).
-        let sky = match c.pointing.mode {
-            PointingMode::Survey => {
-                Some((crate::experiment::of(campaign), experiment::inputs(campaign)?))
-            }
-            PointingMode::Fixed | PointingMode::Track => None,
-        };
-        progress.start("streak", images.len() as u64);
-        let results: Vec<(Vec<Detection>, f64)> = images
-            .par_iter()
-            .zip(chosen.par_iter())
-            .map(|(img, w)| -> anyhow::Result<(Vec<Detection>, f64)> {
-                let pixels = load(img)?;
-                // The prediction is part of the detector's time.
-                let t = Instant::now();
-                let stars = match &sky {
-                    Some((x, inputs)) => Some(crate::star_trails::of_image(
-                        x,
-                        inputs,
-                        w.index,
-                        &dir.join("truth").join(format!("{}.json", img.stem)),
-                    )?),
-                    None => None,
-                };
-                let found = detect_streaks_among_stars(
-                    &pixels,
-                    img.width,
-                    img.height,
-                    params,
-                    w.trail_angle_deg,
-                    stars.as_deref(),
-                );
-                progress.advance();
-                Ok((
-                    found.into_iter().map(|c| c.detection).collect(),
-                    t.elapsed().as_secs_f64(),
-                ))
-            })
-            .collect::<anyhow::Result<_>>()?;
-        progress.finish();
-        let (detections, seconds) = results.into_iter().unzip();
-        runs.push(DetectorRun {
-            name: "streak".into(),
-            description: "classical streak detector (background mesh, oriented line filters, components, moments; no model)".into(),
-            model_sha256: None,
-            detections,
-            seconds,
-        });
-    }
-    if let Some(path) = model {
-        // One single-threaded session per rayon thread, lent to whichever image a thread takes:
-        // every image is detected exactly as on one thread (same detections for any thread
-        // count), and the stage uses every core. Nothing inside `detect` waits on rayon, so at
-        // most that many images are in flight and the pool never runs dry.
-        let sessions = std::sync::Mutex::new(
-            (0..rayon::current_num_threads())
-                .map(|_| {
-                    YoloDetector::load(path, yolo_params(campaign))
-                        .with_context(|| format!("loading model {}", path.display()))
-                })
-                .collect::<anyhow::Result<Vec<_>>>()?,
-        );
-        progress.start("yolo", images.len() as u64);
-        let results: Vec<(Vec<Detection>, f64)> = images
-            .par_iter()
-            .map(|img| -> anyhow::Result<(Vec<Detection>, f64)> {
-                let pixels = load(img)?;
-                let mut yolo = sessions
-                    .lock()
-                    .expect("no session holder panicked")
-                    .pop()
-                    .expect("one session per rayon thread");
-                let t = Instant::now();
-                let found = yolo.detect(&pixels, img.width, img.height);
-                let seconds = t.elapsed().as_secs_f64();
-                sessions
-                    .lock()
-                    .expect("no session holder panicked")
-                    .push(yolo);
-                progress.advance();
-                Ok((found?, seconds))
-            })
-            .collect::<anyhow::Result<_>>()?;
-        progress.finish();
-        let (detections, seconds) = results.into_iter().unzip();
-        runs.push(DetectorRun {
-            name: "yolo".into(),
-            description: format!(
-                "YOLOv8 {} through ONNX Runtime, conf {}, NMS IoU {}",
-                c.detect
-                    .model
-                    .as_deref()
-                    .unwrap_or("train/model.onnx (trained by this run)"),
-                c.detect.conf,
-                c.detect.iou
-            ),
-            model_sha256: match &c.detect.model_sha256 {
-                Some(sha) => Some(sha.clone()),
-                None => Some(crate::hash::sha256_file(path)?.0),
-            },
-            detections,
-            seconds,
-        });
-    }
-    let geometry = match c.enhance.geometry {
-        FrameKind::Original => "original frame",
-        FrameKind::Padded => "padded frame",
-        FrameKind::Rotated => "rotated and expanded frame",
-    };
-    let kind = match c.background {
-        crate::campaign::Background::Uniform => "synthetic",
-        crate::campaign::Background::Frames { .. } => "semisynthetic",
-    };
-    let mode = match c.pointing.mode {
-        PointingMode::Fixed => "fixed",
-        PointingMode::Survey => "survey",
-        PointingMode::Track => "track",
-    };
-    let conversion: Vec<f64> = written.iter().filter_map(|w| w.conversion_s).collect();
-    report::write(
-        dir,
-        &c.name,
-        &campaign.hash,
-        dataset_digest,
-        &format!("{mode}, {geometry}, {kind}"),
-        &images,
-        &runs,
-        c.detect.conf,
-        &conversion,
-        progress,
-    )
 }

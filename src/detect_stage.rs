@@ -1,0 +1,273 @@
+//! The detect stage of a run: each detector over the test split (every image when there is no
+//! split), then the report. The stages in order: the test images and their truth
+//! (`test_images`), the streak detector (`streak_run`), YOLO (`yolo_run`), the report.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Context;
+use rayon::prelude::*;
+
+use crate::artifacts::WrittenPng;
+use crate::campaign::{Campaign, PointingMode};
+use crate::dataset::Subset;
+use crate::detect::Detection;
+use crate::detect::streak::detect_streaks_among_stars;
+use crate::detect::yolo::{YoloDetector, YoloParams};
+use crate::experiment;
+use crate::geometry::FrameKind;
+use crate::progress::Progress;
+use crate::report::{self, DetectorRun, ObjectFacts, TestImage};
+
+/// The YOLO detector's settings of a campaign.
+pub(crate) fn yolo_params(campaign: &Campaign) -> YoloParams {
+    let d = &campaign.resolved.detect;
+    YoloParams {
+        conf: d.conf,
+        iou: d.iou,
+        max_det: d.max_det as usize,
+        ..YoloParams::default()
+    }
+}
+
+/// What an image left for the detect stage.
+pub(crate) struct Written {
+    pub index: u64,
+    pub subset: Option<Subset>,
+    pub png: Option<WrittenPng>,
+    /// FITS -> PNG conversion time (frame, enhancement, encoding), seconds; None when a shard
+    /// did not record it.
+    pub conversion_s: Option<f64>,
+    /// Direction of star trails in the PNG (survey), degrees.
+    pub trail_angle_deg: Option<f64>,
+}
+
+/// Run the detectors on the test split (every image when there is no split) and write the
+/// report.
+pub(crate) fn detect_and_report(
+    campaign: &Campaign,
+    dir: &Path,
+    written: &[Written],
+    dataset_digest: &str,
+    model: Option<&Path>,
+    progress: &dyn Progress,
+) -> anyhow::Result<()> {
+    let c = &campaign.resolved;
+    let chosen: Vec<&Written> = written
+        .iter()
+        .filter(|w| w.png.is_some() && matches!(w.subset, None | Some(Subset::Test)))
+        .collect();
+    let images = test_images(dir, &chosen)?;
+    let mut runs = Vec::new();
+    if c.detect.classical {
+        runs.push(streak_run(campaign, dir, &images, &chosen, progress)?);
+    }
+    if let Some(path) = model {
+        runs.push(yolo_run(campaign, path, &images, progress)?);
+    }
+    let conversion: Vec<f64> = written.iter().filter_map(|w| w.conversion_s).collect();
+    report::write(
+        dir,
+        &c.name,
+        &campaign.hash,
+        dataset_digest,
+        &row_kind(campaign),
+        &images,
+        &runs,
+        c.detect.conf,
+        &conversion,
+        progress,
+    )
+}
+
+/// Each chosen image's PNG and truth, its sidecar's facts checked against its label boxes.
+fn test_images(dir: &Path, chosen: &[&Written]) -> anyhow::Result<Vec<TestImage>> {
+    chosen
+        .iter()
+        .map(|w| -> anyhow::Result<TestImage> {
+            let png = w.png.as_ref().expect("filtered");
+            let stem = png
+                .path
+                .file_stem()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned();
+            let sidecar = dir.join("truth").join(format!("{stem}.json"));
+            let facts = ObjectFacts::read(&sidecar)?;
+            if facts.len() != png.labels.len() {
+                anyhow::bail!(
+                    "{}: {} labelled objects, its image's record has {} label boxes",
+                    sidecar.display(),
+                    facts.len(),
+                    png.labels.len()
+                );
+            }
+            Ok(TestImage {
+                stem,
+                png: png.path.clone(),
+                width: png.width,
+                height: png.height,
+                truth: png.labels.clone(),
+                facts,
+            })
+        })
+        .collect()
+}
+
+/// An image's grey pixels.
+fn load(img: &TestImage) -> anyhow::Result<Vec<u8>> {
+    Ok(image::open(&img.png)
+        .with_context(|| format!("reading {}", img.png.display()))?
+        .to_luma8()
+        .into_raw())
+}
+
+/// One detector over the images in parallel, with a progress bar: `detect` gives an image's
+/// detections and the seconds the detector spent on it.
+fn run_detector(
+    name: &str,
+    images: &[TestImage],
+    progress: &dyn Progress,
+    detect: impl Fn(usize, &TestImage) -> anyhow::Result<(Vec<Detection>, f64)> + Sync,
+) -> anyhow::Result<(Vec<Vec<Detection>>, Vec<f64>)> {
+    progress.start(name, images.len() as u64);
+    let results: Vec<(Vec<Detection>, f64)> = images
+        .par_iter()
+        .enumerate()
+        .map(|(i, img)| {
+            let found = detect(i, img)?;
+            progress.advance();
+            Ok(found)
+        })
+        .collect::<anyhow::Result<_>>()?;
+    progress.finish();
+    Ok(results.into_iter().unzip())
+}
+
+/// The classical streak detector. Survey images get the catalogued stars' trails, predicted as
+/// the images were drawn. Track images get the trail direction alone: the star-aware pass
+/// recovers debris moving along the trails, and a tracked object does not move; its prediction
+/// misses trails bent by the pointing jitter (up to 8 px at the ends of 300 px trails, which it
+/// then reported as debris in the track quickstart; with the direction alone, none).
+fn streak_run(
+    campaign: &Campaign,
+    dir: &Path,
+    images: &[TestImage],
+    chosen: &[&Written],
+    progress: &dyn Progress,
+) -> anyhow::Result<DetectorRun> {
+    let params = &campaign.resolved.detect.streak;
+    let sky = match campaign.resolved.pointing.mode {
+        PointingMode::Survey => Some((experiment::of(campaign), experiment::inputs(campaign)?)),
+        PointingMode::Fixed | PointingMode::Track => None,
+    };
+    let (detections, seconds) = run_detector("streak", images, progress, |i, img| {
+        let pixels = load(img)?;
+        // The prediction is part of the detector's time.
+        let t = Instant::now();
+        let stars = match &sky {
+            Some((x, inputs)) => Some(crate::star_trails::of_image(
+                x,
+                inputs,
+                chosen[i].index,
+                &dir.join("truth").join(format!("{}.json", img.stem)),
+            )?),
+            None => None,
+        };
+        let found = detect_streaks_among_stars(
+            &pixels,
+            img.width,
+            img.height,
+            params,
+            chosen[i].trail_angle_deg,
+            stars.as_deref(),
+        );
+        Ok((
+            found.into_iter().map(|c| c.detection).collect(),
+            t.elapsed().as_secs_f64(),
+        ))
+    })?;
+    Ok(DetectorRun {
+        name: "streak".into(),
+        description: "classical streak detector (background mesh, oriented line filters, components, moments; no model)".into(),
+        model_sha256: None,
+        detections,
+        seconds,
+    })
+}
+
+/// YOLO through ONNX Runtime. One single-threaded session per rayon thread (ONNX Runtime's own
+/// pool slows ~3x beside a busy rayon pool), lent to whichever image a thread takes: every
+/// image is detected exactly as on one thread (same detections for any thread count), and the
+/// stage uses every core. Nothing inside `detect` waits on rayon, so at most that many images
+/// are in flight and the pool never runs dry.
+fn yolo_run(
+    campaign: &Campaign,
+    path: &Path,
+    images: &[TestImage],
+    progress: &dyn Progress,
+) -> anyhow::Result<DetectorRun> {
+    let d = &campaign.resolved.detect;
+    let sessions = std::sync::Mutex::new(
+        (0..rayon::current_num_threads())
+            .map(|_| {
+                YoloDetector::load(path, yolo_params(campaign))
+                    .with_context(|| format!("loading model {}", path.display()))
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?,
+    );
+    let (detections, seconds) = run_detector("yolo", images, progress, |_, img| {
+        let pixels = load(img)?;
+        let mut yolo = sessions
+            .lock()
+            .expect("no session holder panicked")
+            .pop()
+            .expect("one session per rayon thread");
+        let t = Instant::now();
+        let found = yolo.detect(&pixels, img.width, img.height);
+        let seconds = t.elapsed().as_secs_f64();
+        sessions
+            .lock()
+            .expect("no session holder panicked")
+            .push(yolo);
+        Ok((found?, seconds))
+    })?;
+    Ok(DetectorRun {
+        name: "yolo".into(),
+        description: format!(
+            "YOLOv8 {} through ONNX Runtime, conf {}, NMS IoU {}",
+            d.model
+                .as_deref()
+                .unwrap_or("train/model.onnx (trained by this run)"),
+            d.conf,
+            d.iou
+        ),
+        model_sha256: match &d.model_sha256 {
+            Some(sha) => Some(sha.clone()),
+            None => Some(crate::hash::sha256_file(path)?.0),
+        },
+        detections,
+        seconds,
+    })
+}
+
+/// The report's row kind: pointing, frame and background (`survey, rotated and expanded
+/// frame, semisynthetic`).
+fn row_kind(campaign: &Campaign) -> String {
+    let c = &campaign.resolved;
+    let geometry = match c.enhance.geometry {
+        FrameKind::Original => "original frame",
+        FrameKind::Padded => "padded frame",
+        FrameKind::Rotated => "rotated and expanded frame",
+    };
+    let kind = match c.background {
+        crate::campaign::Background::Uniform => "synthetic",
+        crate::campaign::Background::Frames { .. } => "semisynthetic",
+    };
+    let mode = match c.pointing.mode {
+        PointingMode::Fixed => "fixed",
+        PointingMode::Survey => "survey",
+        PointingMode::Track => "track",
+    };
+    format!("{mode}, {geometry}, {kind}")
+}
