@@ -12,7 +12,7 @@ use crate::dataset::Subset;
 use crate::enhance;
 use crate::fits::{self, Card, Cards, Pixels};
 use crate::render::iso_utc;
-use crate::render::{Exposure, FrameTruth};
+use crate::render::{Exposure, FrameTruth, Truth};
 use crate::scene::{Pointing, Scene};
 use crate::sensor::Sensor;
 use crate::simulate::ImageProducts;
@@ -211,6 +211,28 @@ pub fn provenance_cards(
     let mut cards = fits::wcs_cards(&scene.projection(sensor).shifted(jx, jy));
     let mut push =
         |k: &str, v: Card, comment: &str| cards.push((k.to_string(), v, comment.to_string()));
+    identity_cards(&mut push, p, scene);
+    objects_cards(&mut push, scene, t);
+    observation_cards(&mut push, p, scene, t);
+    pointing_cards(&mut push, sensor, scene);
+    collect_cards(&mut push, scene, t);
+    frame_cards(&mut push, t);
+    photometry_cards(&mut push, sensor, scene, t);
+    // A moving camera's WCS at the exposure's start and end (alternates S and E), so that a
+    // reader of the FITS alone can place the stars over the exposure (`soig detect --catalog`).
+    cards.extend(crate::fits::cards_of(crate::sky::motion::cards(
+        &scene.pointing,
+        &scene.projection(sensor).shifted(jx, jy),
+        scene.exposure_s,
+    )));
+    cards
+}
+
+/// Adds one card: keyword, value, comment.
+type Push<'a> = dyn FnMut(&str, Card, &str) + 'a;
+
+/// The image's origin: soig, its version, the campaign, seed and image index.
+fn identity_cards(push: &mut Push, p: &Provenance, scene: &Scene) {
     push(
         "ORIGIN",
         Card::Str("soig".into()),
@@ -233,6 +255,10 @@ pub fn provenance_cards(
         Card::Int(scene.image_index as i64),
         "image index in the campaign",
     );
+}
+
+/// The debris in the field: one object by name and NORAD number, or the placed objects.
+fn objects_cards(push: &mut Push, scene: &Scene, t: &Truth) {
     match &scene.placed {
         None => {
             push("OBJECT", Card::Str(t.object.clone()), "debris in the field");
@@ -262,6 +288,10 @@ pub fn provenance_cards(
             );
         }
     }
+}
+
+/// Who observed when: the observer, the exposure's times and the observer's state.
+fn observation_cards(push: &mut Push, p: &Provenance, scene: &Scene, t: &Truth) {
     push(
         "TELESCOP",
         Card::Str(p.observer.clone()),
@@ -330,6 +360,10 @@ pub fn provenance_cards(
             );
         }
     }
+}
+
+/// The gain and where the sensor pointed.
+fn pointing_cards(push: &mut Push, sensor: &Sensor, scene: &Scene) {
     push("GAIN", Card::Real(sensor.gain_e_per_adu), "[e-/ADU]");
     match &scene.pointing {
         Pointing::Fixed { .. } => push("POINTING", Card::Str("fixed".into()), "fixed or survey"),
@@ -368,6 +402,10 @@ pub fn provenance_cards(
             );
         }
     }
+}
+
+/// A collect's frame and track.
+fn collect_cards(push: &mut Push, scene: &Scene, t: &Truth) {
     if let Some(k) = &t.collect {
         push(
             "COLLECT",
@@ -393,6 +431,10 @@ pub fn provenance_cards(
             );
         }
     }
+}
+
+/// The PNG's frame and its transform from the FITS pixels.
+fn frame_cards(push: &mut Push, t: &Truth) {
     if let Some(f) = &t.frame {
         push(
             "GEOMETRY",
@@ -416,6 +458,10 @@ pub fn provenance_cards(
             }
         }
     }
+}
+
+/// The photometric zero point and the debris' magnitude.
+fn photometry_cards(push: &mut Push, sensor: &Sensor, scene: &Scene, t: &Truth) {
     push(
         "MAGZERO",
         Card::Real(sensor.zero_point_mag),
@@ -428,12 +474,4 @@ pub fn provenance_cards(
             "debris magnitude at mid-exposure (Eq. 6)",
         );
     }
-    // A moving camera's WCS at the exposure's start and end (alternates S and E), so that a
-    // reader of the FITS alone can place the stars over the exposure (`soig detect --catalog`).
-    cards.extend(crate::fits::cards_of(crate::sky::motion::cards(
-        &scene.pointing,
-        &scene.projection(sensor).shifted(jx, jy),
-        scene.exposure_s,
-    )));
-    cards
 }
