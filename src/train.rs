@@ -143,73 +143,8 @@ pub fn fit(
             script.display()
         );
     }
-    let t = &campaign.resolved.train;
-    let (imgsz, batch) = crate::experiment::train_size_and_batch(campaign);
-    // Starting weights (a .pt) are a file beside the campaign and are hashed into the record;
-    // a model YAML names an architecture that Ultralytics builds from scratch.
-    let (model_arg, start_weights) = if t.model.ends_with(".pt") {
-        let pt = campaign.base_dir.join(&t.model);
-        if !pt.is_file() {
-            bail!(
-                "train.model: starting weights {} not found (relative to the campaign file)",
-                pt.display()
-            );
-        }
-        let sha = sha256_file(&pt)?.0;
-        (
-            pt.display().to_string(),
-            Some(serde_json::json!({"path": t.model, "sha256": sha})),
-        )
-    } else {
-        (t.model.clone(), None)
-    };
-    let mut args: Vec<String> = vec![
-        script.display().to_string(),
-        "--data".into(),
-        data.display().to_string(),
-        "--out".into(),
-        tdir.join("run").display().to_string(),
-        "--model".into(),
-        model_arg,
-        "--epochs".into(),
-        t.epochs.to_string(),
-        "--batch".into(),
-        batch.to_string(),
-        "--imgsz".into(),
-        imgsz.to_string(),
-        "--optimizer".into(),
-        t.optimizer.clone(),
-        "--device".into(),
-        t.device.clone(),
-        "--seed".into(),
-        t.seed.to_string(),
-        "--workers".into(),
-        t.workers.to_string(),
-        "--patience".into(),
-        t.patience.to_string(),
-    ];
-    if let Some(h) = t.time_hours {
-        args.extend(["--time-hours".into(), h.to_string()]);
-    }
-    if let Some(cache) = t.cache {
-        args.extend(["--cache".into(), cache.as_str().into()]);
-    }
-    // Only when set, so that the command line of a campaign without them is what it was.
-    if t.amp == Some(true) {
-        args.push("--amp".into());
-    }
-    if t.val == Some(false) {
-        args.push("--no-val".into());
-    }
-    if let Some(b) = chunk.budget_s {
-        args.extend(["--budget-s".into(), b.to_string()]);
-    }
-    if let Some(n) = chunk.epochs {
-        args.extend(["--chunk-epochs".into(), n.to_string()]);
-    }
-    if chunk.resume {
-        args.push("--resume".into());
-    }
+    let (model_arg, start_weights) = start_weights(campaign)?;
+    let args = script_args(&script, &data, &tdir, model_arg, campaign, chunk);
     // One log per chunk: the first keeps the name whole runs always had.
     let log_name = if chunk_no == 1 {
         "train.log".to_string()
@@ -217,28 +152,7 @@ pub fn fit(
         format!("train-chunk-{chunk_no}.log")
     };
     let log_path = tdir.join(&log_name);
-    let log = fs::create_log(&log_path)?;
-    progress.note(&format!(
-        "soig train: {} {} (log: {})",
-        python.display(),
-        args.join(" "),
-        log_path.display()
-    ));
-    let status = Command::new(python)
-        .args(&args)
-        .stdout(log.try_clone()?)
-        .stderr(log)
-        .status()
-        .with_context(|| format!("running {}", python.display()))?;
-    if !status.success() {
-        let text = std::fs::read_to_string(&log_path).unwrap_or_default();
-        let tail: Vec<&str> = text.lines().rev().take(15).collect();
-        bail!(
-            "training failed ({status}); last lines of {}:\n{}",
-            log_path.display(),
-            tail.into_iter().rev().collect::<Vec<_>>().join("\n")
-        );
-    }
+    run_logged(python, &args, &log_path, progress)?;
     let summary_path = tdir.join("run/summary.json");
     let summary: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(&summary_path)
@@ -287,6 +201,122 @@ pub fn fit(
         }),
         model: Some(model),
     })
+}
+
+/// The `--model` argument and, for starting weights (a .pt beside the campaign, hashed into the
+/// record), their path and sha256; a model YAML names an architecture that Ultralytics builds
+/// from scratch.
+fn start_weights(campaign: &Campaign) -> anyhow::Result<(String, Option<serde_json::Value>)> {
+    let t = &campaign.resolved.train;
+    Ok(if t.model.ends_with(".pt") {
+        let pt = campaign.base_dir.join(&t.model);
+        if !pt.is_file() {
+            bail!(
+                "train.model: starting weights {} not found (relative to the campaign file)",
+                pt.display()
+            );
+        }
+        let sha = sha256_file(&pt)?.0;
+        (
+            pt.display().to_string(),
+            Some(serde_json::json!({"path": t.model, "sha256": sha})),
+        )
+    } else {
+        (t.model.clone(), None)
+    })
+}
+
+/// The training script's command line: the campaign's `[train]` settings and the chunk's.
+fn script_args(
+    script: &Path,
+    data: &Path,
+    tdir: &Path,
+    model_arg: String,
+    campaign: &Campaign,
+    chunk: Chunk,
+) -> Vec<String> {
+    let t = &campaign.resolved.train;
+    let (imgsz, batch) = crate::experiment::train_size_and_batch(campaign);
+    let mut args: Vec<String> = vec![
+        script.display().to_string(),
+        "--data".into(),
+        data.display().to_string(),
+        "--out".into(),
+        tdir.join("run").display().to_string(),
+        "--model".into(),
+        model_arg,
+        "--epochs".into(),
+        t.epochs.to_string(),
+        "--batch".into(),
+        batch.to_string(),
+        "--imgsz".into(),
+        imgsz.to_string(),
+        "--optimizer".into(),
+        t.optimizer.clone(),
+        "--device".into(),
+        t.device.clone(),
+        "--seed".into(),
+        t.seed.to_string(),
+        "--workers".into(),
+        t.workers.to_string(),
+        "--patience".into(),
+        t.patience.to_string(),
+    ];
+    if let Some(h) = t.time_hours {
+        args.extend(["--time-hours".into(), h.to_string()]);
+    }
+    if let Some(cache) = t.cache {
+        args.extend(["--cache".into(), cache.as_str().into()]);
+    }
+    // Only when set, so that the command line of a campaign without them is what it was.
+    if t.amp == Some(true) {
+        args.push("--amp".into());
+    }
+    if t.val == Some(false) {
+        args.push("--no-val".into());
+    }
+    if let Some(b) = chunk.budget_s {
+        args.extend(["--budget-s".into(), b.to_string()]);
+    }
+    if let Some(n) = chunk.epochs {
+        args.extend(["--chunk-epochs".into(), n.to_string()]);
+    }
+    if chunk.resume {
+        args.push("--resume".into());
+    }
+    args
+}
+
+/// Run the training script with its output in `log_path`; a failure says the log's last lines.
+fn run_logged(
+    python: &Path,
+    args: &[String],
+    log_path: &Path,
+    progress: &dyn Progress,
+) -> anyhow::Result<()> {
+    let log = fs::create_log(log_path)?;
+    progress.note(&format!(
+        "soig train: {} {} (log: {})",
+        python.display(),
+        args.join(" "),
+        log_path.display()
+    ));
+    let status = Command::new(python)
+        .args(args)
+        .stdout(log.try_clone()?)
+        .stderr(log)
+        .status()
+        .with_context(|| format!("running {}", python.display()))?;
+    if !status.success() {
+        let text = std::fs::read_to_string(log_path).unwrap_or_default();
+        let tail: Vec<&str> = text.lines().rev().take(15).collect();
+        bail!(
+            "training failed ({status}); last lines of {}:\n{}",
+            log_path.display(),
+            tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+        );
+    }
+    Ok(())
 }
 
 /// How many chunks of the schedule in `tdir` have run, checking that one can follow.

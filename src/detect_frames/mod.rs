@@ -274,16 +274,11 @@ pub fn run(inputs: &[PathBuf], out: &Path, opts: &Options) -> anyhow::Result<Sum
     })
 }
 
-/// Enhance one frame, run the detectors on its sky region, put the results into the file's
-/// pixel grid and on the sky. Returns them and the enhanced sky region (for the preview).
-fn detect_frame(
-    frame: &Frame,
-    opts: &Options,
-    yolo: Option<&mut YoloDetector>,
-    stars: Option<&crate::sky::stars::StarCatalog>,
-) -> anyhow::Result<(FrameResult, Gray8)> {
+/// The frame's sky region as the detectors' 8-bit image, with the non-finite pixels replaced,
+/// the pedestal subtracted, and the input's format.
+fn enhance_region(frame: &Frame, opts: &Options) -> (Gray8, usize, f64, &'static str) {
     let (rw, rh) = (frame.region.width(), frame.region.height());
-    let (enhanced, non_finite, pedestal, format) = match &frame.pixels {
+    match &frame.pixels {
         RegionPixels::Gray(g) => (
             Gray8 {
                 width: rw,
@@ -304,12 +299,16 @@ fn detect_frame(
                 "fits",
             )
         }
-    };
-    let pixel_scale = opts
-        .optics
-        .pixel_scale_arcsec
-        .or(frame.wcs.map(|w| w.pixel_scale_arcsec()));
-    let (psf_fwhm_px, psf_source) = match (opts.optics.psf_fwhm_px, opts.optics.psf_fwhm_arcsec) {
+    }
+}
+
+/// The PSF's FWHM in pixels and where it came from: the options, else the streak detector's.
+fn psf_fwhm(
+    frame: &Frame,
+    opts: &Options,
+    pixel_scale: Option<f64>,
+) -> anyhow::Result<(f64, &'static str)> {
+    Ok(match (opts.optics.psf_fwhm_px, opts.optics.psf_fwhm_arcsec) {
         (Some(px), _) => (px, "--psf-fwhm-px"),
         (None, Some(arcsec)) => match pixel_scale {
             Some(s) => (
@@ -329,37 +328,63 @@ fn detect_frame(
             opts.streak.psf_sigma_px * FWHM_PER_SIGMA,
             "the streak detector's psf_sigma_px (not the frame's optics: give --psf-fwhm-px)",
         ),
-    };
+    })
+}
+
+/// The catalogued stars' trails on the detector's image (the frame's sky region), their
+/// direction, and what the catalogue was used for.
+fn catalogue_sky(
+    frame: &Frame,
+    opts: &Options,
+    cat: &crate::sky::stars::StarCatalog,
+    psf_sigma_px: f64,
+    psf_fwhm_px: f64,
+) -> anyhow::Result<(Vec<crate::hint::StarTrail>, Option<f64>, CatalogUse)> {
+        let facts = catalog::FrameSky::of(frame)?;
+        let predicted = facts.predict(cat, frame.region, psf_sigma_px);
+        let trails = catalog::in_region(&predicted, frame.region);
+        // A trail shorter than the PSF's width is a star that does not move.
+        let from_trails = catalog::trail_angle_deg(&trails, 2.0 * psf_fwhm_px);
+        let (angle, source) = match (opts.star_trail_angle_deg, from_trails) {
+            (Some(a), _) => (Some(a), "--star-trail-angle-deg"),
+            (None, Some(a)) => (Some(a), "the predicted trails"),
+            (None, None) => (None, "none: the predicted stars do not move"),
+        };
+        let use_ = CatalogUse {
+            start_utc: crate::render::iso_utc(facts.start),
+            exposure_s: facts.exposure_s,
+            pointing: if facts.motion.is_some() {
+                "moving: the WCS at the exposure's start and end (alternate WCS S and E)"
+            } else {
+                "fixed on the sky: the header has no WCS at the exposure's start and end"
+            },
+            drift_deg: facts.motion.as_ref().map_or(0.0, |m| m.drift_deg()),
+            stars_near: predicted.len(),
+            trails_on_frame: trails.len(),
+            trail_angle_deg: angle,
+            trail_angle_source: source,
+        };
+        Ok((trails, angle, use_))
+}
+
+/// Enhance one frame, run the detectors on its sky region, put the results into the file's
+/// pixel grid and on the sky. Returns them and the enhanced sky region (for the preview).
+fn detect_frame(
+    frame: &Frame,
+    opts: &Options,
+    yolo: Option<&mut YoloDetector>,
+    stars: Option<&crate::sky::stars::StarCatalog>,
+) -> anyhow::Result<(FrameResult, Gray8)> {
+    let (rw, rh) = (frame.region.width(), frame.region.height());
+    let (enhanced, non_finite, pedestal, format) = enhance_region(frame, opts);
+    let pixel_scale = opts
+        .optics
+        .pixel_scale_arcsec
+        .or(frame.wcs.map(|w| w.pixel_scale_arcsec()));
+    let (psf_fwhm_px, psf_source) = psf_fwhm(frame, opts, pixel_scale)?;
     let psf_sigma_px = psf_fwhm_px / FWHM_PER_SIGMA;
-    // The catalogued stars' trails on the detector's image (the frame's sky region).
     let sky = match stars {
-        Some(cat) => {
-            let facts = catalog::FrameSky::of(frame)?;
-            let predicted = facts.predict(cat, frame.region, psf_sigma_px);
-            let trails = catalog::in_region(&predicted, frame.region);
-            // A trail shorter than the PSF's width is a star that does not move.
-            let from_trails = catalog::trail_angle_deg(&trails, 2.0 * psf_fwhm_px);
-            let (angle, source) = match (opts.star_trail_angle_deg, from_trails) {
-                (Some(a), _) => (Some(a), "--star-trail-angle-deg"),
-                (None, Some(a)) => (Some(a), "the predicted trails"),
-                (None, None) => (None, "none: the predicted stars do not move"),
-            };
-            let use_ = CatalogUse {
-                start_utc: crate::render::iso_utc(facts.start),
-                exposure_s: facts.exposure_s,
-                pointing: if facts.motion.is_some() {
-                    "moving: the WCS at the exposure's start and end (alternate WCS S and E)"
-                } else {
-                    "fixed on the sky: the header has no WCS at the exposure's start and end"
-                },
-                drift_deg: facts.motion.as_ref().map_or(0.0, |m| m.drift_deg()),
-                stars_near: predicted.len(),
-                trails_on_frame: trails.len(),
-                trail_angle_deg: angle,
-                trail_angle_source: source,
-            };
-            Some((trails, angle, use_))
-        }
+        Some(cat) => Some(catalogue_sky(frame, opts, cat, psf_sigma_px, psf_fwhm_px)?),
         None => None,
     };
     let mut found = Vec::new();
