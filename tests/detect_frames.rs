@@ -41,7 +41,7 @@ fn pair(v: &serde_json::Value) -> [f64; 2] {
 /// 3.8 px off the truth line, which is the detector's accuracy (the campaign metrics measure
 /// it), not a convention. The conventions are checked exactly: the ends on the sky that
 /// `soig detect` computes through the FITS WCS must be where the renderer's own projection
-/// (`Tan`, checked against astropy in src/sky/projection.rs, not the header) puts the detected
+/// (`Tan`, checked against astropy in crates/sky/src/projection.rs, not the header) puts the detected
 /// pixel ends, to 0.001 px (the header's 12 significant digits allow 1e-9 deg, about 5e-6 px).
 #[test]
 fn finds_a_rendered_streak_on_the_pixel_grid_and_the_sky() {

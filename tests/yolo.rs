@@ -1,4 +1,4 @@
-//! src/detect/yolo.rs against Ultralytics. The figures in tests/fixtures/yolo/expected.rs and the
+//! crates/detect/src/yolo/ against Ultralytics. The figures in tests/fixtures/yolo/expected.rs and the
 //! fixtures themselves (tiny.onnx, the PNGs, the invalid models) are made by
 //! tests/reference/yolo_reference.py: Ultralytics' own `YOLO('tiny.onnx').predict(...)`, its LetterBox and
 //! cv2.resize.

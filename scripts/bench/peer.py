@@ -2,7 +2,7 @@
 """The tools a user would pick instead of soig, doing the same work, for scripts/bench.sh.
 
   peer.py enhance OUT_DIR SQRT CLIP TX TY GAMMA FITS...
-      soig's FITS -> PNG enhancement (src/enhance/mod.rs) in numpy + astropy + OpenCV, step for
+      soig's FITS -> PNG enhancement (crates/image/src/enhance/mod.rs) in numpy + astropy + OpenCV, step for
       step: square root, normalise, the log stretch whose gain puts the median at 0.25 (the same
       bisection), round half away from zero, cv2 CLAHE (soig's CLAHE is bit-exact against it),
       the gamma table, cv2.imwrite. Prints one line per image: name and seconds for enhancement
@@ -25,7 +25,7 @@ import numpy as np
 
 
 def log_gain_for(x, target):
-    # src/enhance/mod.rs `log_gain_for`, the same bisection in the same float arithmetic.
+    # crates/image/src/enhance/mod.rs `log_gain_for`, the same bisection in the same float arithmetic.
     if math.isnan(x) or x <= 0.0 or x >= target:
         return 0.0
     f = lambda g: math.log(1.0 + g * x) / math.log(1.0 + g) - target

@@ -333,7 +333,7 @@ pub struct Photometry {
     /// Named photometry from published sources, replacing the area and albedo below:
     /// `nasa-fragments` draws fragments of 0.1-1 m from the NASA Standard Breakup Model's size
     /// distribution and area (Johnson et al. 2001) with NASA ODPO's albedo 0.175 (Mulrooney
-    /// et al. 2008); see src/sky/debris_sizes.rs. Default `paper`: the fields below. Omitted
+    /// et al. 2008); see crates/sky/src/debris_sizes.rs. Default `paper`: the fields below. Omitted
     /// from the resolved campaign when `paper`, so hashes stay.
     #[serde(default, skip_serializing_if = "PhotometryPreset::is_paper")]
     pub preset: PhotometryPreset,

@@ -125,7 +125,7 @@ pub fn export_readers(py: &Path, args: &[&str]) -> serde_json::Value {
 /// pycocotools on the COCO export of run `out` (in `export`: its test split and the streak
 /// detector's detections) and `soig eval --mode coco` on the run's text files give the same
 /// AP, AP50, AP75 and AR100, to the last bit: soig's COCO metric repeats pycocotools' (and
-/// numpy's) arithmetic step for step (src/metrics/), on the same floats. Returns
+/// numpy's) arithmetic step for step (crates/detect/src/metrics/), on the same floats. Returns
 /// pycocotools' figures.
 pub fn assert_coco_agrees_with_soig_eval(
     py: &Path,

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference apparent star places for `src/sky/apparent.rs` (`STARS`).
+"""Reference apparent star places for `crates/sky/src/apparent.rs` (`STARS`).
 
 For each case: a UTC instant, an observer's GCRS position (km) and velocity (km/s) (a LEO
 circular orbit, 7000 km), a star's ICRS (ra, dec) with no distance (infinitely far), its

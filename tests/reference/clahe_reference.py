@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference fixtures for soig's `clahe_u8` (src/enhance/clahe.rs).
+"""Reference fixtures for soig's `clahe_u8` (crates/image/src/enhance/clahe.rs).
 
 Builds deterministic 8-bit test images (closed-form formulas and a seeded numpy
 generator), runs OpenCV's `cv2.createCLAHE(clipLimit, tileGridSize).apply(img)`

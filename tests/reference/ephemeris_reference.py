@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference geocentric Sun and Moon positions for `src/sky/ephemeris.rs` tests.
+"""Reference geocentric Sun and Moon positions for `crates/sky/src/ephemeris.rs` tests.
 
 Prints one Rust tuple literal per epoch, ready to paste into the `REFERENCE`
 table of tests/fixtures/sky/ephemeris.rs:

@@ -7,7 +7,7 @@ integrated over every pixel of the whole image (pixel i spans [i - 0.5, i + 0.5)
 cut), no jitter. With s_i = e_i / gain (ADU) and sigma_i^2 = sigma_bg^2 + s_i / gain, where
 sigma_bg is the standard deviation of the paper's uniform background (190..210 ADU per 5 s,
 scaled by t) plus bias (2..3 ADU), the SNR is sqrt(sum_i s_i^2 / sigma_i^2).
-The figures are pinned in src/render/tests.rs (test `matched_filter_snr_matches_numpy`).
+The figures are pinned in crates/sim/src/render/tests.rs (test `matched_filter_snr_matches_numpy`).
 Usage: .venv/bin/python tests/reference/matched_filter_reference.py
 """
 import math

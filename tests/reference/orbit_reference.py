@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference figures for the tests of src/sky/orbit/ and src/sky/frames.rs (the tables of
+"""Reference figures for the tests of crates/sky/src/orbit/ and crates/sky/src/frames.rs (the tables of
 tests/fixtures/sky/orbit_teme.rs and teme_gcrs.rs, and the figures inline in those tests).
 
 Run: python3 reference/orbit_reference.py [path/to/catalog.tle]
@@ -58,7 +58,7 @@ def afspc_satrec(l1, l2):
 
 
 def when(label):
-    """Rust literal of the instant a row is for (`When` of src/sky/testing.rs)."""
+    """Rust literal of the instant a row is for (`When` of crates/sky/src/testing.rs)."""
     if label.startswith("epoch"):
         return f"When::SinceEpoch({float(label[5:] or 0)!r})"
     d = datetime.fromisoformat(label)

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference figures pinned in the tests of src/sky/stars/ (galactic.rs, counts.rs, catalog.rs).
+"""Reference figures pinned in the tests of crates/sky/src/stars/ (galactic.rs, counts.rs, catalog.rs).
 
 1. The ICRS -> galactic matrix astropy uses, and (l, b) of test points (astropy).
 2. Eq. 8 proper motion for a Barnard's-star-like star over 6.5 yr (hand formula), compared with

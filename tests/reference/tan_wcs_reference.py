@@ -3,7 +3,7 @@
 Prints 0-based pixel (x, y) -> (RA, Dec) through astropy.wcs `all_pix2world(x, y, 0)` for
 (1) the WCS cards of the raw NEOSSat frame NEOSSAT_240__30_2026025124741.fits (CD and CDELT
 both present: CD wins) and (2) a PC x CDELT header near the pole with a rotation and a flip.
-The figures are pinned in src/sky/wcs.rs (test `matches_astropy`).
+The figures are pinned in crates/sky/src/wcs.rs (test `matches_astropy`).
 Usage: python3 tests/reference/tan_wcs_reference.py  (needs astropy; run with astropy 8.0.2)
 """
 import warnings

@@ -2,7 +2,7 @@
 
 Prints (ra, dec) -> 0-based pixel (x, y) through astropy.wcs for a TAN header with soig's
 conventions (CRPIX at the image centre, 1-based; CD = diag(+s, +s): +x is +RA, +y is +Dec).
-The figures are pinned in src/sky/projection.rs (test `matches_astropy_wcs`).
+The figures are pinned in crates/sky/src/projection.rs (test `matches_astropy_wcs`).
 Usage: python3 tests/reference/wcs_reference.py
 """
 from astropy.io import fits

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference figures for src/detect/yolo.rs (the YOLOv8 ONNX detector), from Ultralytics itself.
+"""Reference figures for crates/detect/src/yolo/ (the YOLOv8 ONNX detector), from Ultralytics itself.
 
 Run from the crate root:
 
