@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, soig, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, run_quiet, soig, tle_object};
 
 /// A run of 4 small fixed-pointing images (FITS and PNG); returns its folder.
 fn small_run(dir: &Path) -> (PathBuf, PathBuf) {
@@ -14,13 +14,7 @@ fn small_run(dir: &Path) -> (PathBuf, PathBuf) {
         .tables("[sensor]\nwidth_px = 256\nheight_px = 256\nfov_radius_deg = 0.025\n[render]\ntrajectory_samples = 500\n")
         .write(&dir.join("small.toml"));
     let out = dir.join("run");
-    let o = soig(&[
-        "run",
-        campaign.to_str().unwrap(),
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_quiet(&campaign, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     (campaign, out)
 }
