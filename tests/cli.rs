@@ -22,6 +22,14 @@ fn small() -> CampaignToml {
     small_with(7, 6)
 }
 
+/// `small()` with the detect stage and `tables` (its model), written as `dir/small.toml`.
+fn small_detecting(dir: &Path, tables: &str) -> PathBuf {
+    small()
+        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
+        .tables(tables)
+        .write(&dir.join("small.toml"))
+}
+
 fn small_with(seed: u64, images: u32) -> CampaignToml {
     CampaignToml::new("small", seed, images)
         .debris(&tle_object(37476))
@@ -319,13 +327,13 @@ fn detect_stage_writes_a_reproducible_report_with_both_detectors() {
         return;
     }
     let tmp = tempfile::tempdir().unwrap();
-    let c = small()
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-        .tables(&format!(
+    let c = small_detecting(
+        tmp.path(),
+        &format!(
             "[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n[detect]\nmodel = \"{}\"\n",
             fixture("tiny.onnx")
-        ))
-        .write(&tmp.path().join("small.toml"));
+        ),
+    );
     let mut digests = Vec::new();
     for threads in [1, 2] {
         let out = tmp.path().join(format!("det{threads}"));
@@ -365,22 +373,14 @@ fn bad_models_fail_cleanly() {
         ("/nonexistent/model.onnx", "/nonexistent/model.onnx"),
         (fixture("not_onnx.onnx").as_str(), "not_onnx.onnx"),
     ] {
-        let c = small()
-            .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-            .tables(&format!("[detect]\nmodel = \"{model}\"\n"))
-            .write(&tmp.path().join("small.toml"));
+        let c = small_detecting(tmp.path(), &format!("[detect]\nmodel = \"{model}\"\n"));
         assert_clean_failure(&c, &out, &["error", expect]);
     }
     // The model is loaded before the first image: the run fails before it creates anything,
     // not even the output's parent folder.
     let late = tmp.path().join("new-parent").join("out");
-    let c = small()
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-        .tables(&format!(
-            "[detect]\nmodel = \"{}\"\n",
-            fixture("not_onnx.onnx")
-        ))
-        .write(&tmp.path().join("small.toml"));
+    let not_onnx = fixture("not_onnx.onnx");
+    let c = small_detecting(tmp.path(), &format!("[detect]\nmodel = \"{not_onnx}\"\n"));
     assert_refused(&run(&c, &late, None), "not_onnx.onnx");
     assert!(!tmp.path().join("new-parent").exists());
 }
