@@ -36,6 +36,23 @@ pub fn png(
     crate::store::fs::write(path, rgb_png(&img)?)
 }
 
+/// The chart's series labels at `position`, on a translucent white box with a black border.
+pub fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> anyhow::Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(position)
+        .draw()?;
+    Ok(())
+}
+
 /// The PNG of `img`, the bytes `RgbImage::save` writes (the PNG encoder's defaults).
 pub fn rgb_png(img: &image::RgbImage) -> anyhow::Result<Vec<u8>> {
     let mut bytes = std::io::Cursor::new(Vec::new());

@@ -561,13 +561,7 @@ fn plot(path: &Path, rows: &[Row]) -> anyhow::Result<()> {
                     )
             }))?;
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()?;
-        Ok(())
+        crate::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)
     })
 }
 

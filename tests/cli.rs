@@ -13,11 +13,21 @@ fn soig(args: &[&str], threads: Option<usize>) -> Output {
 }
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, tle_file, tle_object};
+use common::{
+    CampaignToml, ELEMENTS_40649, assert_refused, json, ort_available, tle_file, tle_object,
+};
 
 /// A small, fast campaign: 256 px images, few samples.
 fn small() -> CampaignToml {
     small_with(7, 6)
+}
+
+/// `small()` with the detect stage and `tables` (its model), written as `dir/small.toml`.
+fn small_detecting(dir: &Path, tables: &str) -> PathBuf {
+    small()
+        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
+        .tables(tables)
+        .write(&dir.join("small.toml"))
 }
 
 fn small_with(seed: u64, images: u32) -> CampaignToml {
@@ -313,31 +323,24 @@ fn fixture(name: &str) -> String {
 
 #[test]
 fn detect_stage_writes_a_reproducible_report_with_both_detectors() {
-    if std::env::var_os("SOIG_REQUIRE_ONNXRUNTIME").is_none()
-        && soig::detect::yolo::find_onnxruntime().is_err()
-    {
-        eprintln!(
-            "ONNX Runtime not installed: run scripts/setup.sh (scripts/test.sh makes this a failure)"
-        );
+    if !ort_available() {
         return;
     }
     let tmp = tempfile::tempdir().unwrap();
-    let c = small()
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-        .tables(&format!(
+    let c = small_detecting(
+        tmp.path(),
+        &format!(
             "[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n[detect]\nmodel = \"{}\"\n",
             fixture("tiny.onnx")
-        ))
-        .write(&tmp.path().join("small.toml"));
+        ),
+    );
     let mut digests = Vec::new();
     for threads in [1, 2] {
         let out = tmp.path().join(format!("det{threads}"));
         digests.push(run_ok(&c, &out, Some(threads)));
         let v = soig(&["verify", out.to_str().unwrap()], None);
         assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
-        let report: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("report/report.json")).unwrap())
-                .unwrap();
+        let report = json(&out.join("report/report.json"));
         let names: Vec<&str> = report["detectors"]
             .as_array()
             .unwrap()
@@ -370,22 +373,14 @@ fn bad_models_fail_cleanly() {
         ("/nonexistent/model.onnx", "/nonexistent/model.onnx"),
         (fixture("not_onnx.onnx").as_str(), "not_onnx.onnx"),
     ] {
-        let c = small()
-            .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-            .tables(&format!("[detect]\nmodel = \"{model}\"\n"))
-            .write(&tmp.path().join("small.toml"));
+        let c = small_detecting(tmp.path(), &format!("[detect]\nmodel = \"{model}\"\n"));
         assert_clean_failure(&c, &out, &["error", expect]);
     }
     // The model is loaded before the first image: the run fails before it creates anything,
     // not even the output's parent folder.
     let late = tmp.path().join("new-parent").join("out");
-    let c = small()
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-        .tables(&format!(
-            "[detect]\nmodel = \"{}\"\n",
-            fixture("not_onnx.onnx")
-        ))
-        .write(&tmp.path().join("small.toml"));
+    let not_onnx = fixture("not_onnx.onnx");
+    let c = small_detecting(tmp.path(), &format!("[detect]\nmodel = \"{not_onnx}\"\n"));
     assert_refused(&run(&c, &late, None), "not_onnx.onnx");
     assert!(!tmp.path().join("new-parent").exists());
 }
@@ -395,21 +390,14 @@ fn bad_models_fail_cleanly() {
 /// mAP50-95 0.578, recall 4/6 at conf 0.5 with no false positive.
 #[test]
 fn committed_model_detects_the_quickstart_debris() {
-    if std::env::var_os("SOIG_REQUIRE_ONNXRUNTIME").is_none()
-        && soig::detect::yolo::find_onnxruntime().is_err()
-    {
-        eprintln!(
-            "ONNX Runtime not installed: run scripts/setup.sh (scripts/test.sh makes this a failure)"
-        );
+    if !ort_available() {
         return;
     }
     let tmp = tempfile::tempdir().unwrap();
     let campaign = Path::new(env!("CARGO_MANIFEST_DIR")).join("campaigns/quickstart.toml");
     let out = tmp.path().join("quickstart");
     run_ok(&campaign, &out, None);
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report/report.json")).unwrap())
-            .unwrap();
+    let report = json(&out.join("report/report.json"));
     let yolo = report["detectors"]
         .as_array()
         .unwrap()
@@ -529,14 +517,6 @@ fn study_writes_a_sane_table_plot_and_manifest() {
         assert_eq!(o.status.code(), Some(2), "{err}");
         assert!(err.contains(says) && !err.contains("panicked"), "{err}");
     }
-}
-
-/// A run that must fail with exit 2 and a message holding `expect`, without a panic.
-fn assert_refused(o: &Output, expect: &str) {
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
-    assert!(!err.contains("panicked"), "{err}");
-    assert!(err.contains(expect), "expected {expect:?} in: {err}");
 }
 
 #[test]

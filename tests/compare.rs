@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, ort_available, soig, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, json, ort_available, run_quiet, soig, tle_object};
 
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
@@ -42,13 +42,7 @@ fn campaign(dir: &Path, seed: u64, model: Option<&Path>) -> PathBuf {
 
 /// `soig run`, which must succeed: its stdout.
 fn run(campaign: &Path, out: &Path) -> String {
-    let o = soig(&[
-        "run",
-        campaign.to_str().unwrap(),
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_quiet(campaign, out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     stdout(&o)
 }
@@ -189,9 +183,7 @@ fn metric_drop_within_and_beyond_tolerance_and_a_results_row() {
         assert!(line.contains("mAP50-95"), "{ending}");
     }
     let map50 = |dir: &Path| -> f64 {
-        let r: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(dir.join("report/report.json")).unwrap())
-                .unwrap();
+        let r = json(&dir.join("report/report.json"));
         r["detectors"][1]["ultralytics"]["map50"].as_f64().unwrap()
     };
     let before = map50(&base);

@@ -11,7 +11,7 @@ use soig::experiment;
 use soig::frames::Frame;
 
 mod common;
-use common::{CampaignToml, ok, soig, tle_object};
+use common::{CampaignToml, ok, python_with_astropy, run_quiet, soig, tle_object};
 
 /// Images of 512 px (0.7 arcsec/px) in pointing `mode`, rendered only (FITS and truth).
 fn campaign(mode: &str) -> CampaignToml {
@@ -27,13 +27,7 @@ fn campaign(mode: &str) -> CampaignToml {
 /// Render the campaign into `dir`/run; returns the campaign file and the loaded campaign.
 fn render(dir: &Path, mode: &str) -> (PathBuf, Campaign) {
     let toml = campaign(mode).write(&dir.join("catalog.toml"));
-    ok(soig(&[
-        "run",
-        toml.to_str().unwrap(),
-        "--quiet",
-        "--out",
-        dir.join("run").to_str().unwrap(),
-    ]));
+    ok(run_quiet(&toml, &dir.join("run")));
     let c = Campaign::load(&toml).unwrap();
     (toml, c)
 }
@@ -334,20 +328,9 @@ fn star_aware_detection_on_soig_fits_keeps_the_debris_and_drops_the_trails() {
 /// says so and passes, unless SOIG_REQUIRE_ONNXRUNTIME is set (scripts/test.sh), when it fails.
 #[test]
 fn astropy_reads_the_start_and_end_wcs_as_soig_does() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let python = root.join(".venv/bin/python3");
-    let has_astropy = std::process::Command::new(&python)
-        .args(["-c", "import astropy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !has_astropy {
-        assert!(
-            std::env::var_os("SOIG_REQUIRE_ONNXRUNTIME").is_none(),
-            "no astropy in .venv: run scripts/setup.sh"
-        );
-        eprintln!("skipped: no astropy in .venv (scripts/setup.sh installs it)");
+    let Some(python) = python_with_astropy() else {
         return;
-    }
+    };
     let tmp = tempfile::tempdir().unwrap();
     render(tmp.path(), "survey");
     let fits = tmp.path().join("run/fits/img_000000.fits");

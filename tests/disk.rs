@@ -1,7 +1,12 @@
 //! Every run states what it will write and checks its disk holds it before the first image.
 
 use std::path::Path;
-use std::process::Command;
+
+mod common;
+use common::run_quickstart;
+
+/// The quickstart's stages without its detect stage.
+const STAGES: &str = "stages=[\"render\", \"enhance\", \"dataset\"]";
 
 fn bytes_under(dir: &Path) -> u64 {
     std::fs::read_dir(dir)
@@ -19,23 +24,14 @@ fn bytes_under(dir: &Path) -> u64 {
 
 #[test]
 fn a_run_too_big_for_its_disk_is_refused_with_both_figures_before_writing() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     // 1e7 images (the most a campaign may ask) of 1024 x 1024 with both FITS: about 100 TB,
     // more than any machine this runs on has free.
-    let o = Command::new(env!("CARGO_BIN_EXE_soig"))
-        .arg("run")
-        .arg(root.join("campaigns/quickstart.toml"))
-        .args(["--quiet", "--set", "images=10000000"])
-        .args([
-            "--set",
-            "stages=[\"render\", \"enhance\", \"dataset\"]",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = run_quickstart(
+        &["--quiet", "--set", "images=10000000", "--set", STAGES],
+        &out,
+    );
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -50,22 +46,9 @@ fn a_run_too_big_for_its_disk_is_refused_with_both_figures_before_writing() {
 
 #[test]
 fn the_planned_size_is_said_and_bounds_what_the_run_writes() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let o = Command::new(env!("CARGO_BIN_EXE_soig"))
-        .arg("run")
-        .arg(root.join("campaigns/quickstart.toml"))
-        .args([
-            "--set",
-            "images=3",
-            "--set",
-            "stages=[\"render\", \"enhance\", \"dataset\"]",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = run_quickstart(&["--set", "images=3", "--set", STAGES], &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);
     let said = err

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, soig, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, run_quiet, soig, tle_object};
 
 /// A run of 4 small fixed-pointing images (FITS and PNG); returns its folder.
 fn small_run(dir: &Path) -> (PathBuf, PathBuf) {
@@ -14,13 +14,7 @@ fn small_run(dir: &Path) -> (PathBuf, PathBuf) {
         .tables("[sensor]\nwidth_px = 256\nheight_px = 256\nfov_radius_deg = 0.025\n[render]\ntrajectory_samples = 500\n")
         .write(&dir.join("small.toml"));
     let out = dir.join("run");
-    let o = soig(&[
-        "run",
-        campaign.to_str().unwrap(),
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_quiet(&campaign, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     (campaign, out)
 }
@@ -87,59 +81,32 @@ fn a_soig_fits_converts_to_the_png_the_run_wrote() {
 fn bad_inputs_fail_cleanly_and_leave_the_inputs_alone() {
     let tmp = tempfile::tempdir().unwrap();
     let (_, run) = small_run(tmp.path());
-    let fits = run.join("fits").join("img_000000.fits");
+    let fits_dir = run.join("fits");
+    let fits = fits_dir.join("img_000000.fits");
+    let fits = fits.to_str().unwrap();
     let png = find(&run, "img_000000.png");
-    let before = std::fs::read_dir(run.join("fits")).unwrap().count();
+    let before = std::fs::read_dir(&fits_dir).unwrap().count();
     let out = tmp.path().join("out");
-    for (args, expect) in [
+    // The inputs and options, the output folder, and what the error says.
+    for (args, to, expect) in [
         (
-            vec![png.to_str().unwrap(), "--out", out.to_str().unwrap()],
+            vec![png.to_str().unwrap()],
+            &out,
             "already an 8-bit enhanced image",
         ),
+        (vec!["/nonexistent/x.fits"], &out, "/nonexistent/x.fits"),
+        (vec![fits], &fits_dir, "refusing to write"),
         (
-            vec!["/nonexistent/x.fits", "--out", out.to_str().unwrap()],
-            "/nonexistent/x.fits",
-        ),
-        (
-            vec![
-                fits.to_str().unwrap(),
-                "--out",
-                run.join("fits").to_str().unwrap(),
-            ],
-            "refusing to write",
-        ),
-        (
-            vec![
-                fits.to_str().unwrap(),
-                "--clahe-tiles",
-                "0x8",
-                "--out",
-                out.to_str().unwrap(),
-            ],
+            vec![fits, "--clahe-tiles", "0x8"],
+            &out,
             "--clahe-tiles 0x8",
         ),
-        (
-            vec![
-                fits.to_str().unwrap(),
-                "--gamma",
-                "NaN",
-                "--out",
-                out.to_str().unwrap(),
-            ],
-            "--gamma NaN",
-        ),
-        (
-            vec![
-                fits.to_str().unwrap(),
-                run.join("fits").join("img_000000.fits").to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-            ],
-            "same file stem",
-        ),
+        (vec![fits, "--gamma", "NaN"], &out, "--gamma NaN"),
+        (vec![fits, fits], &out, "same file stem"),
     ] {
         let mut a = vec!["enhance"];
         a.extend(args);
+        a.extend(["--out", to.to_str().unwrap()]);
         let o = soig(&a);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{a:?}: {err}");

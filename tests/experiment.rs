@@ -64,14 +64,15 @@ fn a_grid_runs_and_a_rerun_reuses_unchanged_points() {
             "[[axis]]\nfield = \"exposure.max_s\"\nvalues = {exposures}\n\n[[axis]]\nfield = \"seed\"\nfrom = 1\nto = 2\nstep = 1\n"
         )
     };
-    let path = experiment(tmp.path(), "e.toml", &axes("[5.0, 8.0]"));
-    let o = soig(&["experiment", &path, "--out", out.to_str().unwrap(), "-q"]);
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(
-        stdout.contains("4 point(s), 0 reused, 0 failed"),
-        "{stdout}"
-    );
+    // `soig experiment` of `axes`, which must succeed and say `summary`.
+    let run = |axes: &str, summary: &str| {
+        let path = experiment(tmp.path(), "e.toml", axes);
+        let o = soig(&["experiment", &path, "--out", out.to_str().unwrap(), "-q"]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(stdout.contains(summary), "{stdout}");
+    };
+    run(&axes("[5.0, 8.0]"), "4 point(s), 0 reused, 0 failed");
     let first = digests(&out);
     assert_eq!(first.len(), 4);
     assert!(
@@ -91,14 +92,7 @@ fn a_grid_runs_and_a_rerun_reuses_unchanged_points() {
     assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
 
     // A point added: the four others are reused, with their digests.
-    let path = experiment(tmp.path(), "e.toml", &axes("[5.0, 8.0, 11.0]"));
-    let o = soig(&["experiment", &path, "--out", out.to_str().unwrap(), "-q"]);
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(
-        stdout.contains("6 point(s), 4 reused, 0 failed"),
-        "{stdout}"
-    );
+    run(&axes("[5.0, 8.0, 11.0]"), "6 point(s), 4 reused, 0 failed");
     let second = digests(&out);
     for p in &first {
         assert!(second.contains(p), "{p:?} changed");

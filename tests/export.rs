@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use common::{
     CampaignToml, ELEMENTS_40649, assert_coco_agrees_with_soig_eval, assert_coco_bbox_is_label_box,
-    digest, export_readers, export_readers_python, json, soig, tle_object,
+    digest, export_readers, export_readers_python, json, run_quiet, soig, tle_object,
 };
 use serde_json::Value;
 
@@ -31,13 +31,7 @@ fn run(dir: &Path) -> PathBuf {
         )
         .write(&dir.join("exports.toml"));
     let out = dir.join("out");
-    let o = soig(&[
-        "run",
-        campaign.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = run_quiet(&campaign, &out);
     digest(&o);
     out
 }

@@ -8,29 +8,18 @@
 //! 1024 x 1024 at the frame's own exposure, the streak added in ADU, then soig's default
 //! enhancement (square root, CLAHE, gamma) to 8 bits, and the detector with its defaults.
 
-use std::path::Path;
-
 use soig::background::RealFrame;
 use soig::detect::streak::{Candidate, StreakParams, detect_streaks};
 use soig::enhance;
 use soig::imaging::robust_stats;
 use soig::rng::{PixelPurpose, pixel_stream};
 
-const FRAMES: [&str; 3] = [
-    "NEOSSAT_240__30_2020214095318.fits",
-    "NEOSSAT_240__30_2026025124741.fits",
-    "NEOS_SCI_2024239174545_cord.fits",
-];
+mod common;
+use common::{NEOSSAT_FRAMES, real_frame};
+
 const SIZE: usize = 1024;
 /// The detector's default PSF sigma, pixels: the streaks are drawn with it.
 const PSF: f64 = 1.5;
-
-fn frame(name: &str) -> RealFrame {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/neossat")
-        .join(name);
-    RealFrame::load(&path).unwrap()
-}
 
 /// Background `i` of a frame at its own exposure (ADU).
 fn background(f: &RealFrame, i: u64) -> Vec<f32> {
@@ -111,8 +100,8 @@ fn iou(a: &[f64; 4], c: &Candidate) -> f64 {
 
 #[test]
 fn debris_free_backgrounds_of_the_three_frames_give_no_box() {
-    for name in FRAMES {
-        let f = frame(name);
+    for name in NEOSSAT_FRAMES {
+        let f = real_frame(name);
         for i in 0..2 {
             let found = detect(&background(&f, i));
             let strong: Vec<_> = found.iter().filter(|c| c.detection.score >= 0.5).collect();
@@ -143,8 +132,8 @@ fn streaks_of_per_pixel_snr_1_and_integrated_snr_20_to_40_are_found() {
     ];
     let mut report = Vec::new();
     let (mut found_n, mut must_miss) = (0, 0);
-    for name in FRAMES {
-        let f = frame(name);
+    for name in NEOSSAT_FRAMES {
+        let f = real_frame(name);
         for (j, &(len, angle)) in cases.iter().enumerate() {
             let bg = background(&f, 10 + j as u64);
             // Per-pixel SNR 1: the streak's peak equals the robust noise sigma of this very

@@ -6,8 +6,10 @@
 //! without it the test says so and passes, unless SOIG_REQUIRE_ONNXRUNTIME is set (the test
 //! command, scripts/test.sh, sets it after the set-up), when it fails.
 
-use std::path::Path;
 use std::process::Command;
+
+mod common;
+use common::{python_with_astropy, run_quickstart};
 
 const CHECK: &str = r#"
 import sys, warnings
@@ -49,42 +51,23 @@ for path in sys.argv[1:]:
         print(path.rsplit("/", 1)[-1], unit, h["TELESCOP"], h["DATE-AVG"])
 "#;
 
-fn python_with_astropy(root: &Path) -> Option<std::path::PathBuf> {
-    let python = root.join(".venv/bin/python3");
-    let ok = Command::new(&python)
-        .args(["-c", "import astropy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    ok.then_some(python)
-}
-
 #[test]
 fn astropy_parses_every_card_and_unit_of_both_fits() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let Some(python) = python_with_astropy(root) else {
-        assert!(
-            std::env::var_os("SOIG_REQUIRE_ONNXRUNTIME").is_none(),
-            "no astropy in .venv: run scripts/setup.sh"
-        );
-        eprintln!("skipped: no astropy in .venv (scripts/setup.sh installs it)");
+    let Some(python) = python_with_astropy() else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let o = Command::new(env!("CARGO_BIN_EXE_soig"))
-        .arg("run")
-        .arg(root.join("campaigns/quickstart.toml"))
-        .args([
+    let o = run_quickstart(
+        &[
             "--quiet",
             "--set",
             "images=2",
             "--set",
             "stages=[\"render\"]",
-        ])
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+        ],
+        &out,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let mut files: Vec<_> = std::fs::read_dir(out.join("fits"))
         .unwrap()

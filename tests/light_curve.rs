@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{CampaignToml, ELEMENTS_40649, digest, soig, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, digest, run_quiet, tle_object};
 
 #[test]
 fn light_curves_match_the_truth_row_for_row() {
@@ -16,13 +16,7 @@ fn light_curves_match_the_truth_row_for_row() {
         .tables("[render]\ntrajectory_samples = 300\n[artifacts]\nlight_curve = true\n")
         .write(&tmp.path().join("curves.toml"));
     let out = tmp.path().join("out");
-    digest(&soig(&[
-        "run",
-        campaign.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]));
+    digest(&run_quiet(&campaign, &out));
     for i in 0..4 {
         let truth: serde_json::Value = serde_json::from_slice(
             &std::fs::read(out.join(format!("truth/img_{i:06}.json"))).unwrap(),

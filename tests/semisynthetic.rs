@@ -2,26 +2,15 @@
 //! periodogram of a 1024 x 1024 background has no peak (no tiling period), and its rows and
 //! columns show no seam.
 
-use std::path::Path;
-
 use soig::background::RealFrame;
 use soig::imaging::robust_stats;
 use soig::rng::{PixelPurpose, pixel_stream};
 
-const FRAMES: [&str; 3] = [
-    "NEOSSAT_240__30_2020214095318.fits",
-    "NEOSSAT_240__30_2026025124741.fits",
-    "NEOS_SCI_2024239174545_cord.fits",
-];
+mod common;
+use common::{NEOSSAT_FRAMES, real_frame};
+
 /// The paper's image size.
 const SIZE: usize = 1024;
-
-fn frame(name: &str) -> RealFrame {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/neossat")
-        .join(name);
-    RealFrame::load(&path).unwrap()
-}
 
 /// Background `i` of a frame: its own phase and block draws.
 fn background(f: &RealFrame, i: u64, exposure_s: f64, phase: Option<(usize, usize)>) -> Vec<f32> {
@@ -80,8 +69,8 @@ fn worst_peak(power: &[f64]) -> (usize, f64) {
 /// to fail on a periodic tiling (the previous method) of the same frame.
 #[test]
 fn no_tiling_period_in_the_periodogram() {
-    for name in FRAMES {
-        let f = frame(name);
+    for name in NEOSSAT_FRAMES {
+        let f = real_frame(name);
         let (k, ratio) = worst_peak(&row_periodogram(&background(&f, 0, 5.0, None), SIZE));
         assert!(
             ratio < 1.5,
@@ -125,8 +114,8 @@ fn column_stats(images: &[Vec<f32>], transpose: bool) -> Vec<(f64, f64)> {
 /// fails this (module doc of `background::fill`).
 #[test]
 fn no_seam_at_block_edges() {
-    for name in FRAMES {
-        let f = frame(name);
+    for name in NEOSSAT_FRAMES {
+        let f = real_frame(name);
         let images: Vec<Vec<f32>> = (0..4)
             .map(|i| background(&f, i, 5.0, Some((0, 0))))
             .collect();
@@ -272,7 +261,7 @@ fn the_fill_has_the_noise_of_the_sky() {
 }
 
 fn fill_has_the_noise_of_the_sky(name: &str) {
-    let f = frame(name);
+    let f = real_frame(name);
     let filled = |i: usize| f.filled[i];
     let clean = |i: usize| !f.filled[i];
     let pick = |set: &dyn Fn(usize) -> bool| -> Vec<f32> {
@@ -317,7 +306,7 @@ fn fill_has_the_noise_of_the_sky(name: &str) {
 fn no_real_streak_is_left_in_the_science_frames_backgrounds() {
     const BOUND: f64 = 6.5;
     for (name, rows) in [(SCIENCE, 128..896), (CALIBRATED, 0..512)] {
-        let f = frame(name);
+        let f = real_frame(name);
         let (raw, _, cols) = soig::fits::read_f32(&f.path).unwrap();
         let sky = f.kept.crop(&raw, cols);
         let n = rows.len();

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, digest, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, assert_refused, digest, tle_object};
 
 fn soig(args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_soig"));
@@ -57,13 +57,6 @@ fn merge(shards: &[&PathBuf], out: &Path) -> Output {
     let mut args = vec!["merge", "--quiet", "--out", out.to_str().unwrap()];
     args.extend(shards.iter().map(|s| s.to_str().unwrap()));
     soig(&args, &[])
-}
-
-fn refused(o: &Output, expect: &str) {
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
-    assert!(!err.contains("panicked"), "{err}");
-    assert!(err.contains(expect), "expected {expect:?} in: {err}");
 }
 
 #[test]
@@ -135,13 +128,13 @@ fn a_set_of_shards_that_is_not_one_whole_campaign_is_refused() {
     let foreign = t.join("foreign");
     digest(&shard(&other, 2, 3, &foreign));
     let out = t.join("out");
-    refused(&merge(&[&s[0], &s[1]], &out), "shard(s) 2 of 3 missing");
-    refused(
+    assert_refused(&merge(&[&s[0], &s[1]], &out), "shard(s) 2 of 3 missing");
+    assert_refused(
         &merge(&[&s[0], &s[1], &s[1], &s[2]], &out),
         "shard 1 of 3 is given twice",
     );
-    refused(&merge(&[&s[0], &s[1], &foreign], &out), "not one campaign");
-    refused(&merge(&[&s[2], &s[0]], &out), "of 3 missing");
+    assert_refused(&merge(&[&s[0], &s[1], &foreign], &out), "not one campaign");
+    assert_refused(&merge(&[&s[2], &s[0]], &out), "of 3 missing");
     let whole = t.join("whole");
     digest(&soig(
         &[
@@ -153,13 +146,13 @@ fn a_set_of_shards_that_is_not_one_whole_campaign_is_refused() {
         ],
         &[],
     ));
-    refused(&merge(&[&whole], &out), "is not a shard");
-    refused(&merge(&[&s[0], &s[1], &s[2]], &s[1]), "one of the shards");
+    assert_refused(&merge(&[&whole], &out), "is not a shard");
+    assert_refused(&merge(&[&s[0], &s[1], &s[2]], &s[1]), "one of the shards");
     // A shard whose files changed after it was made.
     let truth = s[1].join("truth/img_000003.json");
     let text = std::fs::read_to_string(&truth).unwrap();
     std::fs::write(&truth, text.replace("\"snr\"", "\"snr\" ")).unwrap();
-    refused(&merge(&[&s[0], &s[1], &s[2]], &out), "does not verify");
+    assert_refused(&merge(&[&s[0], &s[1], &s[2]], &out), "does not verify");
     assert!(!out.exists());
     // Bad shard specifications.
     for (spec, says) in [
@@ -171,6 +164,6 @@ fn a_set_of_shards_that_is_not_one_whole_campaign_is_refused() {
             &["run", c.to_str().unwrap(), "--quiet", "--shard", spec],
             &[],
         );
-        refused(&o, says);
+        assert_refused(&o, says);
     }
 }

@@ -8,7 +8,7 @@ use soig::sky::{angle_deg, radec_unit};
 mod common;
 use common::{
     CampaignToml, assert_coco_agrees_with_labels_and_truth, digest, rendered,
-    run_on_one_and_two_threads_and_verify, soig, tle_object,
+    run_on_one_and_two_threads_and_verify, run_quiet, tle_object,
 };
 
 /// Track images of 512 px at the paper's pixel scale (0.7"), a LEO and a GEO object;
@@ -182,13 +182,7 @@ fn the_streak_detector_reports_no_star_trail_in_track_images() {
         .tables("[pointing]\nmode = \"track\"\n[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n[detect]\nclassical = true\n")
         .write(&tmp.path().join("t.toml"));
     let out = tmp.path().join("out");
-    let o = soig(&[
-        "run",
-        file.to_str().unwrap(),
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_quiet(&file, &out);
     digest(&o);
     let csv = std::fs::read_to_string(out.join("report").join("detections.csv")).unwrap();
     let confident: Vec<&str> = csv

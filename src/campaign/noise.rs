@@ -48,65 +48,27 @@ impl Noise {
             "sky_mag_per_arcsec2",
             "give the sky either as `sky_e_per_s` or as `sky_mag_per_arcsec2`, not both",
         )?;
-        if let Some(e) = p.sky_e_per_s {
-            check(
-                within(e, 0.0, 1e7),
-                "sky_e_per_s",
-                "must be in [0, 1e7] e-/s per pixel",
-            )?;
+        // Each field's range, in the order they are checked; the sky's only where given.
+        #[rustfmt::skip]
+        let sky = [
+            p.sky_e_per_s.map(|e| (e, 0.0, 1e7, "sky_e_per_s", "must be in [0, 1e7] e-/s per pixel")),
+            p.sky_mag_per_arcsec2.map(|m| (m, 0.0, 40.0, "sky_mag_per_arcsec2", "must be a surface brightness in [0, 40] mag/arcsec^2")),
+        ];
+        #[rustfmt::skip]
+        let detector = [
+            (p.dark_e_per_s, 0.0, 1e6, "dark_e_per_s", "must be in [0, 1e6] e-/s per pixel"),
+            (p.read_noise_e, 0.0, 1e4, "read_noise_e", "must be in [0, 10000] e- rms"),
+            (p.full_well_e, 1.0, 1e9, "full_well_e", "must be in [1, 1e9] e-"),
+            (p.adc_max_adu, 1.0, 4294967295.0, "adc_max_adu", "must be in [1, 4294967295] ADU (65535 for a 16-bit ADC)"),
+            (p.bias_adu, 0.0, p.adc_max_adu, "bias_adu", "must be in [0, adc_max_adu] ADU"),
+            (p.hot_pixel_fraction, 0.0, 1.0, "hot_pixel_fraction", "must be a share of the pixels in [0, 1]"),
+            (p.hot_pixel_dark_e_per_s, 0.0, 1e7, "hot_pixel_dark_e_per_s", "must be in [0, 1e7] e-/s"),
+            (p.cosmic_rate_per_cm2_s, 0.0, 1e5, "cosmic_rate_per_cm2_s", "must be in [0, 1e5] hits per cm^2 per s"),
+            (p.pixel_size_um, 0.5, 100.0, "pixel_size_um", "must be a pixel pitch in [0.5, 100] um"),
+        ];
+        for (x, lo, hi, field, msg) in sky.into_iter().flatten().chain(detector) {
+            check(within(x, lo, hi), field, msg)?;
         }
-        if let Some(m) = p.sky_mag_per_arcsec2 {
-            check(
-                within(m, 0.0, 40.0),
-                "sky_mag_per_arcsec2",
-                "must be a surface brightness in [0, 40] mag/arcsec^2",
-            )?;
-        }
-        check(
-            within(p.dark_e_per_s, 0.0, 1e6),
-            "dark_e_per_s",
-            "must be in [0, 1e6] e-/s per pixel",
-        )?;
-        check(
-            within(p.read_noise_e, 0.0, 1e4),
-            "read_noise_e",
-            "must be in [0, 10000] e- rms",
-        )?;
-        check(
-            within(p.full_well_e, 1.0, 1e9),
-            "full_well_e",
-            "must be in [1, 1e9] e-",
-        )?;
-        check(
-            within(p.adc_max_adu, 1.0, 4294967295.0),
-            "adc_max_adu",
-            "must be in [1, 4294967295] ADU (65535 for a 16-bit ADC)",
-        )?;
-        check(
-            within(p.bias_adu, 0.0, p.adc_max_adu),
-            "bias_adu",
-            "must be in [0, adc_max_adu] ADU",
-        )?;
-        check(
-            within(p.hot_pixel_fraction, 0.0, 1.0),
-            "hot_pixel_fraction",
-            "must be a share of the pixels in [0, 1]",
-        )?;
-        check(
-            within(p.hot_pixel_dark_e_per_s, 0.0, 1e7),
-            "hot_pixel_dark_e_per_s",
-            "must be in [0, 1e7] e-/s",
-        )?;
-        check(
-            within(p.cosmic_rate_per_cm2_s, 0.0, 1e5),
-            "cosmic_rate_per_cm2_s",
-            "must be in [0, 1e5] hits per cm^2 per s",
-        )?;
-        check(
-            within(p.pixel_size_um, 0.5, 100.0),
-            "pixel_size_um",
-            "must be a pixel pitch in [0.5, 100] um",
-        )?;
         Ok(())
     }
 }

@@ -474,12 +474,7 @@ pub fn plot(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
                         vec![(lo, 0.5), (hi, 0.5)],
                         BLACK.mix(0.3),
                     )))?;
-                    chart
-                        .configure_series_labels()
-                        .background_style(WHITE.mix(0.8))
-                        .border_style(BLACK)
-                        .position(SeriesLabelPosition::LowerLeft)
-                        .draw()?;
+                    crate::plot::legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
                 }};
             }
             match q {
@@ -497,6 +492,13 @@ pub fn plot(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
 mod tests {
     use super::*;
     use crate::detect::Detection;
+
+    /// Each bin's (lo, hi, objects, found, false positives).
+    fn counts(bins: &[Bin]) -> Vec<(f64, f64, usize, usize, usize)> {
+        bins.iter()
+            .map(|b| (b.lo, b.hi, b.objects, b.found, b.false_positives))
+            .collect()
+    }
 
     fn image(found: bool, extra_fp: usize) -> ImageEval {
         let truth = [100.0, 100.0, 140.0, 110.0];
@@ -570,12 +572,8 @@ mod tests {
         ];
         let e = efficiency("d", &evals, &each(&f), 0.5);
         let m = &e.curves[&Quantity::Magnitude];
-        let got: Vec<_> = m
-            .iter()
-            .map(|b| (b.lo, b.hi, b.objects, b.found, b.false_positives))
-            .collect();
         assert_eq!(
-            got,
+            counts(m),
             [
                 (10.0, 10.5, 2, 2, 1),
                 (11.0, 11.5, 1, 0, 0),
@@ -696,12 +694,8 @@ mod tests {
             vec![],
         ];
         let e = efficiency("d", &evals, &f, 0.5);
-        let got: Vec<_> = e.curves[&Quantity::Magnitude]
-            .iter()
-            .map(|b| (b.lo, b.hi, b.objects, b.found, b.false_positives))
-            .collect();
         assert_eq!(
-            got,
+            counts(&e.curves[&Quantity::Magnitude]),
             [
                 (10.0, 10.5, 1, 1, 0),
                 (11.0, 11.5, 1, 1, 1),

@@ -44,13 +44,7 @@ pub(super) fn pr_plot(
                     PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
                 });
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerLeft)
-            .draw()?;
-        Ok(())
+        crate::plot::legend(&mut chart, SeriesLabelPosition::LowerLeft)
     })
 }
 

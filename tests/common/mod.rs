@@ -8,6 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
+use soig::background::RealFrame;
 use soig::campaign::Campaign;
 use soig::experiment::{self, Experiment};
 use soig::simulate::{self, ImageProducts};
@@ -38,6 +39,34 @@ pub fn soig_in(cwd: &Path, args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("soig runs")
+}
+
+/// A command that must fail with exit 2 and a message holding `expect`, without a panic.
+pub fn assert_refused(o: &Output, expect: &str) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.contains(expect), "expected {expect:?} in: {err}");
+}
+
+/// `soig run CAMPAIGN --quiet --out OUT`.
+pub fn run_quiet(campaign: &Path, out: &Path) -> Output {
+    soig(&[
+        "run",
+        campaign.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
+/// `soig run campaigns/quickstart.toml ARGS --out OUT`.
+pub fn run_quickstart(args: &[&str], out: &Path) -> Output {
+    let campaign = repo("campaigns/quickstart.toml");
+    let mut all = vec!["run", campaign.to_str().unwrap()];
+    all.extend(args);
+    all.extend(["--out", out.to_str().unwrap()]);
+    soig(&all)
 }
 
 /// `soig run CAMPAIGN --out OUT --quiet` on `threads` rayon threads, which must succeed; its
@@ -177,9 +206,39 @@ pub fn tle_file() -> PathBuf {
     repo("campaigns/data/catalog-2022-01-22.tle")
 }
 
+/// The real NEOSSat frames of tests/fixtures/neossat/.
+pub const NEOSSAT_FRAMES: [&str; 3] = [
+    "NEOSSAT_240__30_2020214095318.fits",
+    "NEOSSAT_240__30_2026025124741.fits",
+    "NEOS_SCI_2024239174545_cord.fits",
+];
+
+/// NEOSSat frame `name` of tests/fixtures/neossat/, loaded.
+pub fn real_frame(name: &str) -> RealFrame {
+    RealFrame::load(&repo("tests/fixtures/neossat").join(name)).unwrap()
+}
+
 /// A real NEOSSat frame, 512 x 512, 10 s.
 pub fn neossat_frame() -> PathBuf {
     repo("tests/fixtures/neossat/NEOS_SCI_2024239174545_cord.fits")
+}
+
+/// The repository's .venv Python when it has astropy; else None, the test saying it skips
+/// (a failure where SOIG_REQUIRE_ONNXRUNTIME says the set-up is complete).
+pub fn python_with_astropy() -> Option<PathBuf> {
+    let python = repo(".venv/bin/python3");
+    let has_astropy = std::process::Command::new(&python)
+        .args(["-c", "import astropy"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has_astropy {
+        assert!(
+            std::env::var_os("SOIG_REQUIRE_ONNXRUNTIME").is_none(),
+            "no astropy in .venv: run scripts/setup.sh"
+        );
+        eprintln!("skipped: no astropy in .venv (scripts/setup.sh installs it)");
+    }
+    has_astropy.then_some(python)
 }
 
 /// The body of an object table for NORAD `norad` of `tle_file()`.

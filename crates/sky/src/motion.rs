@@ -269,26 +269,14 @@ pub fn cards(pointing: &Pointing, mid: &Tan, exposure_s: f64) -> Vec<(String, Wc
         );
         push("CUNIT1", WcsValue::Str("deg"), "");
         push("CUNIT2", WcsValue::Str("deg"), "");
-        push(
-            "CRVAL1",
-            WcsValue::Real(w.crval[0]),
-            "[deg] RA of the tangent point",
-        );
-        push(
-            "CRVAL2",
-            WcsValue::Real(w.crval[1]),
-            "[deg] Dec of the tangent point",
-        );
-        push(
-            "CRPIX1",
-            WcsValue::Real(w.crpix[0]),
-            "tangent point, 1-based pixel",
-        );
-        push(
-            "CRPIX2",
-            WcsValue::Real(w.crpix[1]),
-            "tangent point, 1-based pixel",
-        );
+        for (k, v, comment) in [
+            ("CRVAL1", w.crval[0], "[deg] RA of the tangent point"),
+            ("CRVAL2", w.crval[1], "[deg] Dec of the tangent point"),
+            ("CRPIX1", w.crpix[0], "tangent point, 1-based pixel"),
+            ("CRPIX2", w.crpix[1], "tangent point, 1-based pixel"),
+        ] {
+            push(k, WcsValue::Real(v), comment);
+        }
         for (i, j) in [(1, 1), (1, 2), (2, 1), (2, 2)] {
             push(&format!("CD{i}_{j}"), WcsValue::Real(w.cd[i - 1][j - 1]), "");
         }

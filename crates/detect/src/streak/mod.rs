@@ -154,19 +154,7 @@ pub fn detect_streaks(
     params: &StreakParams,
     star_trail_angle_deg: Option<f64>,
 ) -> Vec<Candidate> {
-    detect(pixels, width, height, params, star_trail_angle_deg).0
-}
-
-/// [`detect_streaks`], and every refined segment that did not become a candidate, with why
-/// (`soig detect --explain`).
-pub fn detect_streaks_explained(
-    pixels: &[u8],
-    width: usize,
-    height: usize,
-    params: &StreakParams,
-    star_trail_angle_deg: Option<f64>,
-) -> (Vec<Candidate>, Vec<Dropped>) {
-    detect(pixels, width, height, params, star_trail_angle_deg)
+    detect_streaks_explained(pixels, width, height, params, star_trail_angle_deg).0
 }
 
 /// [`detect_streaks`] knowing the catalogued stars' predicted trails in the image (`stars`,
@@ -189,7 +177,7 @@ pub fn detect_streaks_among_stars(
 ) -> Vec<Candidate> {
     let trail = star_trail_angle_deg.filter(|a| a.is_finite());
     let (Some(stars), Some(trail)) = (stars, trail) else {
-        return detect(pixels, width, height, params, star_trail_angle_deg).0;
+        return detect_streaks_explained(pixels, width, height, params, star_trail_angle_deg).0;
     };
     assert_eq!(
         pixels.len(),
@@ -213,9 +201,9 @@ pub fn detect_streaks_among_stars(
     union(first, second, trail, &p)
 }
 
-/// The first pass alone (the trails known by their direction only): the candidates and the
-/// segments dropped on the way, with why.
-fn detect(
+/// [`detect_streaks`], and every refined segment that did not become a candidate, with why
+/// (`soig detect --explain`): the first pass alone (the trails known by their direction only).
+pub fn detect_streaks_explained(
     pixels: &[u8],
     width: usize,
     height: usize,

@@ -95,17 +95,22 @@ mod tests {
         (0..n).map(|_| rng.random_range(-1.0f32..1.0)).collect()
     }
 
+    /// A zero-mean field of `width` x `height` pixels.
+    fn field(pixels: &[f32], width: usize, height: usize) -> Field<'_> {
+        Field {
+            pixels,
+            width,
+            height,
+            mean: 0.0,
+        }
+    }
+
     #[test]
     fn cross_fade_keeps_the_variance_everywhere() {
         // White noise of variance 1/3: every column of a 1000-wide fill keeps it (overlaps
         // included); a plain weighted mean would drop to ~1/6 in the overlaps' middles.
         let px = white(300 * 300, 3);
-        let field = Field {
-            pixels: &px,
-            width: 300,
-            height: 300,
-            mean: 0.0,
-        };
+        let field = field(&px, 300, 300);
         let mut rng = pixel_stream(4, 0, PixelPurpose::Noise);
         let (w, h) = (1000, 1000);
         let out = fluctuations(&field, w, h, (37, 91), &mut rng);
@@ -120,12 +125,7 @@ mod tests {
     #[test]
     fn a_field_smaller_than_a_block_still_fills() {
         let px = white(40 * 30, 5);
-        let field = Field {
-            pixels: &px,
-            width: 40,
-            height: 30,
-            mean: 0.0,
-        };
+        let field = field(&px, 40, 30);
         let mut rng = pixel_stream(6, 0, PixelPurpose::Noise);
         let out = fluctuations(&field, 100, 70, (0, 0), &mut rng);
         assert_eq!(out.len(), 7000);

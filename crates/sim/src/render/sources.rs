@@ -10,6 +10,7 @@ use super::Jitter;
 use crate::scene::{Pointing, Scene, SurveyTrack, TargetTrack};
 use crate::sensor::Sensor;
 use soig_sky::photometry::photon_rate;
+use soig_sky::stars::Star;
 
 /// Spacing of the time nodes along a survey star trail, pixels.
 const SURVEY_NODE_SPACING_PX: f64 = 4.0;
@@ -101,6 +102,25 @@ pub(super) fn for_each_source(
             && y < height - 0.5 + margin
     };
     let mut traced = Vec::new();
+    // A star exposed from `t_a` to `t_b` on `path`, traced at (x, y) (before jitter).
+    let mut star_source = |star: &Star, (x, y): (f64, f64), path: Path<'_>, t_a: f64, t_b: f64| {
+        let expected = photon_rate(star.mag, s.zero_point_mag) * (t_b - t_a);
+        traced.push(TracedStar {
+            ra_deg: star.ra_deg,
+            dec_deg: star.dec_deg,
+            mag: star.mag,
+            x: x + jitter_mean.0,
+            y: y + jitter_mean.1,
+            expected_electrons: expected,
+        });
+        add(&Source {
+            expected,
+            path,
+            t_a,
+            t_b,
+            debris: false,
+        });
+    };
     match &scene.pointing {
         Pointing::Fixed { .. } => {
             // Fixed on the sky, photons uniform over the exposure.
@@ -111,22 +131,7 @@ pub(super) fn for_each_source(
                 if !near(x0, y0) {
                     continue;
                 }
-                let expected = photon_rate(star.mag, s.zero_point_mag) * t_exp;
-                traced.push(TracedStar {
-                    ra_deg: star.ra_deg,
-                    dec_deg: star.dec_deg,
-                    mag: star.mag,
-                    x: x0 + jitter_mean.0,
-                    y: y0 + jitter_mean.1,
-                    expected_electrons: expected,
-                });
-                add(&Source {
-                    expected,
-                    path: Path::Still { x: x0, y: y0 },
-                    t_a: 0.0,
-                    t_b: t_exp,
-                    debris: false,
-                });
+                star_source(star, (x0, y0), Path::Still { x: x0, y: y0 }, 0.0, t_exp);
             }
         }
         Pointing::Survey(SurveyTrack { drift_deg, .. })
@@ -168,28 +173,14 @@ pub(super) fn for_each_source(
                 // One node of slack on each side covers a trail entering between nodes.
                 let t_a = a.saturating_sub(1) as f64 * step;
                 let t_b = ((b + 1).min(nodes - 1)) as f64 * step;
-                let expected = photon_rate(star.mag, s.zero_point_mag) * (t_b - t_a);
-                let (xm, ym) = tan
+                let pixel = tan
                     .pixel(star.ra_deg, star.dec_deg)
                     .unwrap_or((f64::NAN, f64::NAN));
-                traced.push(TracedStar {
-                    ra_deg: star.ra_deg,
-                    dec_deg: star.dec_deg,
-                    mag: star.mag,
-                    x: xm + jitter_mean.0,
-                    y: ym + jitter_mean.1,
-                    expected_electrons: expected,
-                });
-                add(&Source {
-                    expected,
-                    path: Path::Trail {
-                        nodes: &trail,
-                        step,
-                    },
-                    t_a,
-                    t_b,
-                    debris: false,
-                });
+                let path = Path::Trail {
+                    nodes: &trail,
+                    step,
+                };
+                star_source(star, pixel, path, t_a, t_b);
             }
         }
     }
