@@ -365,43 +365,32 @@ fn observation_cards(push: &mut Push, p: &Provenance, scene: &Scene, t: &Truth) 
 /// The gain and where the sensor pointed.
 fn pointing_cards(push: &mut Push, sensor: &Sensor, scene: &Scene) {
     push("GAIN", Card::Real(sensor.gain_e_per_adu), "[e-/ADU]");
-    match &scene.pointing {
-        Pointing::Fixed { .. } => push("POINTING", Card::Str("fixed".into()), "fixed or survey"),
-        Pointing::Track(track) => {
-            push(
-                "POINTING",
-                Card::Str("track".into()),
-                "follows the debris; WCS at mid-exposure",
-            );
-            push(
-                "DRIFTANG",
-                Card::Real(track.trail_angle_deg),
-                "[deg] star-trail direction from +x to +y",
-            );
-            push(
-                "DRIFT",
-                Card::Real(track.drift_deg),
-                "[deg] boresight path over the exposure",
-            );
+    // A moving pointing: its name, what it does, its star trails' direction and its drift.
+    let (mode, how, angle_deg, angle_note, drift_deg, drift_note) = match &scene.pointing {
+        Pointing::Fixed { .. } => {
+            push("POINTING", Card::Str("fixed".into()), "fixed or survey");
+            return;
         }
-        Pointing::Survey(track) => {
-            push(
-                "POINTING",
-                Card::Str("survey".into()),
-                "fixed or survey; WCS at mid-exposure",
-            );
-            push(
-                "DRIFTANG",
-                Card::Real(track.trail_angle_deg),
-                "[deg] star-trail direction from +x to +y (Eq. 13)",
-            );
-            push(
-                "DRIFT",
-                Card::Real(track.drift_deg),
-                "[deg] boresight drift over the exposure",
-            );
-        }
-    }
+        Pointing::Track(track) => (
+            "track",
+            "follows the debris; WCS at mid-exposure",
+            track.trail_angle_deg,
+            "[deg] star-trail direction from +x to +y",
+            track.drift_deg,
+            "[deg] boresight path over the exposure",
+        ),
+        Pointing::Survey(track) => (
+            "survey",
+            "fixed or survey; WCS at mid-exposure",
+            track.trail_angle_deg,
+            "[deg] star-trail direction from +x to +y (Eq. 13)",
+            track.drift_deg,
+            "[deg] boresight drift over the exposure",
+        ),
+    };
+    push("POINTING", Card::Str(mode.into()), how);
+    push("DRIFTANG", Card::Real(angle_deg), angle_note);
+    push("DRIFT", Card::Real(drift_deg), drift_note);
 }
 
 /// A collect's frame and track.

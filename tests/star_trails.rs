@@ -2,7 +2,6 @@
 //! against the rendered noise-free image: every star's predicted path lies on its light.
 
 use soig::campaign::Campaign;
-use soig::experiment::Experiment;
 use soig::render::trails::star_trails;
 
 mod common;
