@@ -65,28 +65,20 @@ pub use simulate::{Experiment, ImageProducts};
 // The store's modules under their old paths: `soig::output`, `soig::manifest`, ...
 pub use store::{disk, journal, manifest, output};
 
-pub(crate) mod artifacts;
-pub mod campaign;
-pub mod collect;
-pub mod compare;
-pub mod convert;
-pub mod dataset;
-pub mod detect_frames;
-mod detect_stage;
+pub mod config;
 pub mod error;
-pub mod experiment;
-pub mod export;
-pub mod launch;
-pub mod light_curve;
-pub mod merge;
-pub mod pipeline;
 pub(crate) mod plot;
+pub mod product;
 pub mod report;
-pub mod shard;
-pub mod star_trails;
 pub mod store;
-pub mod study;
-pub mod summary;
-pub mod sweep;
-pub mod tables;
-pub(crate) mod train;
+pub mod verbs;
+
+// The top crate's modules under the paths they had before its folders: `soig::campaign`,
+// `soig::pipeline`, ...
+pub use config::{campaign, experiment};
+pub(crate) use product::artifacts;
+pub use product::{collect, dataset, export, light_curve, shard, star_trails};
+pub(crate) use verbs::{detect_stage, train};
+pub use verbs::{
+    compare, convert, detect_frames, launch, merge, pipeline, study, summary, sweep, tables,
+};

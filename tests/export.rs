@@ -1,4 +1,4 @@
-//! The COCO and DS9 exports (src/export/) read back by their own libraries: pycocotools scores
+//! The COCO and DS9 exports (src/product/export/) read back by their own libraries: pycocotools scores
 //! the COCO files exactly as `soig eval --mode coco` scores the YOLO text files, and
 //! astropy-regions reads the region files back onto the truth sidecars and the COCO boxes.
 //! `soig export` of the finished output writes the same bytes as the run's artifact.

@@ -1,4 +1,4 @@
-//! The light-curve table (`artifacts.light_curve`, src/light_curve.rs) against the truth
+//! The light-curve table (`artifacts.light_curve`, src/product/light_curve.rs) against the truth
 //! sidecar of the same image: one row per trajectory sample, its electrons summing to the
 //! truth's expected debris electrons and its magnitudes spanning the truth's range.
 

@@ -68,7 +68,7 @@ pub enum Command {
     Experiment(ExperimentArgs),
     /// Export a finished output for other tools: the dataset and the detect stage's predictions
     /// as COCO JSON (OUT/coco/) and the truth and detections as DS9 region files over the FITS
-    /// (OUT/ds9/); see src/export/. Both unless one is chosen.
+    /// (OUT/ds9/); see src/product/export/. Both unless one is chosen.
     Export(ExportArgs),
     /// Score YOLO-format predictions (`cls xc yc w h score`) against YOLO labels, exactly as
     /// Ultralytics and pycocotools compute their metrics.
@@ -235,7 +235,7 @@ pub struct CompareArgs {
     /// The run compared with it: a run folder or a `results/` row.
     pub run: PathBuf,
     /// Allowed fall of a metric, `NAME=VALUE` (`map50-95=0.01`, `all=0.05`; default 0.002,
-    /// see src/compare/tolerance.rs). Repeatable.
+    /// see src/verbs/compare/tolerance.rs). Repeatable.
     #[arg(long, value_name = "NAME=VALUE")]
     pub tolerance: Vec<String>,
     /// Print the same facts as JSON.

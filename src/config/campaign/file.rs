@@ -508,18 +508,18 @@ pub struct Artifacts {
     pub star_list: bool,
     /// The dataset as COCO JSON, `export/coco/<split>.json`, and the detect stage's
     /// predictions in COCO's results format, `export/coco/detections_<detector>.json`
-    /// (src/export/coco.rs); needs the `enhance` stage. Omitted from the resolved campaign when
+    /// (src/product/export/coco.rs); needs the `enhance` stage. Omitted from the resolved campaign when
     /// off, so hashes stay.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub coco: bool,
     /// DS9 region files over the FITS images: the truth, `export/ds9/truth/<image>.reg`, and
-    /// each detector's boxes, `export/ds9/<detector>/<image>.reg` (src/export/ds9.rs). Omitted
+    /// each detector's boxes, `export/ds9/<detector>/<image>.reg` (src/product/export/ds9.rs). Omitted
     /// from the resolved campaign when off, so hashes stay.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub ds9_regions: bool,
     /// The debris' brightness over the exposure as rendered, one row per trajectory sample
     /// (time, magnitude with the tumbling modulation, expected photo-electrons, pixel), as
-    /// `truth/<image>_light_curve.csv` (columns in src/light_curve.rs). Omitted from the
+    /// `truth/<image>_light_curve.csv` (columns in src/product/light_curve.rs). Omitted from the
     /// resolved campaign when off, so hashes stay.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub light_curve: bool,

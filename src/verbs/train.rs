@@ -22,7 +22,7 @@ use crate::progress::Progress;
 use crate::store::fs;
 
 /// The training driver, shipped inside the binary so a run records exactly what trained it.
-pub const TRAIN_PY: &str = include_str!("../python/train.py");
+pub const TRAIN_PY: &str = include_str!("../../python/train.py");
 
 /// Where a run's training outputs go, inside the output directory.
 pub const TRAIN_DIR: &str = "train";

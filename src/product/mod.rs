@@ -1,0 +1,11 @@
+//! The product: an image's files (`artifacts`), the dataset's split and layout, collects, the
+//! exports (COCO, DS9), the star trails a detector is told of, light curves, and a shard's share
+//! of the images. Every file goes through the store.
+
+pub(crate) mod artifacts;
+pub mod collect;
+pub mod dataset;
+pub mod export;
+pub mod light_curve;
+pub mod shard;
+pub mod star_trails;
