@@ -8,12 +8,12 @@
 //! an upward import does not compile (docs/architecture.md draws the graph):
 //!
 //! ```text
-//! soig (this crate)  verbs: pipeline (run, train) merge study compare tables sweep convert
-//!                           launch detect_frames; the CLI in src/bin/soig/
-//!                    report
-//!                    product: artifacts dataset collect export star_trails light_curve shard
-//!                    config: campaign (file, defaults, compose, validate, resolve) experiment
-//!                    store: fs (the file primitives: the only code that writes) output
+//! soig (this crate)  verbs/: pipeline (run, train) detect_stage merge study compare tables
+//!                           sweep convert launch detect_frames summary; the CLI in src/bin/soig/
+//!                    report/
+//!                    product/: artifacts dataset collect export star_trails light_curve shard
+//!                    config/: campaign (file, defaults, compose, validate, resolve) experiment
+//!                    store/: fs (the file primitives: the only code that writes) output
 //!                           (whole-or-nothing directories) journal (resume) manifest disk
 //! soig-sim           scene sighting sensor noise background render simulate
 //! soig-detect        streak yolo metrics               (sim and detect never see each other)
@@ -22,8 +22,8 @@
 //! soig-base          rng hash progress build_id input_file python
 //! ```
 //!
-//! The lower crates are re-exported here under their module names (`soig::sky`,
-//! `soig::render`, `soig::detect`, ...).
+//! The lower crates and this crate's folders are re-exported here under their module names
+//! (`soig::sky`, `soig::render`, `soig::detect`, `soig::pipeline`, ...).
 //!
 //! The core never sees the campaign file: the config layer builds a [`Sensor`], a
 //! [`scene::Spec`], [`render::Settings`] and [`enhance::Settings`] once, gathered in an
