@@ -49,10 +49,10 @@
 
 // The layers below, re-exported: `soig::rng`, `soig::sky`, ... name the same modules as before.
 pub use soig_base::{build_id, hash, input_file, progress, python, rng};
-pub use soig_sky as sky;
-pub use soig_image::{enhance, fits, frames, geometry, hint, imaging, psf};
 pub use soig_detect::{self as detect, metrics};
+pub use soig_image::{enhance, fits, frames, geometry, hint, imaging, psf};
 pub use soig_sim::{background, noise, render, scene, sensor, sighting, simulate};
+pub use soig_sky as sky;
 
 pub use artifacts::{Provenance, provenance_cards};
 pub use campaign::{Campaign, CampaignError};
@@ -78,7 +78,7 @@ pub mod verbs;
 pub use config::{campaign, experiment};
 pub(crate) use product::artifacts;
 pub use product::{collect, dataset, export, light_curve, shard, star_trails};
-pub(crate) use verbs::{detect_stage, train};
 pub use verbs::{
     compare, convert, detect_frames, launch, merge, pipeline, study, summary, sweep, tables,
 };
+pub(crate) use verbs::{detect_stage, train};

@@ -345,9 +345,10 @@ fn seal(
     campaign: &Campaign,
     training: Option<serde_json::Value>,
 ) -> anyhow::Result<()> {
-    m.effective = Some(serde_json::to_value(
-        crate::experiment::effective(&crate::experiment::of(campaign), campaign),
-    )?);
+    m.effective = Some(serde_json::to_value(crate::experiment::effective(
+        &crate::experiment::of(campaign),
+        campaign,
+    ))?);
     if training.is_some() {
         m.training = training;
     }

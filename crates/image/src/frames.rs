@@ -107,8 +107,8 @@ impl Frame {
         let mut head = [0u8; 8];
         {
             use std::io::Read;
-            let mut f =
-                soig_base::hash::open_regular(path).map_err(|e| err(format!("cannot open: {e}")))?;
+            let mut f = soig_base::hash::open_regular(path)
+                .map_err(|e| err(format!("cannot open: {e}")))?;
             let n = f
                 .read(&mut head)
                 .map_err(|e| err(format!("cannot read: {e}")))?;

@@ -8,9 +8,9 @@
 //! are a property of the sensor: their positions come from the campaign seed alone, the same in
 //! every image; their charge is drawn per image.
 
-use soig_base::rng::PixelRng;
 use rand::RngExt;
 use rand_distr::{Distribution, Normal, Poisson, StandardNormal};
+use soig_base::rng::PixelRng;
 
 use soig_base::rng::{PixelPurpose, pixel_stream, poisson};
 

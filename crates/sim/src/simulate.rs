@@ -8,12 +8,12 @@
 
 use std::time::Instant;
 
-use soig_image::enhance::{self, Gray8};
-use soig_image::geometry::{self, BoxPx, Fill, Frame, FrameKind, LABEL_SHARE};
 use crate::render::{self, Exposure};
-use soig_base::rng::{PixelPurpose, PixelRng, object_pixel_stream, pixel_stream};
 use crate::scene::{self, Inputs, NoScene, Scene};
 use crate::sensor::Sensor;
+use soig_base::rng::{PixelPurpose, PixelRng, object_pixel_stream, pixel_stream};
+use soig_image::enhance::{self, Gray8};
+use soig_image::geometry::{self, BoxPx, Fill, Frame, FrameKind, LABEL_SHARE};
 
 /// Everything one image needs besides its inputs and index.
 #[derive(Clone, Debug, PartialEq)]

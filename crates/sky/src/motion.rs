@@ -6,11 +6,11 @@
 //! a fixed axis: exactly the survey pointing's motion (the observer's orbit turns it so), and
 //! for track pointing, whose camera follows the debris, the great-circle path between them.
 
+use super::pointing::Pointing;
 use super::projection::Tan;
+use super::projection::WcsValue;
 use super::vec3::{Vec3, cross, dot, norm, radec_deg, radec_unit, rotate, scale};
 use super::wcs::TanWcs;
-use super::pointing::Pointing;
-use super::projection::WcsValue;
 
 /// The alternate-WCS letters of the exposure's start and end.
 pub const START: char = 'S';
@@ -239,7 +239,11 @@ fn turn_at(pointing: &Pointing, t_s: f64) -> Option<(Vec3, f64)> {
 /// The header cards (keyword, value, comment) of the WCS at the start and end of an exposure of
 /// `exposure_s` seconds whose mid-exposure WCS is `mid` (jitter shift included), for a pointing
 /// that moves; none for fixed pointing.
-pub fn cards(pointing: &Pointing, mid: &Tan, exposure_s: f64) -> Vec<(String, WcsValue, &'static str)> {
+pub fn cards(
+    pointing: &Pointing,
+    mid: &Tan,
+    exposure_s: f64,
+) -> Vec<(String, WcsValue, &'static str)> {
     let mut cards = Vec::new();
     if matches!(pointing, Pointing::Fixed { .. }) {
         return cards;
@@ -257,16 +261,8 @@ pub fn cards(pointing: &Pointing, mid: &Tan, exposure_s: f64) -> Vec<(String, Wc
             cards.push((format!("{k}{letter}"), v, comment))
         };
         push("WCSNAME", WcsValue::Str(name), "camera at this instant");
-        push(
-            "CTYPE1",
-            WcsValue::Str("RA---TAN"),
-            "gnomonic projection",
-        );
-        push(
-            "CTYPE2",
-            WcsValue::Str("DEC--TAN"),
-            "gnomonic projection",
-        );
+        push("CTYPE1", WcsValue::Str("RA---TAN"), "gnomonic projection");
+        push("CTYPE2", WcsValue::Str("DEC--TAN"), "gnomonic projection");
         push("CUNIT1", WcsValue::Str("deg"), "");
         push("CUNIT2", WcsValue::Str("deg"), "");
         for (k, v, comment) in [
@@ -278,7 +274,11 @@ pub fn cards(pointing: &Pointing, mid: &Tan, exposure_s: f64) -> Vec<(String, Wc
             push(k, WcsValue::Real(v), comment);
         }
         for (i, j) in [(1, 1), (1, 2), (2, 1), (2, 2)] {
-            push(&format!("CD{i}_{j}"), WcsValue::Real(w.cd[i - 1][j - 1]), "");
+            push(
+                &format!("CD{i}_{j}"),
+                WcsValue::Real(w.cd[i - 1][j - 1]),
+                "",
+            );
         }
     }
     cards

@@ -308,27 +308,29 @@ fn psf_fwhm(
     opts: &Options,
     pixel_scale: Option<f64>,
 ) -> anyhow::Result<(f64, &'static str)> {
-    Ok(match (opts.optics.psf_fwhm_px, opts.optics.psf_fwhm_arcsec) {
-        (Some(px), _) => (px, "--psf-fwhm-px"),
-        (None, Some(arcsec)) => match pixel_scale {
-            Some(s) => (
-                arcsec / s,
-                if opts.optics.pixel_scale_arcsec.is_some() {
-                    "--psf-fwhm-arcsec / --pixel-scale-arcsec"
-                } else {
-                    "--psf-fwhm-arcsec / the WCS's pixel scale"
-                },
-            ),
-            None => bail!(
-                "{}: --psf-fwhm-arcsec needs a pixel scale: the frame has no WCS; give --pixel-scale-arcsec",
-                frame.path.display()
+    Ok(
+        match (opts.optics.psf_fwhm_px, opts.optics.psf_fwhm_arcsec) {
+            (Some(px), _) => (px, "--psf-fwhm-px"),
+            (None, Some(arcsec)) => match pixel_scale {
+                Some(s) => (
+                    arcsec / s,
+                    if opts.optics.pixel_scale_arcsec.is_some() {
+                        "--psf-fwhm-arcsec / --pixel-scale-arcsec"
+                    } else {
+                        "--psf-fwhm-arcsec / the WCS's pixel scale"
+                    },
+                ),
+                None => bail!(
+                    "{}: --psf-fwhm-arcsec needs a pixel scale: the frame has no WCS; give --pixel-scale-arcsec",
+                    frame.path.display()
+                ),
+            },
+            (None, None) => (
+                opts.streak.psf_sigma_px * FWHM_PER_SIGMA,
+                "the streak detector's psf_sigma_px (not the frame's optics: give --psf-fwhm-px)",
             ),
         },
-        (None, None) => (
-            opts.streak.psf_sigma_px * FWHM_PER_SIGMA,
-            "the streak detector's psf_sigma_px (not the frame's optics: give --psf-fwhm-px)",
-        ),
-    })
+    )
 }
 
 /// The catalogued stars' trails on the detector's image (the frame's sky region), their
@@ -340,31 +342,31 @@ fn catalogue_sky(
     psf_sigma_px: f64,
     psf_fwhm_px: f64,
 ) -> anyhow::Result<(Vec<crate::hint::StarTrail>, Option<f64>, CatalogUse)> {
-        let facts = catalog::FrameSky::of(frame)?;
-        let predicted = facts.predict(cat, frame.region, psf_sigma_px);
-        let trails = catalog::in_region(&predicted, frame.region);
-        // A trail shorter than the PSF's width is a star that does not move.
-        let from_trails = catalog::trail_angle_deg(&trails, 2.0 * psf_fwhm_px);
-        let (angle, source) = match (opts.star_trail_angle_deg, from_trails) {
-            (Some(a), _) => (Some(a), "--star-trail-angle-deg"),
-            (None, Some(a)) => (Some(a), "the predicted trails"),
-            (None, None) => (None, "none: the predicted stars do not move"),
-        };
-        let use_ = CatalogUse {
-            start_utc: crate::render::iso_utc(facts.start),
-            exposure_s: facts.exposure_s,
-            pointing: if facts.motion.is_some() {
-                "moving: the WCS at the exposure's start and end (alternate WCS S and E)"
-            } else {
-                "fixed on the sky: the header has no WCS at the exposure's start and end"
-            },
-            drift_deg: facts.motion.as_ref().map_or(0.0, |m| m.drift_deg()),
-            stars_near: predicted.len(),
-            trails_on_frame: trails.len(),
-            trail_angle_deg: angle,
-            trail_angle_source: source,
-        };
-        Ok((trails, angle, use_))
+    let facts = catalog::FrameSky::of(frame)?;
+    let predicted = facts.predict(cat, frame.region, psf_sigma_px);
+    let trails = catalog::in_region(&predicted, frame.region);
+    // A trail shorter than the PSF's width is a star that does not move.
+    let from_trails = catalog::trail_angle_deg(&trails, 2.0 * psf_fwhm_px);
+    let (angle, source) = match (opts.star_trail_angle_deg, from_trails) {
+        (Some(a), _) => (Some(a), "--star-trail-angle-deg"),
+        (None, Some(a)) => (Some(a), "the predicted trails"),
+        (None, None) => (None, "none: the predicted stars do not move"),
+    };
+    let use_ = CatalogUse {
+        start_utc: crate::render::iso_utc(facts.start),
+        exposure_s: facts.exposure_s,
+        pointing: if facts.motion.is_some() {
+            "moving: the WCS at the exposure's start and end (alternate WCS S and E)"
+        } else {
+            "fixed on the sky: the header has no WCS at the exposure's start and end"
+        },
+        drift_deg: facts.motion.as_ref().map_or(0.0, |m| m.drift_deg()),
+        stars_near: predicted.len(),
+        trails_on_frame: trails.len(),
+        trail_angle_deg: angle,
+        trail_angle_source: source,
+    };
+    Ok((trails, angle, use_))
 }
 
 /// Enhance one frame, run the detectors on its sky region, put the results into the file's

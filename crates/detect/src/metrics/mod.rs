@@ -35,9 +35,9 @@
 //! `cases` (tests only).
 
 mod coco_eval;
+mod eval;
 mod matching;
 mod numpy;
-mod eval;
 mod ultralytics_map;
 mod yolo_files;
 

@@ -5,9 +5,9 @@
 
 use super::*;
 use crate::Detection;
+use soig_base::rng::{PixelPurpose, pixel_stream};
 use soig_image::enhance;
 use soig_sim::render::{RenderMethod, Settings, render};
-use soig_base::rng::{PixelPurpose, pixel_stream};
 use soig_sim::scene::Scene;
 use soig_sim::sensor::Sensor;
 

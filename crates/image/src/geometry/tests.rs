@@ -1,8 +1,8 @@
 //! The frame kinds, warps and label boxes against their definitions.
 
 use super::*;
-use soig_base::rng::{PixelPurpose, pixel_stream};
 use rand::RngExt;
+use soig_base::rng::{PixelPurpose, pixel_stream};
 
 #[test]
 fn rotated_frame_is_the_papers_size_and_inverts() {

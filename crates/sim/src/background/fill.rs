@@ -11,8 +11,8 @@
 //! sigma stands 11 sd off). Every block comes from an independent random place, so nothing
 //! repeats at the block pitch.
 
-use soig_base::rng::PixelRng;
 use rand::RngExt;
+use soig_base::rng::PixelRng;
 
 /// Side of a block, pixels, at most (a field smaller than this gives smaller blocks).
 const BLOCK_PX: usize = 256;

@@ -26,11 +26,11 @@ const MAX_TRAIL_ROUNDS: usize = 12;
 
 use std::path::{Path, PathBuf};
 
-use soig_base::rng::PixelRng;
 use fitsio::FitsFile;
+use soig_base::rng::PixelRng;
 
-use soig_image::imaging::robust_stats;
 pub use prepare::Region;
+use soig_image::imaging::robust_stats;
 
 /// A background frame that cannot be used, with its path.
 #[derive(Debug, thiserror::Error)]
@@ -344,7 +344,14 @@ mod tests {
             soig_image::fits::Card::Real(10.0),
             String::new(),
         )];
-        soig_image::fits::write_image(&path, 64, 64, soig_image::fits::Pixels::F32(&pixels), &cards).unwrap();
+        soig_image::fits::write_image(
+            &path,
+            64,
+            64,
+            soig_image::fits::Pixels::F32(&pixels),
+            &cards,
+        )
+        .unwrap();
         path
     }
 

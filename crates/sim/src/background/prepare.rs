@@ -2,9 +2,9 @@
 //! large-scale structure, and replace the pixels of sources and star trails by clean pixels of
 //! the same neighbourhood.
 
-use soig_image::imaging::robust_stats;
-use soig_base::rng::{PixelPurpose, pixel_stream};
 use rand::RngExt;
+use soig_base::rng::{PixelPurpose, pixel_stream};
+use soig_image::imaging::robust_stats;
 
 use super::mask::{clipped_about, components, grow};
 use super::trails::{Rounds, trail_mask};

@@ -3,8 +3,8 @@
 //! frame's noise matrix scaled by exposure (`background`), the bias uniform per pixel; or the
 //! physical model of `noise`.
 
-use soig_base::rng::PixelRng;
 use rand::RngExt;
+use soig_base::rng::PixelRng;
 
 use crate::background::RealFrame;
 use crate::noise::Noise;

@@ -8,11 +8,11 @@
 use soig_base::rng::PixelRng;
 
 use super::{Canvas, Jitter, Path, Source};
-pub use soig_image::psf::{DebrisFlux, DebrisMap};
-use soig_image::psf::{add_separable, weights_into};
-use soig_base::rng::poisson;
 use crate::scene::Scene;
 use crate::sensor::Sensor;
+use soig_base::rng::poisson;
+pub use soig_image::psf::{DebrisFlux, DebrisMap};
+use soig_image::psf::{add_separable, weights_into};
 
 /// Pixels farther than this many PSF sigmas from the path get nothing (a share of 6e-7 of the
 /// photons per axis; photon mapping lands them).
@@ -124,8 +124,7 @@ pub fn matched_filter_snr(
     jitter: &Jitter,
     noise_sigma_adu: f64,
 ) -> f64 {
-    debris_flux(sensor, scene, jitter)
-        .matched_filter_snr(sensor.gain_e_per_adu, noise_sigma_adu)
+    debris_flux(sensor, scene, jitter).matched_filter_snr(sensor.gain_e_per_adu, noise_sigma_adu)
 }
 
 /// First pixel and the PSF share of each pixel of the support along one axis (pixel i spans

@@ -1,9 +1,9 @@
 //! The shared Brownian pointing jitter (paper Eq. 2): one random path per exposure, applied
 //! on the sky so it is isotropic, as pixel shifts of every source on a regular time grid.
 
-use soig_base::rng::PixelRng;
 use rand::RngExt;
 use rand_distr::StandardNormal;
+use soig_base::rng::PixelRng;
 
 use super::Settings;
 use crate::scene::Scene;

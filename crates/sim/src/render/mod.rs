@@ -4,14 +4,14 @@
 //! the detector (Eq. 11). Also the label box and the truth of the debris as rendered.
 //! It reads the sensor and its own settings, never the campaign file.
 
-use soig_base::rng::PixelRng;
 use serde::Serialize;
+use soig_base::rng::PixelRng;
 
 use crate::background::RealFrame;
-use soig_image::geometry::{BoxPx, LABEL_SHARE, flux_box};
-use soig_base::rng::poisson;
 use crate::scene::Scene;
 use crate::sensor::Sensor;
+use soig_base::rng::poisson;
+use soig_image::geometry::{BoxPx, LABEL_SHARE, flux_box};
 
 mod detector;
 pub mod expected;

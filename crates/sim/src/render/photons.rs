@@ -2,8 +2,8 @@
 //! arrival time, position, jitter and PSF, and counted per pixel; the debris' photons, when
 //! none can be merged, drawn per pixel from its expected flux (`DebrisFlux::draw`).
 
-use soig_base::rng::PixelRng;
 use rand_distr::StandardNormal;
+use soig_base::rng::PixelRng;
 
 use super::{Jitter, Path, Source};
 use rand::RngExt;

@@ -2,9 +2,9 @@
 //! (fixed on the detector, or along survey trails sampled on a time grid) and the debris'
 //! trajectory samples, each with its expected photo-electrons and path over the exposure.
 
-use soig_base::rng::PixelRng;
 use rand::RngExt;
 use serde::Serialize;
+use soig_base::rng::PixelRng;
 
 use super::Jitter;
 use crate::scene::{Pointing, Scene, SurveyTrack, TargetTrack};

@@ -2,8 +2,8 @@
 
 use serde::Serialize;
 
-use soig_image::geometry::{BoxPx, Frame};
 use crate::scene::Pointing;
+use soig_image::geometry::{BoxPx, Frame};
 
 /// The truth of one image, written as the JSON sidecar.
 #[derive(Clone, Debug, Serialize)]

@@ -4,21 +4,30 @@
 //! precision-recall curve).
 
 use super::*;
-use soig_sim::background::RealFrame;
-use soig_image::enhance::{self, Settings};
 use soig_base::rng::{PixelPurpose, pixel_stream};
+use soig_image::enhance::{self, Settings};
+use soig_sim::background::RealFrame;
 
 /// The raw 28 s NEOSSat dark frame of `campaigns/base/paper-semisynthetic.toml` (a copy under
 /// tests/fixtures, same sha256).
-const DARK: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/fixtures/neossat/NEOSSAT_240__30_2020214095318.fits");
+const DARK: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../tests/fixtures/neossat/NEOSSAT_240__30_2020214095318.fits"
+);
 
 /// The raw 187 s NEOSSat science frame (the bright streak and faint star-trail arcs masked and
 /// filled by `background::trails`; a copy under tests/fixtures).
-const SCIENCE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/fixtures/neossat/NEOSSAT_240__30_2026025124741.fits");
+const SCIENCE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../tests/fixtures/neossat/NEOSSAT_240__30_2026025124741.fits"
+);
 
 /// The calibrated 10 s NEOSSat frame, every star trailed into an arc that overlaps the others
 /// (masked in rounds by `background`; a copy under tests/fixtures).
-const CALIBRATED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/fixtures/neossat/NEOS_SCI_2024239174545_cord.fits");
+const CALIBRATED: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../tests/fixtures/neossat/NEOS_SCI_2024239174545_cord.fits"
+);
 
 /// Debris-free semisynthetic backgrounds: a frame's noise matrix tiled to 1024 x 1024 at the
 /// paper's exposures (2 to 8 s) and enhanced as the fixed-pointing campaigns do (square root,
