@@ -39,6 +39,44 @@ class RelayError(Exception):
     pass
 
 
+def cpu_times() -> tuple[int, int] | None:
+    """(busy, total) jiffies of all CPUs from /proc/stat; None where there is none."""
+    try:
+        fields = [int(x) for x in Path("/proc/stat").read_text().split("\n")[0].split()[1:]]
+    except (OSError, ValueError):
+        return None
+    idle = fields[3] + (fields[4] if len(fields) > 4 else 0)  # idle + iowait
+    return sum(fields) - idle, sum(fields)
+
+
+class CpuSampler:
+    """The machines' CPU busy share every `period` s while a stage trains: with the GPU's
+    utilisation (gpu-dmon.txt) it says which of the two bounds an epoch (the first loan's GPU was
+    30% busy; issue 47)."""
+
+    def __init__(self, period: float = 5.0):
+        import threading
+        self.period, self.shares, self.stop = period, [], threading.Event()
+        self.thread = threading.Thread(target=self.run, daemon=True)
+
+    def run(self):
+        last = cpu_times()
+        while last is not None and not self.stop.wait(self.period):
+            now = cpu_times()
+            if now is None or now[1] == last[1]:
+                continue
+            self.shares.append(round((now[0] - last[0]) / (now[1] - last[1]), 3))
+            last = now
+
+    def __enter__(self):
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self.stop.set()
+        self.thread.join()
+
+
 def sha256(path: Path) -> str:
     h = hashlib.sha256()
     with open(path, "rb") as f:
@@ -131,7 +169,7 @@ def stage(a) -> None:
         monitor = subprocess.Popen(["nvidia-smi", "dmon", "-s", "um", "-d", "5"],
                                    stdout=open(out / "gpu-dmon.txt", "w"), stderr=subprocess.STDOUT)
     try:
-        with open(out / "soig-train.txt", "w") as log:
+        with open(out / "soig-train.txt", "w") as log, CpuSampler() as cpu:
             done = subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT)
     finally:
         if monitor is not None:
@@ -164,6 +202,8 @@ def stage(a) -> None:
         "epoch_s": [s for c in summary["chunks"] for s in c["epoch_s"]],
         "train_wall_s": summary["train_wall_s"],
         "soig_train_wall_s": wall,
+        "cpus": os.cpu_count(),
+        "cpu_busy_5s": cpu.shares,
         "test": summary["metrics"]["test"],
         "test_conf0.5_iou0.5": summary["metrics"]["test_conf0.5_iou0.5"],
         "dataset_digest": manifest["digest"],
