@@ -183,11 +183,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-survey-rotated-semisynthetic.toml",
-        "615365bda48c5d3fb544d47160e343ed5898212eda7c7dfc1596892a75e8c800",
+        "de5686f2d1c889c591d28865e2262e6000771a91617f4971a7d43f32f82ad840",
     ),
     (
         "results/campaigns/results-survey-rotated-synthetic.toml",
-        "faea793b33de6131a370632c4f67e808af65ec208958b42eda557b7025a76d85",
+        "8df70db7eeef998847f8864c21e2216300266b6ee5a81c0f820a80d57dc6e72f",
     ),
 ];
 

@@ -161,6 +161,10 @@ struct QueuedModel {
     epochs_done: u32,
     stages_done: u32,
     epochs_target: Option<u32>,
+    /// Epochs its starting weights had on another dataset before the relay's first stage
+    /// (not counted in `epochs_done`, which counts this campaign's).
+    #[serde(default)]
+    epochs_before: Option<u32>,
 }
 
 #[derive(serde::Deserialize)]
@@ -230,9 +234,13 @@ impl Tables {
                                 .file_name()
                                 .map_or(m.onnx.clone(), |f| f.to_string_lossy().into_owned())
                         ),
-                        match m.epochs_target {
-                            Some(target) => format!("{} of {target}", m.epochs_done),
-                            None => format!("{} (not in the relay)", m.epochs_done),
+                        match (m.epochs_target, m.epochs_before) {
+                            (Some(target), None) => format!("{} of {target}", m.epochs_done),
+                            (Some(target), Some(before)) => format!(
+                                "{} of {target}, after {before} on an older dataset",
+                                m.epochs_done
+                            ),
+                            (None, _) => format!("{} (not in the relay)", m.epochs_done),
                         },
                         m.stages_done.to_string(),
                     ),
