@@ -12,6 +12,13 @@ summary.json says `finished` and, for every chunk, the epochs it ran.
 Runs fully offline (no downloads): sets YOLO_OFFLINE, a private YOLO_CONFIG_DIR under --out
 with a bundled font as Arial.ttf, and trains with amp=False unless --amp, which skips
 Ultralytics' AMP check (it downloads weights to compare with) and uses AMP on CUDA only.
+
+--channels 1 trains on the grey frames as they are (issue #47: a third of the bytes every
+loader worker, the collation and the GPU feed move) and gives the same model as 3 channels of
+replicated grey: a 3-channel starting checkpoint's first convolution is summed over its input
+channels (exact on grey input), and Ultralytics' HSV augmentation, which skips 1-channel images,
+applies its value gain (what it does to a grey BGR pixel: hue and saturation leave grey as it
+is).
 """
 import argparse
 import csv
@@ -19,6 +26,7 @@ import hashlib
 import importlib.util
 import json
 import os
+import re
 import shutil
 import sys
 import time
@@ -47,6 +55,8 @@ def parse_args():
     p.add_argument("--resume", action="store_true", help="continue from weights/resume.pt")
     p.add_argument("--amp", action="store_true",
                    help="mixed precision on CUDA, without Ultralytics' AMP check (it downloads weights)")
+    p.add_argument("--channels", type=int, choices=(1, 3), default=3,
+                   help="network input channels: 1 trains on the grey frames as they are")
     p.add_argument("--no-val", action="store_true",
                    help="validate only at the end of the schedule, not after every epoch")
     return p.parse_args()
@@ -100,6 +110,72 @@ def skip_amp_check():
     import ultralytics.engine.trainer as trainer
 
     trainer.check_amp = lambda model: next(model.parameters()).device.type == "cuda"
+
+
+def grey_data(data: Path, out: Path) -> Path:
+    """`data` with `channels: 1` (Ultralytics then reads the PNGs with IMREAD_GRAYSCALE and builds
+    a 1-channel network), its folders kept by an absolute `path`."""
+    text = data.read_text()
+    if re.search(r"(?m)^(path|channels)\s*:", text):
+        sys.exit(f"train.py: {data} already sets `path` or `channels`; soig's data.yaml sets neither")
+    grey = out / "data-grey.yaml"
+    grey.write_text(f"path: {json.dumps(str(data.parent))}\n{text.rstrip()}\nchannels: 1\n")
+    return grey
+
+
+def grey_weights(pt: Path, out: Path) -> Path:
+    """A 3-channel checkpoint as a 1-channel one: the first convolution's kernel summed over its
+    input channels, exact on grey input (conv(w, [g, g, g]) = conv(w_B + w_G + w_R, g)). A
+    1-channel checkpoint is returned as it is."""
+    import torch
+
+    ckpt = torch.load(pt, map_location="cpu", weights_only=False)
+    changed = False
+    for key in ("model", "ema"):
+        m = ckpt.get(key) if isinstance(ckpt, dict) else None
+        if m is None:
+            continue
+        conv = m.model[0].conv
+        if conv.in_channels == 1:
+            continue
+        grey = torch.nn.Conv2d(1, conv.out_channels, conv.kernel_size, conv.stride, conv.padding,
+                               conv.dilation, conv.groups, conv.bias is not None)
+        # Summed in float32 and kept so: a half-precision sum would round it (Ultralytics loads
+        # every checkpoint as float32 anyway).
+        grey.weight.data = conv.weight.data.float().sum(1, keepdim=True)
+        if conv.bias is not None:
+            grey.bias.data = conv.bias.data.float()
+        m.model[0].conv = grey
+        # DetectionModel takes its channels from the yaml before the data's: say 1.
+        m.yaml["channels"] = 1
+        changed = True
+    if not changed:
+        return pt
+    dst = out / f"{pt.stem}-grey.pt"
+    torch.save(ckpt, dst)
+    return dst
+
+
+def grey_hsv():
+    """Ultralytics' RandomHSV skips 1-channel images; give them its value gain, as it treats a
+    grey BGR image (same random draws, same lookup table)."""
+    import cv2
+    import numpy as np
+    from ultralytics.data import augment
+
+    three = augment.RandomHSV.__call__
+
+    def call(self, labels):
+        img = labels["img"]
+        if img.ndim == 3 and img.shape[-1] == 3 or not (self.hgain or self.sgain or self.vgain):
+            return three(self, labels)
+        r = np.random.uniform(-1, 1, 3) * [self.hgain, self.sgain, self.vgain]
+        x = np.arange(0, 256, dtype=r.dtype)
+        lut_val = np.clip(x * (r[2] + 1), 0, 255).astype(img.dtype)
+        img[...] = cv2.LUT(img, lut_val).reshape(img.shape)  # in place, as RandomHSV does
+        return labels
+
+    augment.RandomHSV.__call__ = call
 
 
 def box_metrics(m) -> dict:
@@ -160,6 +236,11 @@ def main():
 
     if a.amp:
         skip_amp_check()
+    if a.channels == 1:
+        data = grey_data(data, out)
+        grey_hsv()
+        if a.model.endswith(".pt") and not a.resume:
+            a.model = str(grey_weights(Path(a.model), out))
     device = None if a.device == "auto" else a.device
     cache = {"false": False, "true": True}.get(a.cache, a.cache)
     summary_path = out / "summary.json"

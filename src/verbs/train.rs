@@ -275,6 +275,9 @@ fn script_args(
     if t.val == Some(false) {
         args.push("--no-val".into());
     }
+    if let Some(c) = t.channels {
+        args.extend(["--channels".into(), c.to_string()]);
+    }
     if let Some(b) = chunk.budget_s {
         args.extend(["--budget-s".into(), b.to_string()]);
     }

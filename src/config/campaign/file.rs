@@ -567,6 +567,12 @@ pub struct Train {
     /// every epoch; left out, every epoch (Ultralytics' default).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub val: Option<bool>,
+    /// Network input channels: 1 trains on the grey frames as they are (a third of the bytes
+    /// the loader and the GPU feed move; a 3-channel `.pt` is converted exactly, see
+    /// `python/train.py`); left out, 3 (grey replicated to BGR, Ultralytics' default). The
+    /// exported ONNX takes the same channels, and soig's YOLO runs either.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub channels: Option<u8>,
 }
 
 /// Where Ultralytics keeps decoded training images between epochs.

@@ -471,6 +471,11 @@ fn enhance(c: &CampaignFile) -> Checked {
         "train.time_hours",
         "must be positive",
     )?;
+    check(
+        t.channels.is_none_or(|c| c == 1 || c == 3),
+        "train.channels",
+        "must be 1 (grey) or 3 (grey replicated to BGR)",
+    )?;
     Ok(())
 }
 
