@@ -81,6 +81,38 @@ pub fn create_dir_all(path: &Path) -> anyhow::Result<()> {
     std::fs::create_dir_all(path).with_context(|| format!("cannot create {}", path.display()))
 }
 
+/// Create folder `path` and its missing ancestors; the folders made, outermost first, for
+/// [`remove_empty_dirs`] to take back when what was to fill them fails (a full disk).
+pub fn create_dirs(path: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let made: Vec<PathBuf> = path
+        .ancestors()
+        .take_while(|a| !a.as_os_str().is_empty() && std::fs::symlink_metadata(a).is_err())
+        .map(Path::to_path_buf)
+        .collect();
+    create_dir_all(path)?;
+    Ok(made.into_iter().rev().collect())
+}
+
+/// Remove the folders of `made` ([`create_dirs`]) that hold nothing but empty folders, the
+/// innermost first: a writer that failed leaves no empty folder of its own behind.
+#[allow(clippy::disallowed_methods)] // the store's primitive: only empty folders soig made
+pub fn remove_empty_dirs(made: &[PathBuf]) {
+    fn prune(dir: &Path) {
+        if let Ok(entries) = std::fs::read_dir(dir) {
+            for e in entries.flatten() {
+                if e.file_type().is_ok_and(|t| t.is_dir()) {
+                    prune(&e.path());
+                }
+            }
+        }
+        // Fails, as it should, on a folder that holds anything.
+        let _ = std::fs::remove_dir(dir);
+    }
+    for d in made.iter().rev() {
+        prune(d);
+    }
+}
+
 /// Remove file `path`, which must be soig's (the caller knows it is).
 #[allow(clippy::disallowed_methods)] // the store's primitive
 pub fn remove_file(path: &Path) -> anyhow::Result<()> {

@@ -481,20 +481,27 @@ pub fn write(dir: &Path, files: &[File], keep: &[&Path]) -> anyhow::Result<()> {
             );
         }
     }
-    fs::create_dir_all(dir)?;
+    let made = fs::create_dirs(dir)?;
     for f in files {
         written.insert(f.name.to_string(), sha(f.text.as_bytes()));
     }
-    fs::write(&record, serde_json::to_string_pretty(&written)? + "\n")?;
-    for f in files {
-        let path = dir.join(f.name);
-        if f.executable {
-            fs::write_executable(&path, &f.text)?;
-        } else {
-            fs::write(&path, &f.text)?;
-        }
+    // The record last: a file written before a failure (a full disk) is the new text, which
+    // the next run accepts; the record never claims a file that is not there.
+    let result = files
+        .iter()
+        .try_for_each(|f| {
+            let path = dir.join(f.name);
+            if f.executable {
+                fs::write_executable(&path, &f.text)
+            } else {
+                fs::write(&path, &f.text)
+            }
+        })
+        .and_then(|()| fs::write(&record, serde_json::to_string_pretty(&written)? + "\n"));
+    if result.is_err() {
+        fs::remove_empty_dirs(&made);
     }
-    Ok(())
+    result
 }
 
 #[cfg(test)]
