@@ -31,8 +31,8 @@
 //! | `export` | staged: `write_replacing` (its manifest marks an export, which only an export replaces) | `create`, manifest by `write` |
 //! | `train` (into a finished output) | in place, `train/` of soig's (`check_folder`: never an output holding its starting weights) | `remove_dir_all`, `write` (script, manifest), `create_log`, `copy` (model) |
 //! | `tables --readme` | the user's README, in place | `replace` |
-//! | `experiment` | in place, a folder of its own (`check_folder`) | `write`, `remove_dir_all` (plots) |
-//! | `slurm`, `k8s` | in place, scripts soig wrote (`check_folder`) | `write`, `write_executable` |
+//! | `experiment` | in place, a folder of its own (`check_folder`; one killed before its manifest is resumed) | `create_dirs` (taken back if empty on failure), `write`, `remove_dir_all` (plots) |
+//! | `slurm`, `k8s` | in place, scripts soig wrote (`check_folder`), their record last | `create_dirs` (taken back if empty on failure), `write`, `write_executable` |
 //! | Python's `write_frame` | the path the caller names | `write`, `write_by` (FITS) |
 
 pub mod disk;
