@@ -9,7 +9,8 @@
 //! - `fifo`: its input is a FIFO (it must end, within 30 s, with an error);
 //! - `full-disk`: its output lies on a full tmpfs (as root; skipped, saying so, otherwise);
 //! - `kill`: it is killed just before its output moves into place (`SOIG_TEST_ABORT_AT=rename`,
-//!   an abort as `kill -9` stops it), then run again.
+//!   an abort as `kill -9` stops it), or between the first file it writes atomically and that
+//!   file's rename (`write`), then run again.
 //!
 //! In every case the user's files are byte for byte as they were, a command that fails changes
 //! nothing at all (but the folders a full disk's temporary file passed through), and no
@@ -477,21 +478,25 @@ fn attack(row: &Row, fixture: &Path, root: &Path) -> Vec<String> {
         );
     }
 
-    // Killed just before the output moves into place, then run again.
-    let dir = case(fixture, root, &format!("{}-kill", row.verb));
-    std::fs::write(dir.join("notes.txt"), "a user's notes\n").unwrap();
-    let notes = snapshot(&dir).get(&dir.join("notes.txt")).cloned().unwrap();
-    let (_, err, hung) = run(row, &dir, "out", &[("SOIG_TEST_ABORT_AT", "rename")]);
-    if hung {
-        check("kill", vec![format!("still running after 30 s: {err}")]);
-    }
-    let (code, err, _) = run(row, &dir, "out", &[]);
-    if row.finishes && code != Some(0) {
-        check("kill, then again", vec![format!("exit {code:?}: {err}")]);
-    }
-    check("kill, then again", strays(&dir));
-    if snapshot(&dir).get(&dir.join("notes.txt")) != Some(&notes) {
-        check("kill", vec!["changed notes.txt".into()]);
+    // Killed just before the output moves into place, or between a file's temporary and its
+    // rename, then run again.
+    for phase in ["rename", "write"] {
+        let what = format!("kill at {phase}");
+        let dir = case(fixture, root, &format!("{}-kill-{phase}", row.verb));
+        std::fs::write(dir.join("notes.txt"), "a user's notes\n").unwrap();
+        let notes = snapshot(&dir).get(&dir.join("notes.txt")).cloned().unwrap();
+        let (_, err, hung) = run(row, &dir, "out", &[("SOIG_TEST_ABORT_AT", phase)]);
+        if hung {
+            check(&what, vec![format!("still running after 30 s: {err}")]);
+        }
+        let (code, err, _) = run(row, &dir, "out", &[]);
+        if row.finishes && code != Some(0) {
+            check(&what, vec![format!("then again: exit {code:?}: {err}")]);
+        }
+        check(&format!("{what}, then again"), strays(&dir));
+        if snapshot(&dir).get(&dir.join("notes.txt")) != Some(&notes) {
+            check(&what, vec!["changed notes.txt".into()]);
+        }
     }
     problems
 }
