@@ -115,6 +115,9 @@ struct Case {
     verifies: Vec<String>,
     #[serde(default)]
     exists: Vec<String>,
+    /// Paths that must not exist after the attack (a stray file it was to remove).
+    #[serde(default)]
+    absent: Vec<String>,
 }
 
 /// A soig command run before the attack.
@@ -525,6 +528,11 @@ fn run(case: &Case) -> Vec<String> {
     for e in &case.exists {
         if std::fs::symlink_metadata(dir.join(e)).is_err() {
             problems.push(format!("{e} is missing"));
+        }
+    }
+    for a in &case.absent {
+        if std::fs::symlink_metadata(glob(&dir, a)).is_ok() {
+            problems.push(format!("{a} is still there"));
         }
     }
     if err.contains("panicked") {

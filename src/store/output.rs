@@ -336,7 +336,7 @@ fn unregister(path: &Path) {
 /// The absolute path of `output`, `.` and `..` taken literally (so `new/..` is the folder
 /// holding `new`, whether or not `new` exists), with the symbolic links of its existing part
 /// resolved.
-fn resolve(output: &Path) -> anyhow::Result<PathBuf> {
+pub fn resolve(output: &Path) -> anyhow::Result<PathBuf> {
     let absolute = std::path::absolute(output)
         .with_context(|| format!("cannot resolve {}", output.display()))?;
     let mut lexical = PathBuf::new();

@@ -134,7 +134,8 @@ pub fn export_output(output: &Path, dest: &Path, formats: Formats) -> anyhow::Re
             problems.len()
         );
     }
-    if std::path::absolute(dest)?.starts_with(std::path::absolute(output)?) {
+    // As the store resolves them: `OUT/../OUT-export` is beside OUT, a link into OUT inside.
+    if crate::output::resolve(dest)?.starts_with(crate::output::resolve(output)?) {
         anyhow::bail!(
             "--out {} lies inside the output {}: choose a folder outside it (the output would no longer verify), or set `artifacts.coco` / `artifacts.ds9_regions` in the campaign",
             dest.display(),

@@ -100,6 +100,15 @@ const WRITTEN: [&str; 7] = [
     "times.json",
 ];
 
+/// Whether `name`, at the top of an experiment's output, is one of [`WRITTEN`] or the
+/// temporary file of one that a killed run left (`fs::write` removes it when it writes the
+/// file again).
+fn written(name: &str) -> bool {
+    WRITTEN
+        .iter()
+        .any(|w| name == *w || name.starts_with(&format!(".{w}.tmp-")))
+}
+
 /// Refuse an output that is `/`, the current directory, the experiment's folder or an ancestor,
 /// lies inside a soig output, or exists and is not an experiment's output (its manifest, and
 /// nothing at its top but what `run` writes): `run` rewrites its files in place.
@@ -132,7 +141,7 @@ fn check_output(experiment: &Experiment, out: &Path) -> anyhow::Result<()> {
             out.display()
         );
     }
-    if let Some(foreign) = names.iter().find(|n| !WRITTEN.contains(&n.as_str())) {
+    if let Some(foreign) = names.iter().find(|n| !written(n)) {
         anyhow::bail!(
             "{} holds {foreign}, which soig experiment does not write; refusing to write into it (move it out, or choose another output)",
             out.display()
@@ -157,9 +166,7 @@ fn interrupted(out: &Path, names: &[String]) -> bool {
             || (is_dir
                 && crate::manifest::Manifest::read(&e.path()).is_ok_and(|m| m.tool == "soig"))
     };
-    names.iter().all(|n| WRITTEN.contains(&n.as_str()))
-        && !points.is_empty()
-        && points.iter().all(soigs)
+    names.iter().all(|n| written(n)) && !points.is_empty() && points.iter().all(soigs)
 }
 
 /// The JSON Schema of the experiment file format, generated from the Rust types.
