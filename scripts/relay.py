@@ -221,12 +221,26 @@ def stage(a) -> None:
           "where the files come back", flush=True)
 
 
+# A `name = ...` line: a basic ("...") or a literal ('...') TOML string.
+NAME_LINE = re.compile(r"""(?m)^name\s*=\s*("(?:[^"\\\n]|\\.)*"|'[^'\n]*')\s*(#.*)?$""")
+
+
+def block_name(block: str) -> str | None:
+    """The name an entry's block gives itself, however the TOML string is written."""
+    mt = NAME_LINE.search(block)
+    if mt is None:
+        return None
+    try:
+        return tomllib.loads("v = " + mt.group(1))["v"]
+    except tomllib.TOMLDecodeError:
+        return None
+
+
 def set_progress(text: str, name: str, values: dict, path: Path) -> str:
     """`text` (the queue) with the progress fields of entry `name` set to `values`, the rest
-    of the file (comments, order) as it was."""
+    of the file (comments, order) as it was; checked by reading it back."""
     blocks = re.split(r"(?m)^(?=\[\[)", text)
-    hits = [i for i, b in enumerate(blocks)
-            if re.search(rf'(?m)^name\s*=\s*"{re.escape(name)}"\s*(#.*)?$', b)]
+    hits = [i for i, b in enumerate(blocks) if block_name(b) == name]
     if len(hits) != 1:
         raise RelayError(f"{path}: found {len(hits)} entries named {name!r}")
     b = blocks[hits[0]]
@@ -238,22 +252,56 @@ def set_progress(text: str, name: str, values: dict, path: Path) -> str:
         if count != 1:
             raise RelayError(f"{path}: entry {name!r} has {count} `{field}` lines")
     blocks[hits[0]] = b
-    return "".join(blocks)
+    new = "".join(blocks)
+    try:
+        written = [m for m in tomllib.loads(new).get("model", []) if m.get("name") == name]
+    except tomllib.TOMLDecodeError as e:
+        raise RelayError(f"{path}: the queue would not parse after the update: {e}")
+    if len(written) != 1 or any(written[0].get(f) != values[f] for f in PROGRESS):
+        raise RelayError(f"{path}: entry {name!r}: the updated queue does not read back as "
+                         f"{values}")
+    return new
+
+
+def stage_record(src: Path) -> dict:
+    """The stage's stage.json, every field adopt uses checked to be of its kind."""
+    path = src / "stage.json"
+    try:
+        rec = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise RelayError(f"{path}: {e}")
+    if not isinstance(rec, dict):
+        raise RelayError(f"{path}: not a JSON object")
+    for field in ("weights_sha256", "onnx_sha256"):
+        v = rec.get(field)
+        if not (isinstance(v, str) and re.fullmatch(r"[0-9a-f]{64}", v)):
+            raise RelayError(f"{path}: field `{field}` is not a sha256 ({v!r})")
+    for field in ("stage", "epochs", "epochs_done"):
+        v = rec.get(field)
+        if not isinstance(v, int) or isinstance(v, bool):
+            raise RelayError(f"{path}: field `{field}` missing or not an integer ({v!r})")
+    test = rec.get("test")
+    score = test.get("mAP50-95") if isinstance(test, dict) else None
+    if not isinstance(score, (int, float)) or isinstance(score, bool) or not 0 <= score <= 1:
+        raise RelayError(f"{path}: field `test` holds no test metrics (`test.mAP50-95` between "
+                         f"0 and 1; found {test!r})")
+    return rec
 
 
 def adopt(a) -> None:
+    """Check everything (the record, the files and their sha256, the queue as it will be, the
+    destinations), then copy each file to a temporary beside its destination and rename them
+    all into place, the queue last: a failure before the renames leaves models/ and the
+    queue as they were."""
     queue_path = Path(a.queue).resolve()
     root = Path(a.root).resolve()
     src = Path(a.stage_dir)
-    try:
-        rec = json.loads((src / "stage.json").read_text())
-    except (OSError, json.JSONDecodeError) as e:
-        raise RelayError(f"{src / 'stage.json'}: {e}")
+    rec = stage_record(src)
     models = load_queue(queue_path)
     m = entry(models, rec.get("model"), queue_path)
     n = m["stages_done"] + 1
-    if rec.get("stage") != n:
-        raise RelayError(f"{src}: stage {rec.get('stage')} of {m['name']}, but the queue's next is "
+    if rec["stage"] != n:
+        raise RelayError(f"{src}: stage {rec['stage']} of {m['name']}, but the queue's next is "
                          f"stage {n} (adopted already, or trained from other weights)")
     start_sha = (rec.get("start") or {}).get("sha256", "")
     if start_sha != m["weights_sha256"]:
@@ -264,33 +312,65 @@ def adopt(a) -> None:
             raise RelayError(f"{src}: {f} missing")
     for f, field in (("weights.pt", "weights_sha256"), ("model.onnx", "onnx_sha256")):
         found = sha256(src / f)
-        if found != rec.get(field):
-            raise RelayError(f"{src / f}: sha256 {found}, stage.json says {rec.get(field)}")
-    epochs = rec.get("epochs")
-    if not isinstance(epochs, int) or epochs < 1 or rec.get("epochs_done") != m["epochs_done"] + epochs:
+        if found != rec[field]:
+            raise RelayError(f"{src / f}: sha256 {found}, stage.json says {rec[field]}")
+    epochs = rec["epochs"]
+    if epochs < 1 or rec["epochs_done"] != m["epochs_done"] + epochs:
         raise RelayError(f"{src / 'stage.json'}: epochs {epochs}, epochs_done "
-                         f"{rec.get('epochs_done')} do not follow the queue's {m['epochs_done']}")
-    # Everything is checked; now write, the queue last, so that an interrupted adopt is redone.
-    records = resolve(root, m["records"]) / f"stage{n}"
-    records.mkdir(parents=True, exist_ok=True)
-    for f in RECORDS + OPTIONAL_RECORDS:
-        if (src / f).is_file():
-            shutil.copyfile(src / f, records / f)
-    for f, dest in (("weights.pt", m["weights"]), ("model.onnx", m["onnx"])):
-        d = resolve(root, dest)
-        d.parent.mkdir(parents=True, exist_ok=True)
-        tmp = d.with_name(d.name + ".partial")
-        shutil.copyfile(src / f, tmp)
-        os.replace(tmp, d)
+                         f"{rec['epochs_done']} do not follow the queue's {m['epochs_done']}")
     values = {"stages_done": n, "epochs_done": rec["epochs_done"],
               "weights_sha256": rec["weights_sha256"], "onnx_sha256": rec["onnx_sha256"]}
-    text = set_progress(queue_path.read_text(), m["name"], values, queue_path)
-    tmp = queue_path.with_name(queue_path.name + ".partial")
-    tmp.write_text(text)
-    os.replace(tmp, queue_path)
+    queue_text = set_progress(queue_path.read_text(), m["name"], values, queue_path)
+    records = resolve(root, m["records"]) / f"stage{n}"
+    copies = [(src / f, records / f) for f in RECORDS + OPTIONAL_RECORDS if (src / f).is_file()]
+    copies += [(src / "weights.pt", resolve(root, m["weights"])),
+               (src / "model.onnx", resolve(root, m["onnx"]))]
+    for _, dest in copies:
+        if dest.exists() and not dest.is_file():
+            raise RelayError(f"{dest}: exists and is not a file; nothing was adopted")
+    # Everything is checked; now write: temporaries first, then the renames, the queue last.
+    made = sorted({p for _, dest in copies for p in (dest.parent, *dest.parent.parents)
+                   if not p.exists()})
+    staged = []
+    try:
+        for d in made:
+            d.mkdir(exist_ok=True)
+        for f, dest in copies:
+            staged.append((temporary(dest), dest))
+            copy_synced(f, staged[-1][0])
+        staged.append((temporary(queue_path), queue_path))
+        with open(staged[-1][0], "x") as q:
+            q.write(queue_text)
+            q.flush()
+            os.fsync(q.fileno())
+    except OSError as e:
+        for tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+        for d in reversed(made):
+            try:
+                d.rmdir()
+            except OSError:
+                pass
+        raise RelayError(f"cannot copy the stage's files ({e}); nothing was adopted")
+    for tmp, dest in staged:
+        os.replace(tmp, dest)
     print(f"relay: adopted stage {n} of {m['name']}: {rec['epochs_done']} of "
           f"{m['epochs_target']} epochs, test mAP50-95 {rec['test']['mAP50-95']:.3f}; "
           f"records in {records}")
+
+
+def temporary(dest: Path) -> Path:
+    """A hidden name beside `dest` for the copy that replaces it."""
+    return dest.with_name(f".{dest.name}.tmp-{os.getpid()}")
+
+
+def copy_synced(src: Path, dest: Path) -> None:
+    """Copy `src` to the new file `dest`, on the disk before it returns (a full disk fails
+    here, not after a rename)."""
+    with open(src, "rb") as i, open(dest, "xb") as o:
+        shutil.copyfileobj(i, o, 1 << 20)
+        o.flush()
+        os.fsync(o.fileno())
 
 
 def main() -> None:

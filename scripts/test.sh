@@ -8,6 +8,8 @@ bash scripts/setup.sh
 # Lints first, every warning an error: clippy.toml lets only the store (src/store/) create,
 # replace or delete files, so a writer that bypasses the output-safety rules fails here.
 cargo clippy --workspace --release --locked -- -D warnings
+# The training relay's adopt, checked before it copies (standard library only, seconds).
+python3 scripts/relay_adopt_test.py
 # --release: the tests reuse the dependencies the quickstart's release build compiled (the test
 # profile would build every one of them again).
 SOIG_REQUIRE_ONNXRUNTIME=1 SOIG_REQUIRE_EXPORT_READERS=1 cargo test --release --locked "$@"

@@ -72,9 +72,27 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
         again.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(tree(&export), tree(&again));
-    let o = soig(&["verify", out.to_str().unwrap()]);
+    // The same files, and the export's own manifest, which marks the folder as soig's export.
+    let mut exported = tree(&again);
+    exported.retain(|(p, _)| p != Path::new("manifest.json"));
+    assert_eq!(tree(&export), exported);
+    for dir in [&out, &again] {
+        let o = soig(&["verify", dir.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    // Exporting again into its own earlier export replaces it (#43: refused before).
+    let o = soig(&[
+        "export",
+        out.to_str().unwrap(),
+        "--out",
+        again.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(tree(&export), {
+        let mut t = tree(&again);
+        t.retain(|(p, _)| p != Path::new("manifest.json"));
+        t
+    });
 
     // Labels, truth and COCO agree: every image of every split, each label line one
     // annotation whose box is the truth's label box in the PNG frame. The label file rounds
@@ -238,6 +256,30 @@ fn export_refuses_an_output_that_does_not_verify_and_a_folder_inside_it() {
     assert_eq!(
         std::fs::read_to_string(mine.join("coco/test.json")).unwrap(),
         "the user's"
+    );
+    // Another soig output (not an export) is not replaced by an export either.
+    let other = tmp.path().join("other");
+    std::fs::create_dir_all(&other).unwrap();
+    std::fs::write(other.join("tables.md"), "soig's").unwrap();
+    soig::manifest::Manifest::build(&other, "h", serde_json::json!({}), &[])
+        .unwrap()
+        .write(&other)
+        .unwrap();
+    let o = soig(&[
+        "export",
+        out.to_str().unwrap(),
+        "--out",
+        other.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("not an export"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(other.join("tables.md")).unwrap(),
+        "soig's"
     );
     std::fs::write(out.join("labels/test/extra.txt"), "0 0.5 0.5 0.1 0.1\n").unwrap();
     let o = soig(&[

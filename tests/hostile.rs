@@ -87,6 +87,10 @@ struct Case {
     then_journal: BTreeMap<String, Vec<String>>,
     #[serde(default)]
     then_fifos: Vec<String>,
+    /// After the steps: a file of zeros written here until its file system is full (a tmpfs
+    /// of `tmpfs`), so that the attack runs on a full disk.
+    #[serde(default)]
+    then_fill: Vec<String>,
     /// After the steps: [path, text, replacement], the first occurrence replaced.
     #[serde(default)]
     then_replace: Vec<[String; 3]>,
@@ -99,6 +103,10 @@ struct Case {
     /// Further paths (relative) that the attack may change: a lock a killed step left.
     #[serde(default)]
     may_change: Vec<String>,
+    /// Folders whose own timestamps the attack may change (a temporary file made and removed
+    /// in them, on a full disk); what they hold is checked as everywhere.
+    #[serde(default)]
+    may_touch: Vec<String>,
     /// The attack must succeed (done correctly rather than refused); then `verify` each of
     /// `verifies` and require each of `exists`.
     #[serde(default)]
@@ -107,6 +115,9 @@ struct Case {
     verifies: Vec<String>,
     #[serde(default)]
     exists: Vec<String>,
+    /// Paths that must not exist after the attack (a stray file it was to remove).
+    #[serde(default)]
+    absent: Vec<String>,
 }
 
 /// A soig command run before the attack.
@@ -295,7 +306,9 @@ fn set_up(case: &Case, dir: &Path) -> Result<(), String> {
         }
     }
     for (p, text) in &case.then_files {
-        std::fs::write(glob(dir, p), expand(text)).unwrap();
+        let path = glob(dir, p);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, expand(text)).unwrap();
     }
     for (p, text) in &case.then_append {
         let mut f = std::fs::OpenOptions::new()
@@ -326,6 +339,13 @@ fn set_up(case: &Case, dir: &Path) -> Result<(), String> {
     }
     for p in &case.then_fifos {
         mkfifo(&glob(dir, p));
+    }
+    for p in &case.then_fill {
+        let mut f = std::fs::File::create(glob(dir, p)).unwrap();
+        let zeros = vec![0u8; 1 << 16];
+        // Until the disk is full: the error is the point.
+        while f.write_all(&zeros).is_ok() {}
+        let _ = f.sync_all();
     }
     for [p, from, to] in &case.then_replace {
         let path = glob(dir, p);
@@ -510,6 +530,11 @@ fn run(case: &Case) -> Vec<String> {
             problems.push(format!("{e} is missing"));
         }
     }
+    for a in &case.absent {
+        if std::fs::symlink_metadata(glob(&dir, a)).is_ok() {
+            problems.push(format!("{a} is still there"));
+        }
+    }
     if err.contains("panicked") {
         problems.push("panicked".into());
     }
@@ -527,8 +552,10 @@ fn run(case: &Case) -> Vec<String> {
     }
     let mut after = BTreeMap::new();
     snapshot(&dir, &skip, &mut after);
+    let touched: Vec<PathBuf> = case.may_touch.iter().map(|p| dir.join(p)).collect();
     for (path, id) in &before {
         match after.get(path) {
+            Some(_) if touched.contains(path) => {}
             None => problems.push(format!("deleted {}", path.display())),
             Some(now) if now != id => problems.push(format!("changed {}", path.display())),
             Some(_) => {}

@@ -126,3 +126,136 @@ fn k8s_warns_of_paths_outside_the_volume() {
         "{err}"
     );
 }
+
+/// Run the k8s `submit.sh` in `jobs` against a fake `kubectl` (on PATH) whose Jobs never
+/// finish and whose pods answer `pods`; killed after 60 s.
+fn submit_against(jobs: &Path, pods: &str, env: &[(&str, &str)]) -> (Option<i32>, String) {
+    use std::os::unix::fs::PermissionsExt;
+    let bin = jobs.join("fake-bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    let kubectl = bin.join("kubectl");
+    std::fs::write(
+        &kubectl,
+        format!(
+            "#!/bin/sh\n# A cluster whose Jobs never end.\ncase \"$1 $2\" in\n  \"get pods\") printf '{pods}\\n' ;;\nesac\nexit 0\n"
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&kubectl, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let path = format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let mut child = std::process::Command::new("bash")
+        .arg(jobs.join("submit.sh"))
+        .env("PATH", path)
+        .env("SOIG_K8S_POLL_S", "1")
+        .envs(env.iter().copied())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    let code = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s.code();
+        }
+        if started.elapsed().as_secs() > 60 {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    };
+    let mut err = String::new();
+    use std::io::Read;
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    (code, err)
+}
+
+/// Issue #43: pods that stay Pending, or cannot pull the image, made submit.sh wait for ever.
+/// Now each Job has a deadline (`--deadline`, the Jobs' activeDeadlineSeconds) after which
+/// submit.sh gives up naming the pods' state, and an image that cannot be pulled ends it
+/// after a grace.
+#[test]
+fn k8s_submit_gives_up_after_its_deadline() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let jobs = dir.path().join("jobs");
+    let o = soig_in(
+        root,
+        &[
+            "k8s",
+            "campaigns/quickstart.toml",
+            "--shards",
+            "2",
+            "--out",
+            "runs/q",
+            "--deadline",
+            "3s",
+            "--scripts",
+            jobs.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["shards.yaml", "merge.yaml"] {
+        let text = std::fs::read_to_string(jobs.join(f)).unwrap();
+        assert!(text.contains("activeDeadlineSeconds: 3\n"), "{f}: {text}");
+    }
+    let (code, err) = submit_against(&jobs, "soig-quick-start-0-abc Pending", &[]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("not complete after"), "{err}");
+    assert!(err.contains("deadline"), "{err}");
+    assert!(err.contains("soig-quick-start-0-abc Pending"), "{err}");
+
+    // An image the cluster cannot pull: given up after the grace, long before the deadline.
+    let o = soig_in(
+        root,
+        &[
+            "k8s",
+            "campaigns/quickstart.toml",
+            "--shards",
+            "2",
+            "--out",
+            "runs/q",
+            "--image",
+            "reg.example/none:1",
+            "--scripts",
+            jobs.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (code, err) = submit_against(
+        &jobs,
+        "soig-quick-start-0-abc Pending ImagePullBackOff",
+        &[("SOIG_K8S_PULL_GRACE_S", "2")],
+    );
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("cannot pull the image reg.example/none:1"),
+        "{err}"
+    );
+    // A deadline that is no duration is refused before anything is written.
+    let o = soig_in(
+        root,
+        &[
+            "k8s",
+            "campaigns/quickstart.toml",
+            "--shards",
+            "2",
+            "--deadline",
+            "soon",
+            "--scripts",
+            dir.path().join("none").to_str().unwrap(),
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--deadline \"soon\""));
+    assert!(!dir.path().join("none").exists());
+}

@@ -29,9 +29,11 @@ pub fn write_executable(path: &Path, bytes: impl AsRef<[u8]>) -> anyhow::Result<
 /// C code, given a path); its name is `path`'s, hidden and suffixed, so as plain as `path`'s.
 pub fn write_by(path: &Path, make: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
     let temp = temporary(path)?;
-    let result = make(&temp)
-        .and_then(|()| sync(&temp))
-        .and_then(|()| rename(&temp, path));
+    discard_stale_temporaries(path);
+    let result = make(&temp).and_then(|()| sync(&temp)).and_then(|()| {
+        crate::journal::abort_if_testing("write");
+        rename(&temp, path)
+    });
     if result.is_err() {
         discard(&temp);
     }
@@ -79,6 +81,38 @@ pub fn create_log(path: &Path) -> anyhow::Result<std::fs::File> {
 #[allow(clippy::disallowed_methods)] // the store's primitive
 pub fn create_dir_all(path: &Path) -> anyhow::Result<()> {
     std::fs::create_dir_all(path).with_context(|| format!("cannot create {}", path.display()))
+}
+
+/// Create folder `path` and its missing ancestors; the folders made, outermost first, for
+/// [`remove_empty_dirs`] to take back when what was to fill them fails (a full disk).
+pub fn create_dirs(path: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let made: Vec<PathBuf> = path
+        .ancestors()
+        .take_while(|a| !a.as_os_str().is_empty() && std::fs::symlink_metadata(a).is_err())
+        .map(Path::to_path_buf)
+        .collect();
+    create_dir_all(path)?;
+    Ok(made.into_iter().rev().collect())
+}
+
+/// Remove the folders of `made` ([`create_dirs`]) that hold nothing but empty folders, the
+/// innermost first: a writer that failed leaves no empty folder of its own behind.
+#[allow(clippy::disallowed_methods)] // the store's primitive: only empty folders soig made
+pub fn remove_empty_dirs(made: &[PathBuf]) {
+    fn prune(dir: &Path) {
+        if let Ok(entries) = std::fs::read_dir(dir) {
+            for e in entries.flatten() {
+                if e.file_type().is_ok_and(|t| t.is_dir()) {
+                    prune(&e.path());
+                }
+            }
+        }
+        // Fails, as it should, on a folder that holds anything.
+        let _ = std::fs::remove_dir(dir);
+    }
+    for d in made.iter().rev() {
+        prune(d);
+    }
 }
 
 /// Remove file `path`, which must be soig's (the caller knows it is).
@@ -141,6 +175,38 @@ fn sync(path: &Path) -> anyhow::Result<()> {
         .with_context(|| format!("cannot sync {}", path.display()))
 }
 
+/// Remove the temporary files of `path` ([`temporary`]) that processes which are gone left
+/// (killed between the write and the rename): each names its writer's PID, and a PID of no
+/// process here is a writer that is gone. One of a live writer (this process's, or any PID
+/// that exists) is left alone.
+fn discard_stale_temporaries(path: &Path) {
+    let (Some(parent), Some(name)) = (path.parent(), path.file_name()) else {
+        return;
+    };
+    let prefix = format!(".{}.tmp-", name.to_string_lossy());
+    let parent = if parent.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        parent
+    };
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let pid = file
+            .strip_prefix(&prefix)
+            .and_then(|rest| rest.split_once('-'))
+            .filter(|(_, n)| n.bytes().all(|b| b.is_ascii_digit()) && !n.is_empty())
+            .and_then(|(pid, _)| pid.parse::<u32>().ok());
+        let gone = pid
+            .is_some_and(|p| p != std::process::id() && !Path::new(&format!("/proc/{p}")).exists());
+        if gone && e.file_type().is_ok_and(|t| t.is_file()) {
+            discard(&e.path());
+        }
+    }
+}
+
 /// A name for a temporary file beside `path`, unique in this process: `.NAME.tmp-PID-N`.
 fn temporary(path: &Path) -> anyhow::Result<PathBuf> {
     static NEXT: AtomicU64 = AtomicU64::new(0);
@@ -185,6 +251,29 @@ mod tests {
         write(&path, "new").unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
         assert_eq!(names(tmp.path()), ["a.txt"]);
+    }
+
+    #[test]
+    fn a_temporary_left_by_a_dead_writer_is_removed_and_a_live_ones_kept() {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = tmp.path().join("submit.sh");
+        // PID 0 is never a process of /proc; this process is alive.
+        let dead = tmp.path().join(".submit.sh.tmp-0-3");
+        let live = tmp
+            .path()
+            .join(format!(".submit.sh.tmp-{}-99", std::process::id()));
+        let other = tmp.path().join(".submit.sh.tmp-notes");
+        for p in [&dead, &live, &other] {
+            std::fs::write(p, "x").unwrap();
+        }
+        write(&path, "new").unwrap();
+        let mut want = vec![
+            "submit.sh".to_string(),
+            live.file_name().unwrap().to_string_lossy().into_owned(),
+            ".submit.sh.tmp-notes".to_string(),
+        ];
+        want.sort();
+        assert_eq!(names(tmp.path()), want);
     }
 
     #[test]

@@ -342,7 +342,8 @@ fn open_to_append(path: &Path) -> anyhow::Result<std::fs::File> {
 /// `SOIG_TEST_ABORT_AT` names `phase`, the process aborts here, as a `kill -9` would stop it
 /// (no clean-up, no message). Phases: `render:N` (after the N-th image this process journals),
 /// `dataset` (after `data.yaml`), `manifest` (after the manifest), `rename` (after the journal
-/// is removed, before the staging directory moves into place).
+/// is removed, before the staging directory moves into place), `write` (in `fs::write_by`, the
+/// first file written atomically, after its temporary file is synced and before its rename).
 pub fn abort_if_testing(phase: &str) {
     if std::env::var("SOIG_TEST_ABORT_AT").is_ok_and(|p| p == phase) {
         std::process::abort();

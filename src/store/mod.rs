@@ -9,7 +9,7 @@
 //!    staging directory, then moved into place; an existing one is replaced only if it is
 //!    empty or soig's (its manifest lists every file in it), never `/`, the current directory,
 //!    an input or its folder, a folder inside another soig output, or a mount point; a lock
-//!    keeps two runs apart.
+//!    keeps two runs apart. A refusal comes before anything is made: no lock, no folder.
 //! 2. A file written in place (outside a staging directory) is written atomically:
 //!    [`fs::write`] (temporary file beside it, synced, renamed), so a full disk or a kill leaves
 //!    the old file, never a truncated one; a user's file is only ever replaced that way
@@ -28,11 +28,11 @@
 //! | `run` (and Python's `run`), shards | staged, resumable: `write_resumable` | `create` (images, truth, labels, dataset, report, collects, records), cfitsio (FITS), `create_dir_all`, manifest by `write` |
 //! | `merge` | staged: `write_replacing` | `link_or_copy`, `create`, manifest by `write` |
 //! | `study`, `enhance` (convert), `detect`, `tables --out` | staged: `write_replacing` | `create`, `write` (plots, manifest) |
-//! | `export` | staged: `write_replacing` (no manifest: `--out` must be new or empty) | `create` |
-//! | `train` (into a finished output) | in place, `train/` of soig's | `remove_dir_all`, `write` (script, manifest), `create_log`, `copy` (model) |
+//! | `export` | staged: `write_replacing` (its manifest marks an export, which only an export replaces) | `create`, manifest by `write` |
+//! | `train` (into a finished output) | in place, `train/` of soig's (`check_folder`: never an output holding its starting weights) | `remove_dir_all`, `write` (script, manifest), `create_log`, `copy` (model) |
 //! | `tables --readme` | the user's README, in place | `replace` |
-//! | `experiment` | in place, a folder of its own (`check_folder`) | `write`, `remove_dir_all` (plots) |
-//! | `slurm`, `k8s` | in place, scripts soig wrote (`check_folder`) | `write`, `write_executable` |
+//! | `experiment` | in place, a folder of its own (`check_folder`; one killed before its manifest is resumed) | `create_dirs` (taken back if empty on failure), `write`, `remove_dir_all` (plots) |
+//! | `slurm`, `k8s` | in place, scripts soig wrote (`check_folder`), their record last | `create_dirs` (taken back if empty on failure), `write`, `write_executable` |
 //! | Python's `write_frame` | the path the caller names | `write`, `write_by` (FITS) |
 
 pub mod disk;

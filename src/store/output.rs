@@ -4,8 +4,8 @@
 //! into place only when it succeeded. Before anything is written:
 //!
 //! - the output must not be `/`, the current directory, an input (the campaign, a frame, a
-//!   catalogue, a model) or its folder, or an ancestor of any of them (`name = ".."`,
-//!   `output = "new/.."` and `--out .` resolve to those);
+//!   catalogue, a model, starting weights) or its folder, or an ancestor of any of them
+//!   (`name = ".."`, `output = "new/.."` and `--out .` resolve to those);
 //! - the output must not lie inside another soig output (a rerun of that one would delete it);
 //! - an existing output is replaced only if it is empty or it is a soig output whose every file
 //!   its own manifest lists (another tool's `manifest.json`, or a user's file added to a soig
@@ -88,11 +88,17 @@ fn write_staged<T>(
     let parent = target
         .parent()
         .context("an output directory needs a parent")?;
+    // Refused before anything is made (no lock, no folder beside a user's files), and again
+    // under the lock, which may have put back an old output a killed run had moved aside.
+    let exists = |t: &Path| std::fs::symlink_metadata(t).is_ok();
+    if exists(&target) {
+        check_replaceable(output, &target)?;
+    }
     fs::create_dir_all(parent)?;
 
     let lock = Lock::take(parent, &name, output)?;
     restore_set_aside(parent, &name, &target, resume);
-    if std::fs::symlink_metadata(&target).is_ok() {
+    if exists(&target) {
         check_replaceable(output, &target)?;
     }
     let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
@@ -330,7 +336,7 @@ fn unregister(path: &Path) {
 /// The absolute path of `output`, `.` and `..` taken literally (so `new/..` is the folder
 /// holding `new`, whether or not `new` exists), with the symbolic links of its existing part
 /// resolved.
-fn resolve(output: &Path) -> anyhow::Result<PathBuf> {
+pub fn resolve(output: &Path) -> anyhow::Result<PathBuf> {
     let absolute = std::path::absolute(output)
         .with_context(|| format!("cannot resolve {}", output.display()))?;
     let mut lexical = PathBuf::new();
@@ -384,7 +390,7 @@ fn refuse_protected(output: &Path, target: &Path, keep: &[&Path]) -> anyhow::Res
         if let Ok(p) = resolve(k) {
             protected.push((
                 p,
-                "an input (the campaign, a frame, a catalogue, a model) or its folder",
+                "an input (the campaign, a frame, a catalogue, a model, starting weights) or its folder",
             ));
         }
     }
@@ -534,9 +540,11 @@ impl Lock {
             if !same {
                 continue;
             }
-            file.set_len(0)
-                .and_then(|()| file.write_all(holder().as_bytes()))
-                .with_context(|| format!("cannot write {}", path.display()))?;
+            // Who holds it is for the message of a run that waits; on a full disk the lock
+            // holds without it (an error here would leave the file behind).
+            let _ = file
+                .set_len(0)
+                .and_then(|()| file.write_all(holder().as_bytes()));
             register(&path, false);
             return Ok(Lock { path, _file: file });
         }

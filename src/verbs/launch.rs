@@ -306,33 +306,19 @@ pub fn k8s_jobs(l: &Launch, image: &str, claim: &str) -> (Value, Value) {
     (shards, merge)
 }
 
-/// The Kubernetes files: `shards.yaml`, `merge.yaml`, `submit.sh`.
-pub fn k8s(l: &Launch, image: &str, claim: &str) -> Vec<File> {
-    let (shards, merge) = k8s_jobs(l, image, claim);
+/// The Kubernetes files: `shards.yaml`, `merge.yaml`, `submit.sh`. Each Job fails after
+/// `deadline_s` (its `activeDeadlineSeconds`), and submit.sh gives up on it then, or sooner
+/// when its pods cannot pull the image: never a wait for ever on pods that stay Pending.
+pub fn k8s(l: &Launch, image: &str, claim: &str, deadline_s: u64) -> Vec<File> {
+    let (mut shards, mut merge) = k8s_jobs(l, image, claim);
+    for job in [&mut shards, &mut merge] {
+        job["spec"]["activeDeadlineSeconds"] = json!(deadline_s);
+    }
     let name = job_name(&l.name);
-    let submit = format!(
-        "#!/bin/bash\n\
-         # Start the shards, wait until every index has completed, then start the merge.\n\
-         set -euo pipefail\n\
-         cd \"$(dirname \"$0\")\"\n\
-         # A Job ends Complete or Failed: wait for either (`kubectl wait` on one condition\n\
-         # never returns for the other), and stop with the failure.\n\
-         finished() {{\n\
-           while true; do\n\
-             state=$(kubectl get \"job/$1\" -o jsonpath='{{range .status.conditions[?(@.status==\"True\")]}}{{.type}} {{end}}')\n\
-             case \" $state \" in\n\
-               *\" Complete \"*) return 0 ;;\n\
-               *\" Failed \"*) echo \"job $1 failed:\" >&2; kubectl logs \"job/$1\" >&2 || true; return 1 ;;\n\
-             esac\n\
-             sleep 10\n\
-           done\n\
-         }}\n\
-         kubectl apply -f shards.yaml\n\
-         finished {name}\n\
-         kubectl apply -f merge.yaml\n\
-         finished {name}-merge\n\
-         kubectl logs job/{name}-merge\n"
-    );
+    let submit = SUBMIT_K8S
+        .replace("@DEADLINE@", &deadline_s.to_string())
+        .replace("@IMAGE@", &shell_word(image))
+        .replace("@NAME@", &name);
     vec![
         File {
             name: "shards.yaml",
@@ -351,6 +337,56 @@ pub fn k8s(l: &Launch, image: &str, claim: &str) -> Vec<File> {
         },
     ]
 }
+
+/// The Kubernetes submit.sh; `@NAME@`, `@IMAGE@` and `@DEADLINE@` are filled in.
+const SUBMIT_K8S: &str = r#"#!/bin/bash
+# Start the shards, wait until every index has completed, then start the merge.
+set -euo pipefail
+cd "$(dirname "$0")"
+# Each Job has @DEADLINE@ s (`soig k8s --deadline`; Kubernetes fails it after that, its
+# activeDeadlineSeconds); this script gives up on a Job as long after it started, sooner with
+# $SOIG_K8S_DEADLINE_S, and after $SOIG_K8S_PULL_GRACE_S (300) s of pods that cannot pull
+# the image. It polls every $SOIG_K8S_POLL_S (10) s.
+deadline=${SOIG_K8S_DEADLINE_S:-@DEADLINE@}
+pull_grace=${SOIG_K8S_PULL_GRACE_S:-300}
+poll=${SOIG_K8S_POLL_S:-10}
+# The Job's pods, one a line: name, phase, why a container waits.
+pods() {
+  kubectl get pods -l "job-name=$1" -o jsonpath='{range .items[*]}{.metadata.name} {.status.phase} {.status.containerStatuses[*].state.waiting.reason}{"\n"}{end}' 2>/dev/null || true
+}
+# A Job ends Complete or Failed: wait for either (`kubectl wait` on one condition never
+# returns for the other), and stop with the failure, or when it is past its deadline.
+finished() {
+  local started=$SECONDS waited state now
+  while true; do
+    state=$(kubectl get "job/$1" -o jsonpath='{range .status.conditions[?(@.status=="True")]}{.type} {end}')
+    case " $state " in
+      *" Complete "*) return 0 ;;
+      *" Failed "*) echo "job $1 failed:" >&2; kubectl logs "job/$1" >&2 || true; return 1 ;;
+    esac
+    waited=$((SECONDS - started))
+    now=$(pods "$1")
+    if [ "$waited" -ge "$deadline" ]; then
+      echo "job $1: not complete after $waited s, its deadline (soig k8s --deadline, or \$SOIG_K8S_DEADLINE_S); giving up. Its pods (name, phase, waiting reason):" >&2
+      echo "${now:-  (none)}" >&2
+      echo "The Job is left as it is: kubectl describe job/$1; kubectl delete job/$1" >&2
+      return 1
+    fi
+    if [ "$waited" -ge "$pull_grace" ] && grep -qE 'ErrImagePull|ImagePullBackOff|InvalidImageName' <<<"$now"; then
+      echo "job $1: its pods cannot pull the image "@IMAGE@" after $waited s; giving up. Its pods (name, phase, waiting reason):" >&2
+      echo "$now" >&2
+      echo "Push the image where the cluster can pull it (or give soig k8s --image), then: kubectl delete job/$1; ./submit.sh" >&2
+      return 1
+    fi
+    sleep "$poll"
+  done
+}
+kubectl apply -f shards.yaml
+finished @NAME@
+kubectl apply -f merge.yaml
+finished @NAME@-merge
+kubectl logs job/@NAME@-merge
+"#;
 
 /// `v` as a block YAML document. Strings are written as JSON strings, which YAML reads as
 /// double-quoted scalars, so no value is ever taken for a number, a boolean or a comment.
@@ -445,20 +481,27 @@ pub fn write(dir: &Path, files: &[File], keep: &[&Path]) -> anyhow::Result<()> {
             );
         }
     }
-    fs::create_dir_all(dir)?;
+    let made = fs::create_dirs(dir)?;
     for f in files {
         written.insert(f.name.to_string(), sha(f.text.as_bytes()));
     }
-    fs::write(&record, serde_json::to_string_pretty(&written)? + "\n")?;
-    for f in files {
-        let path = dir.join(f.name);
-        if f.executable {
-            fs::write_executable(&path, &f.text)?;
-        } else {
-            fs::write(&path, &f.text)?;
-        }
+    // The record last: a file written before a failure (a full disk) is the new text, which
+    // the next run accepts; the record never claims a file that is not there.
+    let result = files
+        .iter()
+        .try_for_each(|f| {
+            let path = dir.join(f.name);
+            if f.executable {
+                fs::write_executable(&path, &f.text)
+            } else {
+                fs::write(&path, &f.text)
+            }
+        })
+        .and_then(|()| fs::write(&record, serde_json::to_string_pretty(&written)? + "\n"));
+    if result.is_err() {
+        fs::remove_empty_dirs(&made);
     }
-    Ok(())
+    result
 }
 
 #[cfg(test)]
@@ -627,8 +670,15 @@ mod tests {
 
     #[test]
     fn k8s_submit_stops_on_a_failed_job() {
-        let files = k8s(&launch(2), "reg/soig:1", "soig-data");
+        let files = k8s(&launch(2), "reg/soig:1", "soig-data", 3600);
         let submit = text(&files, "submit.sh");
+        assert!(submit.contains("deadline=${SOIG_K8S_DEADLINE_S:-3600}\n"));
+        for f in ["shards.yaml", "merge.yaml"] {
+            assert!(
+                text(&files, f).contains("  activeDeadlineSeconds: 3600\n"),
+                "{f}"
+            );
+        }
         // `kubectl wait --for=condition=complete` never returns for a Failed Job.
         assert!(!submit.contains("kubectl wait --for"), "{submit}");
         assert!(

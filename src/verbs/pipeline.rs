@@ -294,6 +294,11 @@ pub fn train(
         run(campaign, out, python, progress)?;
         return Ok(Some(out.join(TRAIN_DIR).join("model.onnx")));
     }
+    // Refused before anything is written: an output that is or holds an input (the starting
+    // weights of a chunk trained before, `OUT/train/.../best.pt`), which training replaces.
+    let keep = keep_paths(campaign);
+    let keep: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
+    crate::output::check_folder(out, &keep)?;
     let python = find_python(python)?;
     let reusable = out.join(MANIFEST).is_file()
         && manifest::verify(out)

@@ -123,6 +123,8 @@ pub fn fit(
             out.display()
         );
     }
+    // Checked before the last training is removed.
+    let (model_arg, start_weights) = start_weights(campaign)?;
     let tdir = out.join(TRAIN_DIR);
     let chunk_no = if chunk.resume {
         resumable_chunks(&tdir)? + 1
@@ -143,7 +145,6 @@ pub fn fit(
             script.display()
         );
     }
-    let (model_arg, start_weights) = start_weights(campaign)?;
     let args = script_args(&script, &data, &tdir, model_arg, campaign, chunk);
     // One log per chunk: the first keeps the name whole runs always had.
     let log_name = if chunk_no == 1 {

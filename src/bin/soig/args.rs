@@ -161,6 +161,10 @@ pub struct K8sArgs {
     /// campaign and output paths are taken relative to it.
     #[arg(long, default_value = "soig-data")]
     pub claim: String,
+    /// How long each Job may take, pods Pending included (e.g. 90m, 6h): Kubernetes fails it
+    /// after that (activeDeadlineSeconds) and submit.sh gives up on it with its pods' state.
+    #[arg(long, default_value = "24h")]
+    pub deadline: String,
 }
 
 /// `soig train`.

@@ -95,10 +95,19 @@ pub fn k8s(a: K8sArgs) -> ExitCode {
         launch: a,
         image,
         claim,
+        deadline,
     } = a;
     user_errors(|| {
+        // At most 30 days: Kubernetes keeps the deadline in an int64, and a Job that long is
+        // a typo.
+        let deadline_s = match soig::pipeline::parse_budget(&deadline) {
+            Ok(s) if s <= 30.0 * 86400.0 => s.ceil() as u64,
+            _ => anyhow::bail!(
+                "--deadline {deadline:?}: expected a duration of at most 30 days, such as 90m, 3600s or 6h"
+            ),
+        };
         launch(a, "k8s", Vec::new(), |l| {
-            soig::launch::k8s(l, &image, &claim)
+            soig::launch::k8s(l, &image, &claim, deadline_s)
         })
     })
 }

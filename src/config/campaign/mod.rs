@@ -87,16 +87,26 @@ impl Campaign {
         files
     }
 
-    /// The real paths of [`Campaign::input_files`] and of the campaign file: what an output may
-    /// not be or contain.
+    /// The real paths of [`Campaign::input_files`], of the starting weights of training (a
+    /// `.pt` `train.model`) and of the campaign file: what an output may not be or contain.
     pub fn input_paths(&self) -> Vec<PathBuf> {
         let mut paths: Vec<PathBuf> = self
             .input_files()
             .into_iter()
             .map(|(_, p)| self.base_dir.join(p))
             .collect();
+        if let Some(pt) = self.start_weights() {
+            paths.push(pt);
+        }
         paths.push(self.source.clone());
         paths
+    }
+
+    /// The weights training starts from (`train.model` ending in `.pt`, relative to the
+    /// campaign file); None for an architecture that trains from scratch.
+    pub fn start_weights(&self) -> Option<PathBuf> {
+        let m = &self.resolved.train.model;
+        m.ends_with(".pt").then(|| self.base_dir.join(m))
     }
 
     /// sha256 of each of [`Campaign::input_files`], by path as written: what identifies the

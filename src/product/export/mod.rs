@@ -116,12 +116,17 @@ pub fn write(output: &Path, dest: &Path, formats: Formats) -> anyhow::Result<Vec
         .collect())
 }
 
+/// The field of an export's manifest (its `campaign`) that names the output it exports: what
+/// marks a folder as an export of soig's, which a later export may replace.
+pub const EXPORT_OF: &str = "export_of";
+
 /// `soig export`: check that `output` is a soig output whose files match its manifest, then
 /// write its exports into `dest`, which must lie outside it (a file added to an output would
-/// make it fail `soig verify`). `dest` is written whole or not at all, as a run's output, and
-/// only where no user's file is (it must not exist, or be empty).
+/// make it fail `soig verify`). `dest` is written whole or not at all, as a run's output, with
+/// a manifest of its own (so `soig verify` checks it), and only where no user's file is: it
+/// must not exist, be empty, or be an earlier export (its manifest lists every file in it).
 pub fn export_output(output: &Path, dest: &Path, formats: Formats) -> anyhow::Result<Vec<PathBuf>> {
-    let (_, problems) = crate::manifest::verify(output)?;
+    let (source, problems) = crate::manifest::verify(output)?;
     if let Some(first) = problems.first() {
         anyhow::bail!(
             "{} does not verify ({} problem(s), the first: {first}); export a finished output",
@@ -129,12 +134,38 @@ pub fn export_output(output: &Path, dest: &Path, formats: Formats) -> anyhow::Re
             problems.len()
         );
     }
-    if std::path::absolute(dest)?.starts_with(std::path::absolute(output)?) {
+    // As the store resolves them: `OUT/../OUT-export` is beside OUT, a link into OUT inside.
+    if crate::output::resolve(dest)?.starts_with(crate::output::resolve(output)?) {
         anyhow::bail!(
             "--out {} lies inside the output {}: choose a folder outside it (the output would no longer verify), or set `artifacts.coco` / `artifacts.ds9_regions` in the campaign",
             dest.display(),
             output.display()
         );
     }
-    crate::output::write_replacing(dest, &[output], |dir| write(output, dir, formats))
+    refuse_another_output(dest)?;
+    let record = serde_json::json!({
+        EXPORT_OF: std::path::absolute(output)?,
+        "digest": source.digest,
+        "coco": formats.coco,
+        "ds9": formats.ds9,
+    });
+    crate::output::write_replacing(dest, &[output], |dir| {
+        crate::store::fs::create_dir_all(dir)?;
+        let files = write(output, dir, formats)?;
+        let hash = crate::hash::hash_json(&record);
+        crate::manifest::Manifest::build(dir, &hash, record.clone(), &[])?.write(dir)?;
+        Ok(files)
+    })
+}
+
+/// Refuse to replace a soig output that is not an export (a run's, a study's) with an export;
+/// a user's folder is refused by the store.
+fn refuse_another_output(dest: &Path) -> anyhow::Result<()> {
+    match crate::manifest::Manifest::read(dest) {
+        Ok(m) if m.tool == "soig" && m.campaign.get(EXPORT_OF).is_none() => anyhow::bail!(
+            "--out {} is a soig output but not an export (a run's or another command's); refusing to replace it with an export: choose another folder",
+            dest.display()
+        ),
+        _ => Ok(()),
+    }
 }

@@ -31,6 +31,15 @@ use crate::sky::wcs::TanWcs;
 /// Spacing of the time nodes along a trail, pixels of drift (the renderer's).
 const NODE_SPACING_PX: f64 = 4.0;
 
+/// Most pixels the stars may drift over one exposure: 100 000 time nodes, about 15 MB of
+/// cameras. soig's own images drift at most `MAX_SURVEY_DRIFT_DEG` (72 000 px at 0.1"/px); a
+/// header with a tiny CD and start and end WCS far apart would ask for terabytes.
+const MAX_DRIFT_PX: f64 = 400_000.0;
+
+/// The dates a header may give, MJD (1900-01-01 to 2200-01-01): an exposure's start outside
+/// them is a broken header, and far outside them overflows the time scales.
+const MJD_RANGE: std::ops::RangeInclusive<f64> = 15_020.0..=124_593.0;
+
 /// What a frame's header says of its sky over the exposure.
 #[derive(Clone, Debug)]
 pub struct FrameSky {
@@ -95,6 +104,18 @@ impl FrameSky {
                 "{file}: --catalog needs the exposure's start (header keyword DATE-OBS or MJD-OBS) to move the catalogue's stars to it"
             ),
         };
+        let mjd = start.to_mjd_utc_days();
+        if !MJD_RANGE.contains(&mjd) {
+            let (key, v) = match card("DATE-OBS") {
+                Some(d) => ("DATE-OBS", d),
+                None => ("MJD-OBS", card("MJD-OBS").unwrap_or_default()),
+            };
+            bail!(
+                "{file}: header keyword {key} = {v}: the exposure's start must lie between 1900 and 2200 (MJD {} to {})",
+                MJD_RANGE.start(),
+                MJD_RANGE.end()
+            );
+        }
         // EXPTIME, else EXPOSURE (NEOSSat's, and older FITS writers').
         let (key, exposure_s) = match (number("EXPTIME")?, number("EXPOSURE")?) {
             (Some(t), _) => ("EXPTIME", t),
@@ -108,6 +129,16 @@ impl FrameSky {
         }
         let motion = ExposureMotion::from_header(|k| card(k), &wcs)
             .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+        if let Some(m) = &motion {
+            let scale_arcsec = wcs.pixel_scale_arcsec();
+            let drift_px = m.drift_deg() * 3600.0 / scale_arcsec;
+            if drift_px.is_nan() || drift_px > MAX_DRIFT_PX {
+                bail!(
+                    "{file}: the start and end WCS (alternate WCS S and E) move the pointing {:.6} deg over the exposure, {drift_px:.3e} px at the CD's {scale_arcsec:.3e} arcsec/px: more than the {MAX_DRIFT_PX} px of drift --catalog predicts trails for",
+                    m.drift_deg()
+                );
+            }
+        }
         Ok(FrameSky {
             wcs,
             motion,
@@ -273,5 +304,8 @@ pub fn read(path: &Path, epoch_jyear: f64) -> anyhow::Result<StarCatalog> {
     if !(1000.0..=3000.0).contains(&epoch_jyear) {
         bail!("--catalog-epoch {epoch_jyear}: not a Julian year between 1000 and 3000");
     }
+    // A FIFO would block the read for ever, a device never end.
+    crate::input_file::regular(path)
+        .map_err(|why| anyhow::anyhow!("--catalog {}: {why}", path.display()))?;
     Ok(StarCatalog::from_csv_path(path, epoch_jyear)?)
 }

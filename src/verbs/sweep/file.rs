@@ -134,7 +134,8 @@ pub struct Experiment {
 impl Experiment {
     /// Read, check and expand an experiment file; nothing runs.
     pub fn load(path: &Path) -> Result<Experiment, CampaignError> {
-        let text = std::fs::read_to_string(path).map_err(|e| CampaignError {
+        // A FIFO or a device would block or never end: a regular file of a sane size only.
+        let text = crate::input_file::read_text(path).map_err(|e| CampaignError {
             file: path.to_path_buf(),
             line: None,
             field: None,

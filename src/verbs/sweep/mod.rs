@@ -35,8 +35,15 @@ pub fn run(
     progress: &dyn Progress,
 ) -> anyhow::Result<Finished> {
     check_output(experiment, out)?;
-    fs::create_dir_all(out)?;
-    let outcomes = run::run_points(experiment, out, progress)?;
+    let made = fs::create_dirs(out)?;
+    let outcomes = match run::run_points(experiment, out, progress) {
+        Ok(o) => o,
+        Err(e) => {
+            // Nothing of a point is kept but what it finished (or can resume).
+            fs::remove_empty_dirs(&made);
+            return Err(e);
+        }
+    };
     let summary = summary::Summary::new(experiment, &outcomes);
     summary.write_csv(&out.join("summary.csv"))?;
     let plots = summary.plots(&out.join("plots"))?;
@@ -93,6 +100,15 @@ const WRITTEN: [&str; 7] = [
     "times.json",
 ];
 
+/// Whether `name`, at the top of an experiment's output, is one of [`WRITTEN`] or the
+/// temporary file of one that a killed run left (`fs::write` removes it when it writes the
+/// file again).
+fn written(name: &str) -> bool {
+    WRITTEN
+        .iter()
+        .any(|w| name == *w || name.starts_with(&format!(".{w}.tmp-")))
+}
+
 /// Refuse an output that is `/`, the current directory, the experiment's folder or an ancestor,
 /// lies inside a soig output, or exists and is not an experiment's output (its manifest, and
 /// nothing at its top but what `run` writes): `run` rewrites its files in place.
@@ -119,19 +135,38 @@ fn check_output(experiment: &Experiment, out: &Path) -> anyhow::Result<()> {
         .ok()
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
         .is_some_and(|m| m["tool"] == "soig" && m["points"].is_array() && m["digest"].is_string());
-    if !ours {
+    if !ours && !interrupted(out, &names) {
         anyhow::bail!(
             "{} exists and is not an experiment's output (no {MANIFEST} that soig wrote); refusing to write into it",
             out.display()
         );
     }
-    if let Some(foreign) = names.iter().find(|n| !WRITTEN.contains(&n.as_str())) {
+    if let Some(foreign) = names.iter().find(|n| !written(n)) {
         anyhow::bail!(
             "{} holds {foreign}, which soig experiment does not write; refusing to write into it (move it out, or choose another output)",
             out.display()
         );
     }
     Ok(())
+}
+
+/// Whether `out` is an experiment killed before it wrote its manifest: nothing at its top but
+/// what `run` writes, and `points/` holding only soig outputs and the staging folders, locks
+/// and set-aside outputs of the points' runs (which the rerun resumes or removes).
+fn interrupted(out: &Path, names: &[String]) -> bool {
+    let Ok(points) = std::fs::read_dir(out.join("points")) else {
+        return false;
+    };
+    let points: Vec<std::fs::DirEntry> = points.flatten().collect();
+    let soigs = |e: &std::fs::DirEntry| {
+        let n = e.file_name().to_string_lossy().into_owned();
+        let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
+        (n.starts_with('.') && n.ends_with(".lock") && e.file_type().is_ok_and(|t| t.is_file()))
+            || (n.starts_with('.') && (n.contains(".partial-") || n.contains(".old-")) && is_dir)
+            || (is_dir
+                && crate::manifest::Manifest::read(&e.path()).is_ok_and(|m| m.tool == "soig"))
+    };
+    names.iter().all(|n| written(n)) && !points.is_empty() && points.iter().all(soigs)
 }
 
 /// The JSON Schema of the experiment file format, generated from the Rust types.
