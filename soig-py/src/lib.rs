@@ -359,7 +359,11 @@ fn run<'py>(
     let c = campaign.campaign.clone();
     let s = py
         .detach(move || {
-            let options = soig::RunOptions { shard: None, fresh };
+            let options = soig::RunOptions {
+                shard: None,
+                fresh,
+                force: false,
+            };
             soig::run_with(&c, &out, options, python.as_deref(), &soig::Silent)
         })
         .map_err(run_err)?;

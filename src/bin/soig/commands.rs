@@ -15,6 +15,7 @@ pub fn run(a: RunArgs) -> ExitCode {
         out,
         shard,
         fresh,
+        force,
         quiet,
         python,
         set,
@@ -30,7 +31,11 @@ pub fn run(a: RunArgs) -> ExitCode {
             Some(s) => s.output_dir(&campaign.output_dir),
             None => campaign.output_dir.clone(),
         });
-        let options = soig::RunOptions { shard, fresh };
+        let options = soig::RunOptions {
+            shard,
+            fresh,
+            force,
+        };
         let s = soig::run_with(
             &campaign,
             &output,
@@ -243,6 +248,7 @@ pub fn study(a: StudyArgs) -> ExitCode {
         seeds,
         image,
         quick,
+        force,
         set,
     } = a;
     user_errors(|| {
@@ -256,6 +262,7 @@ pub fn study(a: StudyArgs) -> ExitCode {
             seeds,
             image,
             quick,
+            force,
         };
         let s = soig::study::run(&campaign, &output, &opts)?;
         println!(
@@ -528,6 +535,7 @@ pub fn experiment(a: ExperimentArgs) -> ExitCode {
         experiment: path,
         out,
         quiet,
+        force,
     } = a;
     let mut failed = false;
     let code = user_errors(|| {
@@ -539,7 +547,7 @@ pub fn experiment(a: ExperimentArgs) -> ExitCode {
                 .join("runs")
                 .join(stem)
         });
-        let f = soig::sweep::run(&experiment, &out, &*progress(quiet))?;
+        let f = soig::sweep::run(&experiment, &out, &*progress(quiet), force)?;
         for (name, e) in &f.failures {
             eprintln!("point {name} failed: {e}");
         }
