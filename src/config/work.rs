@@ -80,21 +80,24 @@ mod tests {
 
     const ELEMENTS: &str = "elements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }";
 
-    fn load(extra: &str) -> Campaign {
+    fn load(top: &str, extra: &str) -> Campaign {
         let text = format!(
-            "name = \"t\"\n[observer]\nnorad = 1\n{ELEMENTS}\n[[debris]]\nnorad = 40649\n{ELEMENTS}\n{extra}"
+            "name = \"t\"\n{top}[observer]\nnorad = 1\n{ELEMENTS}\n[[debris]]\nnorad = 40649\n{ELEMENTS}\n{extra}"
         );
         Campaign::from_toml(&text, Path::new("/nowhere/c.toml")).unwrap()
     }
 
     #[test]
     fn the_papers_images_pass_and_a_zero_point_of_40_is_refused_by_field() {
-        let paper = load("");
+        let paper = load("", "");
         let c = image(&paper);
         assert!(c.seconds < 2.0, "{c:?}");
         check_run(&paper, 4000, false).unwrap();
 
-        let bright = load("[sensor]\nwidth_px = 128\nheight_px = 128\nzero_point_mag = 40.0\n");
+        let bright = load(
+            "",
+            "[sensor]\nwidth_px = 128\nheight_px = 128\nzero_point_mag = 40.0\n",
+        );
         let e = check_run(&bright, 2, false).unwrap_err();
         assert_eq!(e.field.as_deref(), Some("sensor.zero_point_mag"), "{e}");
         assert_eq!(e.line, Some(11), "{e}");
@@ -102,6 +105,7 @@ mod tests {
         check_run(&bright, 2, true).unwrap();
         // The expected-flux renderer's work does not grow with the photons.
         let expected = load(
+            "",
             "[sensor]\nwidth_px = 128\nheight_px = 128\nzero_point_mag = 40.0\n[render]\nmethod = \"expected\"\n",
         );
         check_run(&expected, 2, false).unwrap();
@@ -109,7 +113,7 @@ mod tests {
 
     #[test]
     fn a_run_beyond_the_total_limit_names_images() {
-        let many = load("images = 10000000\n");
+        let many = load("images = 10000000\n", "");
         let e = check_run(&many, 10_000_000, false).unwrap_err();
         assert_eq!(e.field.as_deref(), Some("images"), "{e}");
         assert!(e.to_string().contains("days"), "{e}");

@@ -201,11 +201,8 @@ impl Experiment {
             ));
         }
         for (i, values) in columns.iter().enumerate() {
-            if let Some(v) = values
-                .iter()
-                .enumerate()
-                .find_map(|(k, v)| values[..k].contains(v).then_some(v))
-            {
+            let mut seen = std::collections::HashSet::new();
+            if let Some(v) = values.iter().find(|v| !seen.insert(*v)) {
                 return Err(at(
                     Some(i),
                     "values",
