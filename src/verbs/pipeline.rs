@@ -701,5 +701,6 @@ fn rejection_fields(reason: Rejection) -> &'static str {
         Rejection::TrackTooFast => {
             "`exposure.max_s` (track pointing follows the debris' apparent motion)"
         }
+        Rejection::CollectPastWindow => "`collect.frames`, `collect.gap_s` and the `window`",
     }
 }
