@@ -150,6 +150,7 @@ fn run_detector(
         .par_iter()
         .enumerate()
         .map(|(i, img)| {
+            crate::progress::check(progress)?;
             let found = detect(i, img)?;
             progress.advance();
             Ok(found)

@@ -477,6 +477,7 @@ fn render(
     let rendered: Vec<Record> = todo
         .par_iter()
         .map(|&i| -> anyhow::Result<Record> {
+            crate::progress::check(progress)?;
             let subset = dataset_stage.then(|| subsets[i as usize]);
             let products = simulate::image(&x, &inputs, i).map_err(|e| {
                 // Draws meet the checks in turn, so a rare reason can be the one that matters.
