@@ -75,7 +75,7 @@ pub mod verbs;
 
 // The top crate's modules under the paths they had before its folders: `soig::campaign`,
 // `soig::pipeline`, ...
-pub use config::{campaign, experiment};
+pub use config::{campaign, experiment, work};
 pub(crate) use product::artifacts;
 pub use product::{collect, dataset, export, light_curve, shard, star_trails};
 pub use verbs::{

@@ -33,6 +33,8 @@ pub struct TestImage {
     pub png: std::path::PathBuf,
     pub width: usize,
     pub height: usize,
+    /// The label boxes as the image's label file reads (6 decimals of the frame), scaled to
+    /// pixels: what `soig eval` scores against.
     pub truth: Vec<[f64; 4]>,
     /// Each labelled object's magnitude, SNR and length from the truth sidecar, in the order
     /// of `truth`.
@@ -140,6 +142,9 @@ impl Timing {
     }
 }
 
+/// What the report scores: each test image's truth (as its label file reads, see
+/// `TestImage::truth`) and its detections as `soig eval` reads them back from the prediction
+/// files, so report.json holds the figures `soig eval` gives on the run's own files.
 fn evals(images: &[TestImage], run: &DetectorRun) -> Vec<ImageEval> {
     images
         .iter()
@@ -147,9 +152,30 @@ fn evals(images: &[TestImage], run: &DetectorRun) -> Vec<ImageEval> {
         .map(|(img, dets)| ImageEval {
             truth: img.truth.clone(),
             truth_class: vec![0; img.truth.len()],
-            detections: dets.clone(),
+            detections: dets
+                .iter()
+                .map(|d| as_written(d, img.width, img.height))
+                .collect(),
         })
         .collect()
+}
+
+/// A detection as `soig eval` reads it from its prediction line: normalised, written, read and
+/// scaled back to the image's pixels (as `ImageEval::scaled` scales it).
+fn as_written(d: &Detection, width: usize, height: usize) -> Detection {
+    let line = yolo_prediction_line(d, width, height);
+    let read = metrics::parse_yolo(Path::new("(prediction line)"), &line, true)
+        .expect("a prediction line soig writes reads back");
+    let (class, b, score) = read[0];
+    let (w, h) = (width as f64, height as f64);
+    Detection {
+        x1: b[0] * w,
+        y1: b[1] * h,
+        x2: b[2] * w,
+        y2: b[3] * h,
+        score,
+        class,
+    }
 }
 
 /// Metrics of one detector in both conventions and at the fixed threshold.
@@ -197,11 +223,13 @@ pub fn detector_metrics(
     (m, u, c, t)
 }
 
-/// The YOLO prediction line of a detection: `cls xc yc w h score`, normalised.
+/// The YOLO prediction line of a detection: `cls xc yc w h score`, normalised, each number at
+/// round-trip precision (the shortest text that reads back as the same f64: 6 decimals tied
+/// scores, and `soig eval` of the files then disagreed with the report).
 pub fn yolo_prediction_line(d: &Detection, width: usize, height: usize) -> String {
     let (w, h) = (width as f64, height as f64);
     format!(
-        "{} {:.6} {:.6} {:.6} {:.6} {:.6}\n",
+        "{} {} {} {} {} {}\n",
         d.class,
         (d.x1 + d.x2) / 2.0 / w,
         (d.y1 + d.y2) / 2.0 / h,
@@ -248,7 +276,7 @@ pub fn write(
                     format!("{:.3}", d.y1),
                     format!("{:.3}", d.x2),
                     format!("{:.3}", d.y2),
-                    format!("{:.6}", d.score),
+                    d.score.to_string(),
                     d.class.to_string(),
                 ])?;
             }

@@ -254,3 +254,65 @@ fn several_objects_keep_their_track_ids_over_a_collect() {
     // Labels, truths and COCO agree; the objects show in their first frames at least.
     assert!(assert_coco_agrees_with_labels_and_truth(&one) >= 2 * n as usize);
 }
+
+/// Every frame of a collect is judged (issue #43): with two minutes between frames a LEO object
+/// seen from LEO moves tens of degrees, and on the main of 2026-11-28 the later frames were
+/// rendered whatever they saw (4 of these 12 frames broke the Earth, Sun or Moon angle; with
+/// longer gaps the object went behind the Earth, bright and labelled).
+/// Now each frame's line of sight clears the Earth by the campaign's 100 km and keeps the
+/// Earth, Sun and Moon angles, and every frame starts inside the window. A collect longer than
+/// the window is refused, naming `collect.gap_s`.
+#[test]
+fn every_frame_of_a_collect_is_judged_and_inside_the_window() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = CampaignToml::new("gaps", 3, 12)
+        .top("stages = [\"render\"]\n")
+        .debris(&tle_object(37476))
+        .tables(
+            "[collect]\nframes = 4\ngap_s = 120.0\n[sensor]\nwidth_px = 64\nheight_px = 64\n\
+             [window]\nstart = \"2022-01-22T00:00:00 UTC\"\nend = \"2022-01-22T12:00:00 UTC\"\n",
+        );
+    let file = toml.write(&tmp.path().join("gaps.toml"));
+    let c = Campaign::load(&file).unwrap();
+    let out = tmp.path().join("out");
+    common::ok(common::run_quiet(&file, &out));
+    let radius = soig::scene::EARTH_RADIUS_KM + c.resolved.visibility.earth_clearance_km;
+    let v = &c.resolved.visibility;
+    for i in 0..12 {
+        let t = json(&out.join(format!("truth/img_{i:06}.json")));
+        let start =
+            soig::campaign::parse_epoch(&format!("{} UTC", t["start_utc"].as_str().unwrap()))
+                .unwrap();
+        assert!(start < c.window_end, "image {i} starts after the window");
+        let mid = start + hifitime::Duration::from_seconds(t["exposure_s"].as_f64().unwrap() / 2.0);
+        let obs = c.observer.propagator.position_teme_km(mid).unwrap();
+        let deb = c.debris[0].propagator.position_teme_km(mid).unwrap();
+        assert!(
+            !soig::sky::segment_hits_sphere(obs, deb, radius),
+            "image {i} (frame {}): the line of sight goes through the Earth",
+            t["collect"]["frame"]
+        );
+        for (key, min) in [
+            ("earth_angle_deg", v.earth_min_deg),
+            ("sun_angle_deg", v.sun_min_deg),
+            ("moon_angle_deg", v.moon_min_deg),
+        ] {
+            let a = t[key].as_f64().unwrap();
+            assert!(a > min, "image {i}: {key} {a} <= {min}");
+        }
+    }
+    // Four frames 20 min apart do not fit a window of one hour.
+    let e = Campaign::from_toml(
+        &toml
+            .text()
+            .replace("gap_s = 120.0", "gap_s = 1200.0")
+            .replace(
+                "end = \"2022-01-22T12:00:00 UTC\"",
+                "end = \"2022-01-22T01:00:00 UTC\"",
+            ),
+        &tmp.path().join("short.toml"),
+    )
+    .unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("collect.gap_s"), "{e}");
+    assert!(e.to_string().contains("inside the window"), "{e}");
+}

@@ -55,6 +55,61 @@ fn digests(out: &Path) -> Vec<(String, String)> {
         .collect()
 }
 
+/// The folder of the point named `name` (in the experiment's manifest).
+fn folder_of(out: &Path, name: &str) -> String {
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("experiment.json")).unwrap())
+            .unwrap();
+    m["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == name)
+        .unwrap_or_else(|| panic!("no point {name}"))["folder"]
+        .as_str()
+        .unwrap()
+        .to_string()
+}
+
+/// Two values whose names sanitise alike (`a/b` and `a_b`) are two points in two folders, each
+/// with its values in a readable file beside it, not one folder averaged as replicates
+/// (issue #43: on the main of 2026-11-28 they shared `points/output=_a_b_`).
+#[test]
+fn values_that_read_alike_get_folders_of_their_own() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let path = experiment(
+        tmp.path(),
+        "e.toml",
+        "set = [\"images=1\", \"stages=[\\\"render\\\"]\"]\n[[axis]]\nfield = \"output\"\nvalues = [\"a/b\", \"a_b\"]\n",
+    );
+    let o = soig(&["experiment", &path, "--out", out.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut folders: Vec<String> = std::fs::read_dir(out.join("points"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    folders.sort();
+    assert_eq!(
+        folders.len(),
+        4,
+        "two folders and their values: {folders:?}"
+    );
+    let values: Vec<String> = folders
+        .iter()
+        .filter(|f| f.ends_with(".json"))
+        .map(|f| std::fs::read_to_string(out.join("points").join(f)).unwrap())
+        .collect();
+    assert!(
+        values.iter().any(|v| v.contains("\\\"a/b\\\"")),
+        "{values:?}"
+    );
+    assert!(
+        values.iter().any(|v| v.contains("\\\"a_b\\\"")),
+        "{values:?}"
+    );
+}
+
 #[test]
 fn a_grid_runs_and_a_rerun_reuses_unchanged_points() {
     let tmp = tempfile::tempdir().unwrap();
@@ -85,7 +140,8 @@ fn a_grid_runs_and_a_rerun_reuses_unchanged_points() {
     // Each point is a verifiable soig run.
     let v = soig(&[
         "verify",
-        out.join("points/exposure.max_s=5.0,seed=1")
+        out.join("points")
+            .join(folder_of(&out, "exposure.max_s=5.0,seed=1"))
             .to_str()
             .unwrap(),
     ]);

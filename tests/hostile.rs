@@ -274,12 +274,18 @@ fn glob(dir: &Path, p: &str) -> PathBuf {
             path.push(part);
             continue;
         };
-        let found = std::fs::read_dir(&path)
+        // A folder before a file: an experiment's `points/` holds each point's folder and,
+        // beside it, the file of its values.
+        let mut found: Vec<String> = std::fs::read_dir(&path)
             .into_iter()
             .flatten()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .find(|n| n.starts_with(pre) && n.ends_with(post) && n.len() >= pre.len() + post.len());
-        path.push(found.unwrap_or_else(|| part.to_string()));
+            .filter(|n| {
+                n.starts_with(pre) && n.ends_with(post) && n.len() >= pre.len() + post.len()
+            })
+            .collect();
+        found.sort_by_key(|n| !path.join(n).is_dir());
+        path.push(found.into_iter().next().unwrap_or_else(|| part.to_string()));
     }
     path
 }

@@ -190,6 +190,13 @@ impl NativeCampaign {
         }
     }
 
+    /// `key=value` as `--set` writes it (the value a Python value, as TOML), unchecked: the
+    /// campaign judges its overrides together when it is built (`from_parts`).
+    #[staticmethod]
+    fn override_text(key: &str, value: &Bound<'_, PyAny>) -> PyResult<String> {
+        Ok(format!("{key}={}", toml_value(value)?))
+    }
+
     /// This campaign with `key=value` added to its overrides (the value a Python value).
     fn with_set(&self, key: &str, value: &Bound<'_, PyAny>) -> PyResult<Self> {
         let v = toml_value(value)?;
@@ -346,22 +353,61 @@ impl NativeCampaign {
     }
 }
 
+/// A run's progress that reports nothing and stops when asked (Ctrl-C in Python).
+struct Cancel(Arc<std::sync::atomic::AtomicBool>);
+
+impl soig::Progress for Cancel {
+    fn cancelled(&self) -> bool {
+        self.0.load(std::sync::atomic::Ordering::SeqCst)
+    }
+}
+
 /// Run a campaign into `out` as `soig run` does; returns the run summary as a dict.
 #[pyfunction]
-#[pyo3(signature = (campaign, out, fresh=false, python=None))]
+#[pyo3(signature = (campaign, out, fresh=false, python=None, force=false))]
 fn run<'py>(
     py: Python<'py>,
     campaign: &NativeCampaign,
     out: PathBuf,
     fresh: bool,
     python: Option<PathBuf>,
+    force: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let c = campaign.campaign.clone();
-    let s = py
-        .detach(move || {
-            let options = soig::RunOptions { shard: None, fresh };
-            soig::run_with(&c, &out, options, python.as_deref(), &soig::Silent)
-        })
+    // The run goes on in a thread of its own while this one, every 0.1 s, lets Python see its
+    // signals: Ctrl-C then stops the run before its next image (`Progress::cancelled`), leaves
+    // its work to resume, and raises KeyboardInterrupt here.
+    let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let cancel = Cancel(stop.clone());
+    let worker = std::thread::spawn(move || {
+        let options = soig::RunOptions {
+            shard: None,
+            fresh,
+            force,
+        };
+        soig::run_with(&c, &out, options, python.as_deref(), &cancel)
+    });
+    loop {
+        py.detach(|| {
+            for _ in 0..10 {
+                if worker.is_finished() {
+                    break;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(10));
+            }
+        });
+        if worker.is_finished() {
+            break;
+        }
+        if let Err(interrupt) = py.check_signals() {
+            stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            let _ = py.detach(|| worker.join());
+            return Err(interrupt);
+        }
+    }
+    let s = worker
+        .join()
+        .map_err(|_| SoigError::new_err("the run panicked"))?
         .map_err(run_err)?;
     let d = PyDict::new(py);
     d.set_item("output", s.output)?;
@@ -371,6 +417,13 @@ fn run<'py>(
     d.set_item("seconds", s.seconds)?;
     d.set_item("mix", to_python(py, &s.mix)?)?;
     Ok(d)
+}
+
+/// The build identity that keeps two builds out of one output: sha256 of this extension
+/// module's file (`soig::build_id`).
+#[pyfunction]
+fn build_id() -> String {
+    soig::build_id::identity().to_string()
 }
 
 /// Check an output against its manifest, as `soig verify`.
@@ -509,6 +562,7 @@ fn _soig(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<NativeCampaign>()?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(build_id, m)?)?;
     m.add_function(wrap_pyfunction!(verify, m)?)?;
     m.add_function(wrap_pyfunction!(eval, m)?)?;
     m.add_function(wrap_pyfunction!(detect_files, m)?)?;

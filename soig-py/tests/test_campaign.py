@@ -106,14 +106,43 @@ def test_set_errors_are_the_cli_errors():
     path = REPO / "campaigns" / "quickstart.toml"
     c = soig.Campaign(path)
     before = c.hash
+    c.set("sensor.width_px", -3)  # judged at the next use, as the command judges --set
     with pytest.raises(soig.CampaignError) as e:
-        c.set("sensor.width_px", -3)
+        c.hash
     assert e.value.field == "sensor.width_px" and e.value.line is None
     assert str(e.value) == cli_error(path, "--set", "sensor.width_px=-3")
     assert c.hash == before  # a refused value leaves the campaign as it was
     with pytest.raises(soig.CampaignError) as e:
-        c.set("sensor.gain_e_per_adu", "fast")
+        c.set("sensor.gain_e_per_adu", "fast").images
     assert e.value.field == "sensor.gain_e_per_adu"
+
+
+def test_chained_sets_are_judged_together_as_the_cli_judges_them(tmp_path):
+    # Issue #43: on the main of 2026-11-28 each set was judged alone, so raising the exposure
+    # minimum above the default maximum (8 s) failed before the maximum was raised.
+    path = REPO / "campaigns" / "quickstart.toml"
+    c = soig.Campaign(path).set("exposure.min_s", 10.0).set("exposure.max_s", 20.0)
+    r = c.resolved()
+    assert (r["exposure"]["min_s"], r["exposure"]["max_s"]) == (10.0, 20.0)
+    assert c.overrides == ["exposure.min_s=10.0", "exposure.max_s=20.0"]
+    p = subprocess.run(
+        [str(soig_command()), "run", str(path), "--quiet", "--out", str(tmp_path / "x"),
+         "--set", "images=0", "--set", "exposure.min_s=10.0", "--set", "exposure.max_s=20.0"],
+        capture_output=True, text=True,
+    )
+    # The command accepts the same pair (it stops at `images`, which it judges too).
+    assert "exposure" not in p.stderr, p.stderr
+
+
+def test_the_build_identity_is_the_native_modules():
+    # Issue #43: on the main of 2026-11-28 the identity hashed the Python interpreter
+    # (/proc/self/exe), so a module reinstalled under the same interpreter looked the same.
+    import hashlib
+
+    from soig import _soig
+
+    with open(_soig.__file__, "rb") as f:
+        assert soig.build_id() == hashlib.sha256(f.read()).hexdigest()
 
 
 def test_file_errors_name_file_line_field(tmp_path):
@@ -235,3 +264,37 @@ def test_the_gil_is_released_while_rendering():
     finally:
         sys.setswitchinterval(old)
     assert turns > 0
+
+
+def test_ctrl_c_stops_a_run_within_a_second_and_the_output_resumes(tmp_path):
+    # Issue #43: on the main of 2026-11-28 Ctrl-C during soig.run was ignored until the run
+    # ended, and then swallowed.
+    import signal
+    import sys
+    import time
+
+    out = tmp_path / "run"
+    quickstart = str(REPO / "campaigns" / "quickstart.toml")
+    script = (
+        "import sys, soig\n"
+        f"c = soig.Campaign({quickstart!r}).set('images', 400).set('stages', ['render'])\n"
+        "print('start', flush=True)\n"
+        "try:\n"
+        f"    soig.run(c, {str(out)!r})\n"
+        "except KeyboardInterrupt:\n"
+        "    sys.exit(3)\n"
+    )
+    p = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "start"
+    time.sleep(3.0)
+    sent = time.monotonic()
+    p.send_signal(signal.SIGINT)
+    p.wait(timeout=60)
+    stopped = time.monotonic() - sent
+    assert p.returncode == 3, p.returncode
+    assert stopped < 2.0, f"KeyboardInterrupt {stopped:.2f} s after Ctrl-C"
+    # The work done is kept: the same run resumes it and ends whole.
+    c = soig.Campaign(quickstart).set("images", 400).set("stages", ["render"])
+    r = soig.run(c, out)
+    assert r["resumed"] > 0, r
+    assert soig.verify(out)["ok"]

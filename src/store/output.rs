@@ -111,6 +111,9 @@ fn write_staged<T>(
     register(&staging, resume.is_some());
     let result = match write(&staging) {
         Ok(value) => put_in_place(&staging, &target, output, &name).map(|()| value),
+        // Stopped by the user (Python's Ctrl-C): the staging stays to be resumed, as a kill
+        // leaves it.
+        Err(e) if resume.is_some() && e.is::<crate::progress::Interrupted>() => Err(e),
         Err(e) => {
             let _ = fs::remove_dir_all(&staging);
             Err(e)

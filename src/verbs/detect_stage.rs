@@ -102,12 +102,27 @@ fn test_images(dir: &Path, chosen: &[&Written]) -> anyhow::Result<Vec<TestImage>
                     png.labels.len()
                 );
             }
+            // The truth as the label file reads (what `soig eval` scores against), in pixels.
+            let label = dir.join(crate::artifacts::dataset_paths(w.index, w.subset).1);
+            let (fw, fh) = (png.width as f64, png.height as f64);
+            let truth: Vec<[f64; 4]> = crate::metrics::read_yolo_file(&label, false)?
+                .iter()
+                .map(|(_, b, _)| [b[0] * fw, b[1] * fh, b[2] * fw, b[3] * fh])
+                .collect();
+            if truth.len() != png.labels.len() {
+                anyhow::bail!(
+                    "{}: {} label lines, its image's record has {} label boxes",
+                    label.display(),
+                    truth.len(),
+                    png.labels.len()
+                );
+            }
             Ok(TestImage {
                 stem,
                 png: png.path.clone(),
                 width: png.width,
                 height: png.height,
-                truth: png.labels.clone(),
+                truth,
                 facts,
             })
         })
@@ -135,6 +150,7 @@ fn run_detector(
         .par_iter()
         .enumerate()
         .map(|(i, img)| {
+            crate::progress::check(progress)?;
             let found = detect(i, img)?;
             progress.advance();
             Ok(found)

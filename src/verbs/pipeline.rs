@@ -88,6 +88,8 @@ pub struct RunOptions {
     pub shard: Option<Shard>,
     /// Start afresh rather than resume the staging directory a killed run left.
     pub fresh: bool,
+    /// Run even what the work estimate refuses (`work::check_run`).
+    pub force: bool,
 }
 
 /// Run the campaign into `output`. An existing `output` is replaced only if it is a soig output
@@ -136,6 +138,7 @@ pub fn run_with(
         let share = s.images(n);
         share.end - share.start
     });
+    crate::work::check_run(campaign, images, options.force)?;
     crate::disk::check(campaign, images, output, &|m| progress.note(m))?;
     let inputs = campaign.input_hashes()?;
     let id = Identity::new(
@@ -479,6 +482,7 @@ fn render(
     let rendered: Vec<Record> = todo
         .par_iter()
         .map(|&i| -> anyhow::Result<Record> {
+            crate::progress::check(progress)?;
             let subset = dataset_stage.then(|| subsets[i as usize]);
             let products = simulate::image(&x, &inputs, i).map_err(|e| {
                 // Draws meet the checks in turn, so a rare reason can be the one that matters.
@@ -703,5 +707,6 @@ fn rejection_fields(reason: Rejection) -> &'static str {
         Rejection::TrackTooFast => {
             "`exposure.max_s` (track pointing follows the debris' apparent motion)"
         }
+        Rejection::CollectPastWindow => "`collect.frames`, `collect.gap_s` and the `window`",
     }
 }

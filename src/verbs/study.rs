@@ -36,6 +36,8 @@ pub struct Options {
     pub image: u64,
     /// Fewer values per knob (a smoke test).
     pub quick: bool,
+    /// Run even what the work estimate refuses (`work::MAX_SECONDS`).
+    pub force: bool,
 }
 
 /// One setting: a knob at one value, the others at the campaign's.
@@ -104,7 +106,33 @@ pub fn run(campaign: &Campaign, out: &Path, opts: &Options) -> anyhow::Result<Su
         opts.image,
         campaign.resolved.images
     );
+    if !opts.force {
+        check_work(campaign, opts)?;
+    }
     crate::output::write_replacing(out, &[&campaign.base_dir], |dir| study(campaign, dir, opts))
+}
+
+/// Refuse a study whose settings times seeds would take beyond `work::MAX_SECONDS`, saying so.
+fn check_work(campaign: &Campaign, opts: &Options) -> anyhow::Result<()> {
+    let base = crate::experiment::of(campaign);
+    let ref_steps = base.render.jitter_steps * REFERENCE_REFINEMENT as usize;
+    let settings = settings(&base, opts.quick, ref_steps);
+    let per_seed: f64 = settings
+        .iter()
+        .map(|s| crate::render::cost::image(&s.x).seconds)
+        .sum();
+    let total = per_seed * f64::from(opts.seeds);
+    anyhow::ensure!(
+        total <= crate::work::MAX_SECONDS,
+        "--seeds {}: {} settings of up to about {} a seed would take up to {} of one core, \
+         beyond the limit of {}: fewer seeds, --quick, or pass --force",
+        opts.seeds,
+        settings.len(),
+        crate::work::duration(per_seed),
+        crate::work::duration(total),
+        crate::work::duration(crate::work::MAX_SECONDS),
+    );
+    Ok(())
 }
 
 /// The study itself, its files written into `dir`.

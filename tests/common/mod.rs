@@ -197,7 +197,7 @@ pub fn assert_coco_agrees_with_soig_eval(
     coco
 }
 
-fn repo(rel: &str) -> PathBuf {
+pub fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 

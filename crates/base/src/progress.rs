@@ -16,6 +16,33 @@ pub trait Progress: Sync {
     fn finish(&self) {}
     /// Something the user should know (e.g. which interpreter trains).
     fn note(&self, _message: &str) {}
+    /// Whether the user asked to stop (Python's Ctrl-C): long loops then end with
+    /// [`Interrupted`] before their next item, and the output is left to resume.
+    fn cancelled(&self) -> bool {
+        false
+    }
+}
+
+/// The error of work stopped because [`Progress::cancelled`] said so: the work done is kept
+/// for a resume, as after a kill.
+#[derive(Debug)]
+pub struct Interrupted;
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("interrupted: the work done so far is kept; run the same again to resume it")
+    }
+}
+
+impl std::error::Error for Interrupted {}
+
+/// `Err(Interrupted)` when `progress` asks to stop.
+pub fn check(progress: &dyn Progress) -> Result<(), Interrupted> {
+    if progress.cancelled() {
+        Err(Interrupted)
+    } else {
+        Ok(())
+    }
 }
 
 /// Reports nothing.

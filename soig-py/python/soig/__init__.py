@@ -29,6 +29,7 @@ __all__ = [
     "CampaignError",
     "Image",
     "SoigError",
+    "build_id",
     "detect",
     "eval",
     "run",
@@ -83,17 +84,18 @@ class Campaign:
     unless `path` names another).
     """
 
-    __slots__ = ("_native",)
+    __slots__ = ("_built", "_pending")
 
     def __init__(self, source: Union[PathLike, dict], *, path: Optional[PathLike] = None):
+        self._pending: List[str] = []
         if isinstance(source, dict):
-            self._native = _soig.NativeCampaign.from_parts(
+            self._built = _soig.NativeCampaign.from_parts(
                 _soig.NativeCampaign.dict_to_toml(source), str(path or "<dict>")
             )
         elif isinstance(source, (str, os.PathLike)):
             if path is not None:
                 raise TypeError("path= names text or a dict; a file names itself")
-            self._native = _soig.NativeCampaign.from_file(os.fspath(source))
+            self._built = _soig.NativeCampaign.from_file(os.fspath(source))
         else:
             raise TypeError(f"a campaign is a file path or a dict, not {type(source).__name__}")
 
@@ -102,8 +104,23 @@ class Campaign:
         """A campaign from TOML text; `path` names it in errors and its directory is where
         relative paths are read from."""
         c = cls.__new__(cls)
-        c._native = _soig.NativeCampaign.from_parts(text, os.fspath(path))
+        c._pending = []
+        c._built = _soig.NativeCampaign.from_parts(text, os.fspath(path))
         return c
+
+    @property
+    def _native(self) -> Any:
+        """The campaign with every `set` since the last use applied and judged together, as
+        `soig run --set ... --set ...` judges them (so chained sets whose first alone would
+        be refused work). A refused set raises CampaignError here, at the use, and the
+        campaign stays as it was before those sets."""
+        if self._pending:
+            pending, self._pending = self._pending, []
+            b = self._built
+            self._built = _soig.NativeCampaign.from_parts(
+                b.text, os.fspath(b.path), b.overrides + pending
+            )
+        return self._built
 
     @classmethod
     def from_dict(cls, d: dict, path: PathLike = "<dict>") -> "Campaign":
@@ -112,9 +129,11 @@ class Campaign:
 
     def set(self, key: str, value: Any) -> "Campaign":
         """Override a setting as `soig run --set key=value` does (after `extends`), e.g.
-        `.set("sensor.width_px", 512)`; returns the campaign, changed in place. A refused
-        value raises CampaignError and leaves the campaign as it was."""
-        self._native = self._native.with_set(key, value)
+        `.set("sensor.width_px", 512)`; returns the campaign, changed in place. The sets are
+        judged together at the campaign's next use (as the command judges its `--set`s), so
+        `.set("exposure.min_s", 10).set("exposure.max_s", 20)` works; a refused value raises
+        CampaignError then, and the campaign stays as it was before those sets."""
+        self._pending.append(_soig.NativeCampaign.override_text(key, value))
         return self
 
     @property
@@ -163,7 +182,8 @@ class Campaign:
 
     def __setstate__(self, state):
         text, path, overrides = state
-        self._native = _soig.NativeCampaign.from_parts(text, path, overrides)
+        self._pending = []
+        self._built = _soig.NativeCampaign.from_parts(text, path, overrides)
 
     def __repr__(self) -> str:
         return f"<soig.Campaign {self.name!r}: {self.images} images, hash {self.hash[:12]}>"
@@ -175,14 +195,26 @@ def run(
     *,
     fresh: bool = False,
     python: Optional[PathLike] = None,
+    force: bool = False,
 ) -> dict:
     """Run the campaign into `out` (default: its output_dir) as `soig run`: the same files and
     digest. Resumes a killed run of that output unless `fresh`. `python`: the interpreter with
-    Ultralytics for a `train` stage. Returns {output, digest, images, resumed, seconds, mix}."""
+    Ultralytics for a `train` stage. `force`: run even what the work estimate refuses (as
+    `soig run --force`). Returns {output, digest, images, resumed, seconds, mix}."""
     out = campaign.output_dir if out is None else Path(out)
     return _soig.run(
-        campaign._native, os.fspath(out), fresh, None if python is None else os.fspath(python)
+        campaign._native,
+        os.fspath(out),
+        fresh,
+        None if python is None else os.fspath(python),
+        force,
     )
+
+
+def build_id() -> str:
+    """The build identity a run records to keep two builds out of one output: sha256 of
+    soig's native module (not of the interpreter)."""
+    return _soig.build_id()
 
 
 def verify(path: PathLike) -> dict:

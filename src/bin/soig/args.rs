@@ -61,7 +61,7 @@ pub enum Command {
     /// file).
     Schema(SchemaArgs),
     /// Run an experiment: a sweep of campaign fields (an experiment file), one `soig run` per
-    /// point into OUT/points/<parameter values>, reusing a point whose campaign is unchanged;
+    /// point into OUT/points/<hash of its values> (the values in <hash>.json beside it), reusing a point whose campaign is unchanged;
     /// writes summary.csv, summary.md, plots/ and experiment.json (the digest of every point).
     /// A malformed experiment is refused before anything runs; a failing point is reported and
     /// the others go on (exit 1 at the end).
@@ -93,6 +93,10 @@ pub struct RunArgs {
     /// Do not resume: discard the work a killed run of this output left, and start afresh.
     #[arg(long)]
     pub fresh: bool,
+    /// Run even what the work estimate refuses: an image estimated beyond 5 minutes of one
+    /// core, or a run (shard) beyond 30 days (see src/config/work.rs).
+    #[arg(long)]
+    pub force: bool,
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
@@ -225,6 +229,9 @@ pub struct StudyArgs {
     /// Fewer values per knob (a smoke test).
     #[arg(long)]
     pub quick: bool,
+    /// Run even what the work estimate refuses: a study beyond 30 days of one core.
+    #[arg(long)]
+    pub force: bool,
     /// Override a campaign setting, after `extends`: `key.path=value`, the value a TOML
     /// value (`512`, `true`, `[8, 8]`) or else a string. Repeatable.
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -365,6 +372,10 @@ pub struct ExperimentArgs {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Run even what the work estimate refuses: points beyond 30 days of one core in all, or
+    /// a point `soig run` would refuse.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `soig export`.
@@ -399,18 +410,39 @@ pub struct EvalArgs {
     /// units matter at the last digit); default: every image `--image-size` square.
     #[arg(long)]
     pub images: Option<PathBuf>,
-    /// Side of every image in pixels, when --images is not given.
-    #[arg(long, default_value_t = 1024)]
+    /// Side of every image in pixels, when --images is not given (1 to 65536).
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub image_size: u32,
-    /// Confidence threshold of the fixed-threshold precision and recall.
-    #[arg(long, default_value_t = 0.5)]
+    /// Confidence threshold of the fixed-threshold precision and recall, in [0, 1].
+    #[arg(long, default_value_t = 0.5, value_parser = share_of_one)]
     pub conf: f64,
-    /// IoU threshold of the fixed-threshold precision and recall.
-    #[arg(long, default_value_t = 0.5)]
+    /// IoU threshold of the fixed-threshold precision and recall, in (0, 1].
+    #[arg(long, default_value_t = 0.5, value_parser = overlap)]
     pub iou: f64,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+}
+
+/// A number in [0, 1] (a confidence): NaN and anything outside are refused by clap, naming
+/// the option.
+fn share_of_one(text: &str) -> Result<f64, String> {
+    let x: f64 = text.trim().parse().map_err(|e| format!("{e}"))?;
+    if (0.0..=1.0).contains(&x) {
+        Ok(x)
+    } else {
+        Err("must be a number in [0, 1]".into())
+    }
+}
+
+/// A number in (0, 1] (an IoU threshold).
+fn overlap(text: &str) -> Result<f64, String> {
+    let x: f64 = text.trim().parse().map_err(|e| format!("{e}"))?;
+    if x > 0.0 && x <= 1.0 {
+        Ok(x)
+    } else {
+        Err("must be a number in (0, 1]".into())
+    }
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]

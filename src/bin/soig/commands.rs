@@ -15,6 +15,7 @@ pub fn run(a: RunArgs) -> ExitCode {
         out,
         shard,
         fresh,
+        force,
         quiet,
         python,
         set,
@@ -30,7 +31,11 @@ pub fn run(a: RunArgs) -> ExitCode {
             Some(s) => s.output_dir(&campaign.output_dir),
             None => campaign.output_dir.clone(),
         });
-        let options = soig::RunOptions { shard, fresh };
+        let options = soig::RunOptions {
+            shard,
+            fresh,
+            force,
+        };
         let s = soig::run_with(
             &campaign,
             &output,
@@ -252,6 +257,7 @@ pub fn study(a: StudyArgs) -> ExitCode {
         seeds,
         image,
         quick,
+        force,
         set,
     } = a;
     user_errors(|| {
@@ -265,6 +271,7 @@ pub fn study(a: StudyArgs) -> ExitCode {
             seeds,
             image,
             quick,
+            force,
         };
         let s = soig::study::run(&campaign, &output, &opts)?;
         println!(
@@ -537,6 +544,7 @@ pub fn experiment(a: ExperimentArgs) -> ExitCode {
         experiment: path,
         out,
         quiet,
+        force,
     } = a;
     let mut failed = false;
     let code = user_errors(|| {
@@ -548,7 +556,7 @@ pub fn experiment(a: ExperimentArgs) -> ExitCode {
                 .join("runs")
                 .join(stem)
         });
-        let f = soig::sweep::run(&experiment, &out, &*progress(quiet))?;
+        let f = soig::sweep::run(&experiment, &out, &*progress(quiet), force)?;
         for (name, e) in &f.failures {
             eprintln!("point {name} failed: {e}");
         }

@@ -58,13 +58,16 @@ pub struct Campaign {
     pub base_dir: PathBuf,
     /// The campaign file (or the name given to campaign text built in code), for messages.
     pub source: PathBuf,
-    /// Where each of `RUN_FIELDS` and each `debris[i]` was written (file, line), for errors
-    /// found only when the campaign runs (`Campaign::error_at`).
+    /// Where each of `RUN_FIELDS`, `WORK_FIELDS` and each `debris[i]` was written (file,
+    /// line), for errors found only when the campaign runs (`Campaign::error_at`).
     run_fields: Vec<(String, PathBuf, Option<usize>)>,
 }
 
 /// The fields naming files that are read only when a campaign runs (frames, model, catalogue).
 const RUN_FIELDS: [&str; 3] = ["background.paths", "detect.model", "stars.path"];
+
+/// The fields a refused estimate of the work names (`work`).
+const WORK_FIELDS: [&str; 2] = ["sensor.zero_point_mag", "images"];
 
 impl Campaign {
     /// The files a run reads besides the campaign and its TLE files (whose lines the campaign
@@ -204,6 +207,7 @@ impl Campaign {
             source: path.to_path_buf(),
             run_fields: RUN_FIELDS
                 .iter()
+                .chain(&WORK_FIELDS)
                 .map(|f| f.to_string())
                 .chain((0..file.debris.len()).map(|i| format!("debris[{i}]")))
                 .map(|f| {
@@ -215,7 +219,8 @@ impl Campaign {
     }
 
     /// An error found while running about `field` (`background.paths`, `detect.model`,
-    /// `stars.path` or `debris[i]`), at the file and line that wrote it.
+    /// `stars.path`, `sensor.zero_point_mag`, `images` or `debris[i]`), at the file and line
+    /// that wrote it.
     pub fn error_at(&self, field: &str, message: String) -> CampaignError {
         let (file, line) = self
             .run_fields

@@ -33,6 +33,22 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
             format!("must be after window.start ({})", file.window.start),
         ));
     }
+    // Every frame of a collect starts inside the window (`judge_later_frames`): a collect
+    // longer than the window could never be drawn.
+    if let Some(k) = &file.collect {
+        let span_s = (window_end - window_start).to_seconds();
+        let collect_s = (k.frames.saturating_sub(1)) as f64 * (file.exposure.min_s + k.gap_s);
+        if collect_s >= span_s {
+            return Err(fail(
+                "collect.gap_s",
+                format!(
+                    "{} frames {} s apart span {collect_s} s, beyond the window's {span_s} s: every frame must start inside the window",
+                    k.frames,
+                    file.exposure.min_s + k.gap_s
+                ),
+            ));
+        }
+    }
 
     let mut resolved = file.clone();
     let observer = resolve_object(&mut resolved.observer, base_dir, window_start)

@@ -140,7 +140,7 @@ fn csv(frames: &[FrameResult]) -> String {
             };
             let _ = writeln!(
                 s,
-                "{file},{},{:.6},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{}",
+                "{file},{},{},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{}",
                 d.detector,
                 d.confidence,
                 b[0],
@@ -163,7 +163,8 @@ fn csv(frames: &[FrameResult]) -> String {
     s
 }
 
-/// Ultralytics' prediction text: `cls xc yc w h conf`, normalised by the file's size.
+/// Ultralytics' prediction text: `cls xc yc w h conf`, normalised by the file's size, at
+/// round-trip precision (6 decimals tied scores).
 fn yolo_txt(f: &FrameResult, detector: &str) -> String {
     let (w, h) = (f.width as f64, f.height as f64);
     let mut s = String::new();
@@ -171,7 +172,7 @@ fn yolo_txt(f: &FrameResult, detector: &str) -> String {
         let b = d.pixel_box;
         let _ = writeln!(
             s,
-            "0 {:.6} {:.6} {:.6} {:.6} {:.6}",
+            "0 {} {} {} {} {}",
             (b[0] + b[2]) / 2.0 / w,
             (b[1] + b[3]) / 2.0 / h,
             (b[2] - b[0]) / w,

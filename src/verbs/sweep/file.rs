@@ -116,8 +116,11 @@ pub struct Point {
     pub settings: Vec<Setting>,
     /// Replicate index, 0-based.
     pub replicate: u32,
-    /// The point's folder name, from its parameter values (and replicate).
+    /// The point's name, from its parameter values (and replicate): what the summary shows.
     pub name: String,
+    /// The point's folder under `points/`: a hash of its values and replicate, so two values
+    /// whose names read alike never share one (`points/<folder>.json` holds the values).
+    pub folder: String,
     /// The point name without the replicate: replicates share it in the summary.
     pub group: String,
     pub campaign: Campaign,
@@ -129,7 +132,22 @@ pub struct Experiment {
     pub file: ExperimentFile,
     pub source: PathBuf,
     pub points: Vec<Point>,
+    /// The estimated work of every point, seconds of one core (`work`).
+    pub seconds: f64,
+    /// The file's text, for the lines of errors found after loading.
+    text: String,
 }
+
+/// Most runs (points times seed replicates) an experiment may hold: each is a campaign loaded
+/// and checked before anything runs, and a folder of its own.
+pub const MAX_RUNS: u64 = 10_000;
+
+/// Most values a range axis may hold.
+const MAX_AXIS_VALUES: u64 = 10_000;
+
+/// Whole numbers up to this are exact in a float: a range of integers beyond it would give
+/// values that are not those asked for (or the same one twice).
+const EXACT_INTEGERS: f64 = 9_007_199_254_740_992.0; // 2^53
 
 impl Experiment {
     /// Read, check and expand an experiment file; nothing runs.
@@ -183,9 +201,86 @@ impl Experiment {
                 ),
             ));
         }
+        for (i, values) in columns.iter().enumerate() {
+            let mut seen = std::collections::HashSet::new();
+            if let Some(v) = values.iter().find(|v| !seen.insert(*v)) {
+                return Err(at(
+                    Some(i),
+                    "values",
+                    format!("holds {v} twice: each value is one point"),
+                ));
+            }
+        }
+        // Each replicate sets `seed`, which would silently replace a swept or fixed seed.
+        if file.seeds > 1 {
+            if let Some(i) = file.axes.iter().position(|a| a.field.trim() == "seed") {
+                return Err(at(
+                    Some(i),
+                    "field",
+                    format!(
+                        "a `seed` axis is replaced by the seed of each of the `seeds` = {} replicates: sweep `seed` or give `seeds`, not both",
+                        file.seeds
+                    ),
+                ));
+            }
+            if file
+                .set
+                .iter()
+                .any(|s| s.split('=').next().map(str::trim) == Some("seed"))
+            {
+                return Err(at(
+                    None,
+                    "set",
+                    format!(
+                        "`seed` is replaced by the seed of each of the `seeds` = {} replicates: set one or the other",
+                        file.seeds
+                    ),
+                ));
+            }
+        }
+        let points_count = match file.mode {
+            Mode::Zip => columns[0].len() as u64,
+            Mode::Grid => columns
+                .iter()
+                .try_fold(1u64, |n, c| n.checked_mul(c.len() as u64))
+                .unwrap_or(u64::MAX),
+        };
+        let runs = points_count.saturating_mul(u64::from(file.seeds));
+        if runs > MAX_RUNS {
+            let (axis, key) = if file.seeds > 1 {
+                (None, "seeds")
+            } else {
+                (None, "axis")
+            };
+            return Err(at(
+                axis,
+                key,
+                format!(
+                    "{points_count} point(s) times {} seed replicate(s) is {runs} runs, beyond the limit of {MAX_RUNS}: fewer values or replicates, or several experiments",
+                    file.seeds
+                ),
+            ));
+        }
         let base = dir_of(path).join(&file.base);
         let base_campaign = Campaign::load(&base)
             .map_err(|e| at(None, "base", format!("the base campaign is refused: {e}")))?;
+        // A replicate's seed is written as a TOML integer, which stops at 2^63 - 1.
+        if file.seeds > 1
+            && base_campaign
+                .resolved
+                .seed
+                .checked_add(u64::from(file.seeds) - 1)
+                .is_none_or(|last| last > i64::MAX as u64)
+        {
+            return Err(at(
+                None,
+                "seeds",
+                format!(
+                    "the base seed {} plus {} replicates passes 2^63 - 1, the largest seed a campaign holds",
+                    base_campaign.resolved.seed, file.seeds
+                ),
+            ));
+        }
         let mut points = Vec::new();
         for combo in combinations(&columns, file.mode) {
             let settings: Vec<Setting> = combo
@@ -243,6 +338,7 @@ impl Experiment {
                     )
                 })?;
                 points.push(Point {
+                    folder: point_folder(&settings, replicate),
                     settings: settings.clone(),
                     replicate,
                     name,
@@ -251,12 +347,55 @@ impl Experiment {
                 });
             }
         }
+        let seconds = points
+            .iter()
+            .map(|p| {
+                crate::work::image(&p.campaign).seconds * f64::from(p.campaign.resolved.images)
+            })
+            .sum();
         Ok(Experiment {
             file,
             source: path.to_path_buf(),
             points,
+            seconds,
+            text,
         })
     }
+
+    /// Refuse an experiment whose points would take beyond `work::MAX_SECONDS` of one core,
+    /// saying so, or one of whose points `work::check_run` refuses.
+    pub fn check_work(&self) -> Result<(), CampaignError> {
+        let key = if self.file.seeds > 1 { "seeds" } else { "axis" };
+        if self.seconds > crate::work::MAX_SECONDS {
+            return Err(CampaignError {
+                file: self.source.clone(),
+                line: line_of(&self.text, None, key),
+                field: Some(key.into()),
+                message: format!(
+                    "{} runs would take up to about {} of one core, beyond the limit of {}: fewer points, replicates or images, or pass --force",
+                    self.points.len(),
+                    crate::work::duration(self.seconds),
+                    crate::work::duration(crate::work::MAX_SECONDS)
+                ),
+            });
+        }
+        for p in &self.points {
+            let images = u64::from(p.campaign.resolved.images);
+            crate::work::check_run(&p.campaign, images, false).map_err(|e| CampaignError {
+                file: self.source.clone(),
+                line: line_of(&self.text, None, "axis"),
+                field: Some("axis".into()),
+                message: format!("point {}: {e}", p.name),
+            })?;
+        }
+        Ok(())
+    }
+}
+
+/// The folder of a point: the first 16 hex digits of the hash of its values and replicate.
+fn point_folder(settings: &[Setting], replicate: u32) -> String {
+    let h = crate::hash::hash_json(&(settings, replicate));
+    h[..16].to_string()
 }
 
 /// The values of an axis as TOML text (`--set` syntax); an error names the key at fault.
@@ -291,12 +430,18 @@ fn axis_values(axis: &Axis) -> Result<Vec<String>, (&'static str, String)> {
                     }
                     // A tolerance of a millionth of a step keeps `to` when rounding misses it.
                     let n = ((to - from) / step + 1e-6).floor();
-                    if !(0.0..=10_000.0).contains(&n) {
+                    if !(0.0..=MAX_AXIS_VALUES as f64).contains(&n) {
                         return Err(("to", "the range is empty or has over 10000 values".into()));
                     }
                     (0..=n as u64).map(|i| from + i as f64 * step).collect()
                 }
                 (None, Some(count)) => match count {
+                    n if u64::from(n) > MAX_AXIS_VALUES => {
+                        return Err((
+                            "count",
+                            format!("must be at most {MAX_AXIS_VALUES} values (got {n})"),
+                        ));
+                    }
                     0 => Vec::new(),
                     1 => vec![from],
                     n => (0..n)
@@ -316,6 +461,17 @@ fn axis_values(axis: &Axis) -> Result<Vec<String>, (&'static str, String)> {
                 .flatten()
                 .all(|x| x.fract() == 0.0)
                 && xs.iter().all(|x| x.fract() == 0.0);
+            // Beyond 2^53 a float range no longer steps by whole numbers (and beyond 2^63 an
+            // integer is not TOML): list such values in `values`.
+            if integral && xs.iter().any(|x| x.abs() > EXACT_INTEGERS) {
+                return Err((
+                    "to",
+                    "a range of whole numbers beyond 2^53 is not exact: list the values in `values`".into(),
+                ));
+            }
+            if xs.iter().any(|x| !x.is_finite()) {
+                return Err(("to", "the range must stay finite".into()));
+            }
             Ok(xs
                 .iter()
                 .map(|&x| {

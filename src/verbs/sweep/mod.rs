@@ -28,15 +28,20 @@ pub struct Finished {
 /// The manifest of an experiment, beside `summary.csv`.
 pub const MANIFEST: &str = "experiment.json";
 
-/// Run an experiment (already checked by `Experiment::load`) into `out`.
+/// Run an experiment (already checked by `Experiment::load`) into `out`; one whose work the
+/// estimate refuses (`Experiment::check_work`) runs only with `force`.
 pub fn run(
     experiment: &Experiment,
     out: &Path,
     progress: &dyn Progress,
+    force: bool,
 ) -> anyhow::Result<Finished> {
+    if !force {
+        experiment.check_work()?;
+    }
     check_output(experiment, out)?;
     let made = fs::create_dirs(out)?;
-    let outcomes = match run::run_points(experiment, out, progress) {
+    let outcomes = match run::run_points(experiment, out, progress, force) {
         Ok(o) => o,
         Err(e) => {
             // Nothing of a point is kept but what it finished (or can resume).

@@ -18,6 +18,8 @@ use crate::store::fs;
 #[derive(Debug, Serialize)]
 pub struct Outcome {
     pub name: String,
+    /// Its folder under `points/`.
+    pub folder: String,
     pub group: String,
     pub settings: Vec<Setting>,
     pub replicate: u32,
@@ -46,6 +48,7 @@ pub fn run_points(
     experiment: &Experiment,
     out: &Path,
     progress: &dyn Progress,
+    force: bool,
 ) -> anyhow::Result<Vec<Outcome>> {
     let points_dir = out.join("points");
     fs::create_dir_all(&points_dir)?;
@@ -56,9 +59,20 @@ pub fn run_points(
         .unwrap_or_default();
     let mut outcomes = Vec::new();
     for point in &experiment.points {
-        let dir = points_dir.join(&point.name);
+        let dir = points_dir.join(&point.folder);
+        // The folder's values, readable beside it (its name is a hash of them).
+        let values = serde_json::json!({
+            "name": point.name,
+            "settings": point.settings,
+            "replicate": point.replicate,
+        });
+        fs::write(
+            &points_dir.join(format!("{}.json", point.folder)),
+            serde_json::to_string_pretty(&values)? + "\n",
+        )?;
         let mut o = Outcome {
             name: point.name.clone(),
+            folder: point.folder.clone(),
             group: point.group.clone(),
             settings: point.settings.clone(),
             replicate: point.replicate,
@@ -68,7 +82,7 @@ pub fn run_points(
             reused: false,
             figures: BTreeMap::new(),
         };
-        match run_point(point, &dir, progress) {
+        match run_point(point, &dir, progress, force) {
             Ok((digest, reused, seconds)) => {
                 if let Some(s) = seconds {
                     times.0.insert(point.name.clone(), s);
@@ -95,6 +109,7 @@ fn run_point(
     point: &Point,
     dir: &Path,
     progress: &dyn Progress,
+    force: bool,
 ) -> anyhow::Result<(String, bool, Option<f64>)> {
     // Reused only if it verifies (an edited report must not reach summary.csv) and was made
     // from input files of the same content.
@@ -112,6 +127,7 @@ fn run_point(
     let options = crate::RunOptions {
         shard: None,
         fresh: false,
+        force,
     };
     let s = crate::run_with(&point.campaign, dir, options, None, progress)?;
     Ok((s.digest, false, Some(s.seconds)))

@@ -50,6 +50,46 @@ pub enum EvalError {
     NoImage { stem: String, dir: PathBuf },
     #[error("{}: {message}", path.display())]
     Image { path: PathBuf, message: String },
+    /// An option out of its range, by name.
+    #[error("`{name}` = {value}: {allowed}")]
+    Option {
+        name: &'static str,
+        value: String,
+        allowed: &'static str,
+    },
+}
+
+/// Refuse an option out of its range (NaN included), by name, before any file is read.
+fn check(options: &EvalOptions) -> Result<(), EvalError> {
+    let bad = |name, value: String, allowed| {
+        Err(EvalError::Option {
+            name,
+            value,
+            allowed,
+        })
+    };
+    if options.images.is_none() && !(1..=65_536).contains(&options.image_size) {
+        return bad(
+            "image_size",
+            options.image_size.to_string(),
+            "must be between 1 and 65536 pixels",
+        );
+    }
+    if !(0.0..=1.0).contains(&options.conf) {
+        return bad(
+            "conf",
+            options.conf.to_string(),
+            "must be a confidence in [0, 1]",
+        );
+    }
+    if !(options.iou > 0.0 && options.iou <= 1.0) {
+        return bad(
+            "iou",
+            options.iou.to_string(),
+            "must be an IoU threshold in (0, 1]",
+        );
+    }
+    Ok(())
 }
 
 /// Score the predictions in `predictions` against the labels in `labels` (YOLO text files paired
@@ -59,6 +99,7 @@ pub fn eval_dirs(
     predictions: &Path,
     options: EvalOptions,
 ) -> Result<Evaluation, EvalError> {
+    check(&options)?;
     let pairs = super::read_yolo_dirs(labels, predictions)?;
     let mut scaled = Vec::with_capacity(pairs.len());
     for (stem, e) in &pairs {

@@ -48,7 +48,7 @@ pub use coco_eval::{CocoMetrics, coco};
 pub use eval::{EvalError, EvalMode, EvalOptions, Evaluation, Scores, eval_dirs};
 pub use matching::{AtThreshold, ImageMatch, at_threshold, iou, match_image};
 pub use ultralytics_map::{UltralyticsMetrics, UltralyticsVersion, ultralytics, ultralytics_with};
-pub use yolo_files::{MetricsError, read_yolo_dirs, read_yolo_file};
+pub use yolo_files::{MetricsError, parse_yolo, read_yolo_dirs, read_yolo_file};
 
 use crate::Detection;
 use serde::{Deserialize, Serialize};

@@ -48,8 +48,8 @@ fn txt_files(dir: &Path) -> Result<Vec<(String, PathBuf)>, MetricsError> {
 }
 
 /// Parses `cls xc yc w h [score]` lines (`with_score` selects the prediction form); blank lines are
-/// skipped. Returns `(class, [x1, y1, x2, y2], score)`.
-fn parse_yolo(
+/// skipped. Returns `(class, [x1, y1, x2, y2], score)`, normalised; `path` names the text in errors.
+pub fn parse_yolo(
     path: &Path,
     text: &str,
     with_score: bool,

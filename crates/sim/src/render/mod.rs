@@ -13,6 +13,7 @@ use crate::sensor::Sensor;
 use soig_base::rng::poisson;
 use soig_image::geometry::{BoxPx, LABEL_SHARE, flux_box};
 
+pub mod cost;
 mod detector;
 pub mod expected;
 mod jitter;

@@ -1,7 +1,8 @@
 //! The scene draw of one image (paper 3.2.1-3.2.3): its debris object by the campaign's
 //! weights, then the exposure, placement, background and light curve, retried on the scene
 //! stream until the visibility checks and the gate accept them. A later frame of a collect
-//! follows its first frame's plan, unjudged.
+//! follows its first frame's plan; the gate judges the first frame, and the attempt stands only
+//! if every later frame starts in the window and sees the object (`judge_later_frames`).
 
 use std::collections::BTreeMap;
 
@@ -14,7 +15,7 @@ use super::object_draws::{draw_tumble, pick_debris};
 use super::place::place;
 use super::pointing::point_sensor;
 use super::trajectory::{Shot, trajectory};
-use super::visibility::{gate_snr, visibility};
+use super::visibility::{gate_snr, in_sight, visibility};
 use super::{CollectFrame, Inputs, NoScene, Pointing, Rejection, Scene, Spec, Tumble};
 use crate::background::{BackgroundModel, FrameChoice};
 use crate::sensor::Sensor;
@@ -54,7 +55,13 @@ pub fn draw(
     };
     for attempt in 1..=max {
         let d = draw_values(spec, inputs, on_frame, rng);
-        match try_draw(spec, sensor, inputs, image, debris_index, &d, Plan::First) {
+        let first = try_draw(spec, sensor, inputs, image, debris_index, &d, Plan::First).and_then(
+            |first| {
+                judge_later_frames(spec, inputs, debris_index, &d)?;
+                Ok(first)
+            },
+        );
+        match first {
             Ok(first) => {
                 let later = if frame == 0 {
                     None
@@ -90,6 +97,35 @@ pub fn draw(
         }
     }
     Err(no_scene(max, rejections))
+}
+
+/// Whether every later frame of the collect that starts with the draws `d` starts inside the
+/// campaign's window and sees its object (`in_sight`): judged by every image of the collect
+/// alike, so that all its frames take the same attempt. A single image has none.
+fn judge_later_frames(
+    spec: &Spec,
+    inputs: &Inputs,
+    debris_index: usize,
+    d: &Draws,
+) -> Result<(), Rejection> {
+    let frames = spec.collect_frames.max(1);
+    let step_s = d.exposure_s + spec.collect_gap_s;
+    for k in 1..frames {
+        let start = d.start + Duration::from_seconds(k as f64 * step_s);
+        if start >= spec.window_end {
+            return Err(Rejection::CollectPastWindow);
+        }
+        let mid = start + Duration::from_seconds(d.exposure_s / 2.0);
+        let sighting = Sighting::new(
+            &inputs.observer.propagator,
+            &inputs.debris[debris_index].propagator,
+            mid,
+            spec.apparent_positions,
+        );
+        let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
+        in_sight(spec, &sight, (sun_position_km(mid), mid))?;
+    }
+    Ok(())
 }
 
 /// The random values of one draw attempt, in the scene stream's order.

@@ -23,6 +23,8 @@ pub enum Rejection {
     PropagationFailed,
     TooFast,
     TrackTooFast,
+    /// A later frame of the collect would start after the campaign's window.
+    CollectPastWindow,
 }
 
 impl Rejection {
@@ -39,6 +41,7 @@ impl Rejection {
             Rejection::PropagationFailed => "propagation failed",
             Rejection::TooFast => "streak too fast to sample (over 1e6 trajectory samples)",
             Rejection::TrackTooFast => "tracking drift beyond the survey drift limit",
+            Rejection::CollectPastWindow => "a later frame of the collect after the window",
         }
     }
 }

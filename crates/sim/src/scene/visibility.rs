@@ -12,8 +12,9 @@ use crate::sensor::Sensor;
 use crate::sighting::Sight;
 
 /// Visibility of the debris at mid-exposure (paper 3.2.2), its geometry then, and whether it
-/// is in the Earth's shadow. Ungated (a later frame of a collect, which the gate does not
-/// judge), every check passes and a shadowed object sends no light.
+/// sends no light (in the Earth's shadow). Ungated (a later frame of a collect, whose line of
+/// sight `draw` judges apart), every check passes, and an object in the shadow or behind the
+/// solid Earth sends no light: it is neither drawn nor labelled.
 pub(super) fn visibility(
     spec: &Spec,
     sensor: &Sensor,
@@ -24,23 +25,15 @@ pub(super) fn visibility(
 ) -> Result<(Geometry, bool), Rejection> {
     let (obs, deb) = (sight.observer_km, sight.debris_km);
     let los = sub(deb, obs);
-    let moon = moon_position_km(mid);
-    let v = &spec.gate;
-    let earth_angle_deg = angle_deg(los, sub([0.0; 3], obs));
-    if gated && earth_angle_deg <= v.earth_min_deg {
-        return Err(Rejection::EarthAngle);
-    }
-    let sun_angle_deg = angle_deg(los, sub(sun, obs));
-    if gated && sun_angle_deg <= v.sun_min_deg {
-        return Err(Rejection::SunAngle);
-    }
-    let moon_angle_deg = angle_deg(los, sub(moon, obs));
-    if gated && moon_angle_deg <= v.moon_min_deg {
-        return Err(Rejection::MoonAngle);
-    }
-    if gated && segment_hits_sphere(obs, deb, EARTH_RADIUS_KM + v.earth_clearance_km) {
-        return Err(Rejection::ThroughEarth);
-    }
+    let Angles {
+        earth_angle_deg,
+        sun_angle_deg,
+        moon_angle_deg,
+    } = if gated {
+        in_sight(spec, sight, (sun, mid))?
+    } else {
+        angles(sight, (sun, mid))
+    };
     let shadowed = segment_hits_sphere(deb, sun, EARTH_RADIUS_KM);
     if gated && shadowed {
         return Err(Rejection::EarthShadow);
@@ -59,7 +52,55 @@ pub(super) fn visibility(
         moon_angle_deg,
         magnitude,
     };
-    Ok((geometry, shadowed))
+    let hidden = !gated && segment_hits_sphere(obs, deb, EARTH_RADIUS_KM);
+    Ok((geometry, shadowed || hidden))
+}
+
+/// The angles of a line of sight from the Earth's centre, the Sun and the Moon, degrees.
+pub(super) struct Angles {
+    earth_angle_deg: f64,
+    sun_angle_deg: f64,
+    moon_angle_deg: f64,
+}
+
+fn angles(sight: &Sight, (sun, mid): (Vec3, Epoch)) -> Angles {
+    let obs = sight.observer_km;
+    let los = sub(sight.debris_km, obs);
+    Angles {
+        earth_angle_deg: angle_deg(los, sub([0.0; 3], obs)),
+        sun_angle_deg: angle_deg(los, sub(sun, obs)),
+        moon_angle_deg: angle_deg(los, sub(moon_position_km(mid), obs)),
+    }
+}
+
+/// The checks of a line of sight (paper 3.2.2) that every frame of a collect must pass, its
+/// later frames included: the Earth, Sun and Moon angles, and a line of sight clear of the
+/// Earth (an object behind the Earth is not seen, however bright). Shadow and faintness only
+/// dim a later frame's object.
+pub(super) fn in_sight(
+    spec: &Spec,
+    sight: &Sight,
+    (sun, mid): (Vec3, Epoch),
+) -> Result<Angles, Rejection> {
+    let a = angles(sight, (sun, mid));
+    let v = &spec.gate;
+    if a.earth_angle_deg <= v.earth_min_deg {
+        return Err(Rejection::EarthAngle);
+    }
+    if a.sun_angle_deg <= v.sun_min_deg {
+        return Err(Rejection::SunAngle);
+    }
+    if a.moon_angle_deg <= v.moon_min_deg {
+        return Err(Rejection::MoonAngle);
+    }
+    if segment_hits_sphere(
+        sight.observer_km,
+        sight.debris_km,
+        EARTH_RADIUS_KM + v.earth_clearance_km,
+    ) {
+        return Err(Rejection::ThroughEarth);
+    }
+    Ok(a)
 }
 
 /// An object's expected signal-to-noise ratios (`expected_snr`).

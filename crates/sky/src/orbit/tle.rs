@@ -62,6 +62,15 @@ pub enum TleError {
         last: usize,
         text: String,
     },
+    #[error("TLE line {line}, columns {first}-{last}: {field} {text:?} is outside {allowed}")]
+    OutOfRange {
+        line: usize,
+        field: &'static str,
+        first: usize,
+        last: usize,
+        text: String,
+        allowed: &'static str,
+    },
     #[error("TLE line {line}: text ends where TLE line {expected} should follow")]
     MissingLine { line: usize, expected: char },
     /// Anything the checks above let through but the `sgp4` parser refuses.
@@ -222,6 +231,67 @@ const LINE2_FIELDS: &[(usize, usize, &str, Kind)] = &[
     (63, 68, "revolution number", Kind::Unsigned),
 ];
 
+/// The physical ranges of line 2's elements (columns as in `LINE2_FIELDS`): values the fixed
+/// columns let through but no orbit has. A mean motion above 17.1 revolutions a day is an orbit
+/// below the Earth's surface (84.5 minutes).
+const LINE2_RANGES: &[(usize, usize, &str, f64, f64, &str)] = &[
+    (8, 16, "inclination", 0.0, 180.0, "[0, 180] degrees"),
+    (
+        17,
+        25,
+        "right ascension of the ascending node",
+        0.0,
+        360.0,
+        "[0, 360] degrees",
+    ),
+    // Seven digits after an assumed point: below 1 whenever it is not negative.
+    (26, 33, "eccentricity", 0.0, 1.0, "[0, 1)"),
+    (
+        34,
+        42,
+        "argument of perigee",
+        0.0,
+        360.0,
+        "[0, 360] degrees",
+    ),
+    (43, 51, "mean anomaly", 0.0, 360.0, "[0, 360] degrees"),
+    (
+        52,
+        63,
+        "mean motion",
+        f64::MIN_POSITIVE,
+        17.1,
+        "(0, 17.1] revolutions a day",
+    ),
+];
+
+/// Refuse an element of line 2 outside its physical range (`LINE2_RANGES`).
+fn check_ranges(n: usize, text: &str) -> Result<(), TleError> {
+    for &(start, end, field, lo, hi, allowed) in LINE2_RANGES {
+        let s = &text[start..end];
+        let t = s.trim();
+        // The eccentricity's decimal point is assumed.
+        let value = if field == "eccentricity" {
+            format!(".{}", t.trim_start_matches(['-', '+']))
+                .parse::<f64>()
+                .map(|x| if t.starts_with('-') { -x } else { x })
+        } else {
+            t.parse::<f64>()
+        };
+        if !value.is_ok_and(|x| (lo..=hi).contains(&x)) {
+            return Err(TleError::OutOfRange {
+                line: n,
+                field,
+                first: start + 1,
+                last: end,
+                text: s.to_string(),
+                allowed,
+            });
+        }
+    }
+    Ok(())
+}
+
 fn field_ok(s: &str, kind: Kind) -> bool {
     let t = s.trim_start();
     let finite = |x: &str| x.parse::<f64>().is_ok_and(f64::is_finite);
@@ -309,6 +379,7 @@ fn parse_one(
         });
     }
     check_fields(n2, l2, LINE2_FIELDS)?;
+    check_ranges(n2, l2)?;
     let elements =
         sgp4::Elements::from_tle(name.clone(), l1.as_bytes(), l2.as_bytes()).map_err(|e| {
             let message = e.to_string();
@@ -369,6 +440,36 @@ mod tests {
                 tle.norad_id
             );
         }
+    }
+
+    #[test]
+    fn elements_outside_their_physical_ranges_are_refused_by_line_and_field() {
+        let text = catalog_text();
+        let lines: Vec<String> = text.lines().map(str::to_string).collect();
+        // FENGYUN 1C DEB's line 2 is the file's line 3.
+        let l2 = &lines[2];
+        for (first, last, value, field) in [
+            (9, 16, "200.0000", "inclination"),
+            (18, 25, "400.0000", "right ascension of the ascending node"),
+            (35, 42, "361.0000", "argument of perigee"),
+            (44, 51, "999.9999", "mean anomaly"),
+            (53, 63, " 0.00000000", "mean motion"),
+            (53, 63, "25.00000000", "mean motion"),
+        ] {
+            let mut bad = lines.clone();
+            let mut line = l2.clone();
+            let width = last - first + 1;
+            let value = format!("{value:>width$}");
+            line.replace_range(first - 1..last, &value[value.len() - width..]);
+            bad[2] = with_checksum(&line);
+            let err = parse_tles(&bad.join("\n")).unwrap_err();
+            assert!(
+                matches!(&err, TleError::OutOfRange { line: 3, field: f, .. } if *f == field),
+                "{value}: {err}"
+            );
+        }
+        // The catalogue's own orbits are all within range.
+        assert_eq!(parse_tles(&text).unwrap().len(), 5);
     }
 
     #[test]
