@@ -140,7 +140,7 @@ fn check_output(experiment: &Experiment, out: &Path) -> anyhow::Result<()> {
         .ok()
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
         .is_some_and(|m| m["tool"] == "soig" && m["points"].is_array() && m["digest"].is_string());
-    if !ours && !interrupted(out, &names) {
+    if !ours && !interrupted(experiment, out, &names) {
         anyhow::bail!(
             "{} exists and is not an experiment's output (no {MANIFEST} that soig wrote); refusing to write into it",
             out.display()
@@ -156,17 +156,26 @@ fn check_output(experiment: &Experiment, out: &Path) -> anyhow::Result<()> {
 }
 
 /// Whether `out` is an experiment killed before it wrote its manifest: nothing at its top but
-/// what `run` writes, and `points/` holding only soig outputs and the staging folders, locks
-/// and set-aside outputs of the points' runs (which the rerun resumes or removes).
-fn interrupted(out: &Path, names: &[String]) -> bool {
+/// what `run` writes, and `points/` holding only soig outputs, the staging folders, locks
+/// and set-aside outputs of the points' runs (which the rerun resumes or removes), and this
+/// experiment's point value files (`FOLDER.json`) with the temporaries a kill left of them.
+fn interrupted(experiment: &Experiment, out: &Path, names: &[String]) -> bool {
     let Ok(points) = std::fs::read_dir(out.join("points")) else {
         return false;
     };
     let points: Vec<std::fs::DirEntry> = points.flatten().collect();
+    let values_file = |n: &str| {
+        experiment.points.iter().any(|p| {
+            let file = format!("{}.json", p.folder);
+            n == file || n.starts_with(&format!(".{file}.tmp-"))
+        })
+    };
     let soigs = |e: &std::fs::DirEntry| {
         let n = e.file_name().to_string_lossy().into_owned();
         let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
-        (n.starts_with('.') && n.ends_with(".lock") && e.file_type().is_ok_and(|t| t.is_file()))
+        let is_file = e.file_type().is_ok_and(|t| t.is_file());
+        (is_file && values_file(&n))
+            || (n.starts_with('.') && n.ends_with(".lock") && is_file)
             || (n.starts_with('.') && (n.contains(".partial-") || n.contains(".old-")) && is_dir)
             || (is_dir
                 && crate::manifest::Manifest::read(&e.path()).is_ok_and(|m| m.tool == "soig"))
