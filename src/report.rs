@@ -548,7 +548,20 @@ mod tests {
         };
         assert_eq!(
             yolo_prediction_line(&d, 1000, 500),
-            "0 0.200000 0.460000 0.200000 0.120000 0.750000\n"
+            "0 0.2 0.46 0.2 0.12 0.75\n"
         );
+        // Round-trip precision: two scores 6 decimals would tie stay apart, and the report
+        // scores what the file holds.
+        let a = Detection {
+            score: 0.123_456_78,
+            ..d
+        };
+        let b = Detection {
+            score: 0.123_456_81,
+            ..d
+        };
+        let (ra, rb) = (as_written(&a, 1000, 500), as_written(&b, 1000, 500));
+        assert_eq!((ra.score, rb.score), (a.score, b.score));
+        assert!((ra.x1 - a.x1).abs() < 1e-9 && (ra.y2 - a.y2).abs() < 1e-9);
     }
 }

@@ -27,9 +27,17 @@ fn a_run_too_big_for_its_disk_is_refused_with_both_figures_before_writing() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     // 1e7 images (the most a campaign may ask) of 1024 x 1024 with both FITS: about 100 TB,
-    // more than any machine this runs on has free.
+    // more than any machine this runs on has free. (--force: their work, over 30 days of one
+    // core, is refused first otherwise; tests/hostile/runaway.toml checks that.)
     let o = run_quickstart(
-        &["--quiet", "--set", "images=10000000", "--set", STAGES],
+        &[
+            "--quiet",
+            "--force",
+            "--set",
+            "images=10000000",
+            "--set",
+            STAGES,
+        ],
         &out,
     );
     assert_eq!(o.status.code(), Some(2));

@@ -16,7 +16,9 @@ pub const MAX_SECONDS: f64 = 30.0 * 86_400.0;
 
 /// Seconds as a reader says them: seconds, hours, days or years.
 pub fn duration(seconds: f64) -> String {
-    if seconds < 3600.0 {
+    if seconds < 10.0 {
+        format!("{seconds:.2} s")
+    } else if seconds < 3600.0 {
         format!("{seconds:.0} s")
     } else if seconds < 86_400.0 {
         format!("{:.1} hours", seconds / 3600.0)
