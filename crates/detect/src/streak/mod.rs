@@ -84,7 +84,9 @@
 //! Everything is single-threaded and deterministic: the same input gives the same output.
 //!
 //! The driver ([`detect_streaks_among_stars`]) runs a first pass, the star-aware pass where the
-//! hint has predicted trails, and their union (`union`). A pass (`pass`) runs its stages in
+//! hint has predicted trails, and their union (`union`). Told nothing of the stars,
+//! [`detect_streaks_on_frame`] measures their trails on the frame (`own_trails`) and, where
+//! they share a direction, runs both passes along it. A pass (`pass`) runs its stages in
 //! order, each a function of its own file: `unit_noise` (1-2: `background`, `smooth`),
 //! `flatten` (2: `trails`, `sky`, `stars`), `seeds` (3-4: `noise`, `lines`, `components`) and
 //! `radon` (3b), `fragments` (5: `refine`), `merge` (6), `accept`, `explain_away`, then the
