@@ -68,7 +68,7 @@ fn main() -> anyhow::Result<()> {
         // As the run's detect stage: a rotated frame has its trails along x.
         let trail_png = trail.map(|t| if frame_kind == "rotated" { 0.0 } else { t });
         let t = Instant::now();
-        let stars = soig::star_trails::of_image(&x, &inputs, index, &truth_path)?;
+        let stars = soig::star_trails::of_image(&x, &inputs, index, &pixels, w, h)?;
         if let Some(dir) = std::env::var_os("SKY_EVAL_DUMP") {
             let t: Vec<(Vec<(f64, f64)>, f64)> = stars
                 .iter()

@@ -60,7 +60,7 @@ pub(crate) fn detect_and_report(
     let images = test_images(dir, &chosen)?;
     let mut runs = Vec::new();
     if c.detect.classical {
-        runs.push(streak_run(campaign, dir, &images, &chosen, progress)?);
+        runs.push(streak_run(campaign, &images, &chosen, progress)?);
     }
     if let Some(path) = model {
         runs.push(yolo_run(campaign, path, &images, progress)?);
@@ -161,13 +161,13 @@ fn run_detector(
 }
 
 /// The classical streak detector. Survey images get the catalogued stars' trails, predicted as
-/// the images were drawn. Track images get the trail direction alone: the star-aware pass
+/// the images were drawn, placed by the pointing offset measured on each image (nothing of the
+/// truth: `star_trails`). Track images get the trail direction alone: the star-aware pass
 /// recovers debris moving along the trails, and a tracked object does not move; its prediction
 /// misses trails bent by the pointing jitter (up to 8 px at the ends of 300 px trails, which it
 /// then reported as debris in the track quickstart; with the direction alone, none).
 fn streak_run(
     campaign: &Campaign,
-    dir: &Path,
     images: &[TestImage],
     chosen: &[&Written],
     progress: &dyn Progress,
@@ -186,7 +186,9 @@ fn streak_run(
                 x,
                 inputs,
                 chosen[i].index,
-                &dir.join("truth").join(format!("{}.json", img.stem)),
+                &pixels,
+                img.width,
+                img.height,
             )?),
             None => None,
         };

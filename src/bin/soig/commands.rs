@@ -416,6 +416,9 @@ pub fn detect(a: DetectArgs) -> ExitCode {
         let s = soig::detect_frames::run(&inputs, &out, &opts)?;
         for f in &s.frames {
             println!("{}: {} detection(s)", f.file, f.detections.len());
+            if let Some(own) = &f.own_trails {
+                println!("  star trails measured on the frame: {own}");
+            }
             for d in &f.dropped {
                 println!("  dropped {d}");
             }

@@ -21,7 +21,8 @@ use anyhow::{Context, bail};
 use crate::campaign::{Campaign, Detect};
 use crate::detect::Detection;
 use crate::detect::streak::{
-    Dropped, StreakParams, detect_streaks_among_stars, detect_streaks_explained,
+    Dropped, OwnTrails, StreakParams, detect_streaks_among_stars, detect_streaks_explained,
+    detect_streaks_on_frame,
 };
 use crate::detect::yolo::{YoloDetector, YoloParams};
 use crate::enhance::{self, Gray8};
@@ -177,6 +178,11 @@ pub struct FrameResult {
     /// With `--catalog`: what the star-aware detector knew of the frame's sky.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub catalog: Option<CatalogUse>,
+    /// Given neither `--catalog` nor `--star-trail-angle-deg`: the star trails the streak
+    /// detector measured on the frame itself (direction, length, count, how sure), or that
+    /// they share no direction (point stars).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub own_trails: Option<OwnTrails>,
 }
 
 /// What `--catalog` gave the streak detector on one frame.
@@ -391,6 +397,7 @@ fn detect_frame(
     };
     let mut found = Vec::new();
     let mut dropped = Vec::new();
+    let mut own_trails = None;
     let (ox, oy) = (frame.region.x0 as f64, frame.region.y0 as f64);
     let shift = |d: &Detection| [d.x1 + ox, d.y1 + oy, d.x2 + ox, d.y2 + oy];
     if opts.which != Which::Yolo {
@@ -398,18 +405,27 @@ fn detect_frame(
             psf_sigma_px,
             ..opts.streak.clone()
         };
-        let (cands, why) = match &sky {
-            Some((trails, angle, _)) => (
+        let (cands, why) = match (&sky, opts.star_trail_angle_deg) {
+            (Some((trails, angle, _)), _) => (
                 detect_streaks_among_stars(&enhanced.pixels, rw, rh, &params, *angle, Some(trails)),
                 Vec::new(),
             ),
-            None => detect_streaks_explained(
-                &enhanced.pixels,
-                rw,
-                rh,
-                &params,
-                opts.star_trail_angle_deg,
-            ),
+            (None, Some(angle)) => {
+                detect_streaks_explained(&enhanced.pixels, rw, rh, &params, Some(angle))
+            }
+            (None, None) => {
+                let (found, own) =
+                    detect_streaks_on_frame(&enhanced.pixels, rw, rh, &params, None, None);
+                // --explain explains the first pass, along the measured direction if any.
+                let why = if opts.explain {
+                    let angle = own.as_ref().and_then(|o| o.model()).map(|m| m.angle_deg);
+                    detect_streaks_explained(&enhanced.pixels, rw, rh, &params, angle).1
+                } else {
+                    Vec::new()
+                };
+                own_trails = own;
+                (found, why)
+            }
         };
         if opts.explain {
             dropped = why;
@@ -474,6 +490,7 @@ fn detect_frame(
         detections: found,
         dropped,
         catalog: sky.map(|s| s.2),
+        own_trails,
     };
     Ok((result, enhanced))
 }

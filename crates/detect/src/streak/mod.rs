@@ -84,7 +84,9 @@
 //! Everything is single-threaded and deterministic: the same input gives the same output.
 //!
 //! The driver ([`detect_streaks_among_stars`]) runs a first pass, the star-aware pass where the
-//! hint has predicted trails, and their union (`union`). A pass (`pass`) runs its stages in
+//! hint has predicted trails, and their union (`union`). Told nothing of the stars,
+//! [`detect_streaks_on_frame`] measures their trails on the frame (`own_trails`) and, where
+//! they share a direction, runs both passes along it. A pass (`pass`) runs its stages in
 //! order, each a function of its own file: `unit_noise` (1-2: `background`, `smooth`),
 //! `flatten` (2: `trails`, `sky`, `stars`), `seeds` (3-4: `noise`, `lines`, `components`) and
 //! `radon` (3b), `fragments` (5: `refine`), `merge` (6), `accept`, `explain_away`, then the
@@ -107,6 +109,7 @@ mod maps;
 mod merge;
 mod noise;
 mod output;
+mod own_trails;
 mod params;
 mod pass;
 mod radon;
@@ -135,6 +138,8 @@ mod unit_noise;
 
 pub use explain::{Dropped, Reason, Seeds};
 pub use output::Candidate;
+pub use own_trails::{OwnTrails, TrailModel};
+use own_trails::{from_lines, own_trails};
 use params::Sanitized;
 pub use params::StreakParams;
 use pass::pass;
@@ -190,15 +195,109 @@ pub fn detect_streaks_among_stars(
     let p = Sanitized::new(params);
     // Both passes start from the same background and unit-noise map.
     let (bg, z) = unit_noise_map(pixels, width, height, &p);
+    two_passes(pixels, width, height, &p, (bg, z), trail, stars)
+}
+
+/// Detect streaks in a frame told nothing of its stars: with no trail direction and no
+/// predicted trails given, the frame's own trails are measured (`own_trails`); where many
+/// share a direction, the first pass runs along it, and the star-aware pass, with no trail
+/// predicted, finds every line along the trails; of those, the lines off the direction that
+/// most of them share (`TrailModel::settle`, `explains`) join the first pass's. Where they share none
+/// (point stars), as [`detect_streaks`], unchanged. A direction or trails given: as
+/// [`detect_streaks_among_stars`], and nothing measured (None).
+pub fn detect_streaks_on_frame(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    params: &StreakParams,
+    star_trail_angle_deg: Option<f64>,
+    stars: Option<&[StarTrail]>,
+) -> (Vec<Candidate>, Option<OwnTrails>) {
+    let told = star_trail_angle_deg.is_some_and(f64::is_finite) || stars.is_some();
+    if told || width < 2 || height < 2 {
+        let found =
+            detect_streaks_among_stars(pixels, width, height, params, star_trail_angle_deg, stars);
+        return (found, None);
+    }
+    assert_eq!(
+        pixels.len(),
+        width * height,
+        "pixels.len() must be width * height"
+    );
+    let p = Sanitized::new(params);
+    let (bg, z) = unit_noise_map(pixels, width, height, &p);
     let (w, h) = (width, height);
-    let first = pass(pixels, w, h, &p, bg.clone(), z.clone(), Some(trail), None).0;
+    let mut own = own_trails(&z, w, h);
+    if let OwnTrails::Common(m) = &mut own {
+        let found = along_own_trails(pixels, w, h, &p, (bg, z), m);
+        return (found, Some(own));
+    }
+    // Too few bright features: the lines a pass told of no trails finds may still share a
+    // direction (a frame whose trails are faint but for one or two).
+    let found = pass(pixels, w, h, &p, bg.clone(), z.clone(), None, None).0;
+    match from_lines(&found, p.psf_sigma) {
+        Some(mut m) => {
+            let found = along_own_trails(pixels, w, h, &p, (bg, z), &mut m);
+            (found, Some(OwnTrails::Common(m)))
+        }
+        None => (found, Some(own)),
+    }
+}
+
+/// The two passes along the frame's own trails `m`: the first along their direction, and the
+/// star-aware pass with no trail predicted, which finds every line along them; most of those
+/// are stars, whose direction settles `m`'s (`TrailModel::settle`), and the lines off it are
+/// debris (`TrailModel::explains`); they join the first pass's.
+fn along_own_trails(
+    pixels: &[u8],
+    w: usize,
+    h: usize,
+    p: &Sanitized,
+    (bg, z): (Vec<f32>, Vec<f32>),
+    m: &mut TrailModel,
+) -> Vec<Candidate> {
+    let trail = m.angle_deg;
+    let first = pass(pixels, w, h, p, bg.clone(), z.clone(), Some(trail), None).0;
+    // The star trails are among the lines, so beyond `max_candidates`.
+    let along = Sanitized {
+        along: Some(trail),
+        max_candidates: p.max_candidates.max(ALL_LINES),
+        ..p.clone()
+    };
+    let second = pass(pixels, w, h, &along, bg, z, Some(trail), Some(&[])).0;
+    m.settle(&second);
+    let debris = second
+        .into_iter()
+        .filter(|c| !m.explains(c, p.psf_sigma))
+        .collect();
+    union(first, debris, trail, p)
+}
+
+/// The most lines along the trails that the star-aware pass keeps when told of none (a
+/// crowded survey frame shows tens of trails; each costs its refinement and box).
+const ALL_LINES: usize = 256;
+
+/// The first pass (everything along `trail` subtracted and dropped) and the star-aware pass
+/// (the trails `stars` subtracted where they show, and what they explain dropped) on the
+/// background and unit-noise map `maps`, and their union.
+#[allow(clippy::too_many_arguments)]
+fn two_passes(
+    pixels: &[u8],
+    w: usize,
+    h: usize,
+    p: &Sanitized,
+    (bg, z): (Vec<f32>, Vec<f32>),
+    trail: f64,
+    stars: &[StarTrail],
+) -> Vec<Candidate> {
+    let first = pass(pixels, w, h, p, bg.clone(), z.clone(), Some(trail), None).0;
     // The second pass finds what the first cannot, along the trails, so it searches only there.
     let along = Sanitized {
         along: Some(trail),
         ..p.clone()
     };
     let second = pass(pixels, w, h, &along, bg, z, Some(trail), Some(stars)).0;
-    union(first, second, trail, &p)
+    union(first, second, trail, p)
 }
 
 /// [`detect_streaks`], and every refined segment that did not become a candidate, with why
