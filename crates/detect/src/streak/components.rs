@@ -12,6 +12,9 @@ pub(super) struct Component {
     pub(super) half_len: f64,
 }
 
+/// The label of a pixel in no component.
+pub(super) const NONE: u32 = u32::MAX;
+
 fn find(parent: &mut [u32], mut a: u32) -> u32 {
     while parent[a as usize] != a {
         let g = parent[parent[a as usize] as usize];
@@ -21,46 +24,27 @@ fn find(parent: &mut [u32], mut a: u32) -> u32 {
     a
 }
 
-#[derive(Default, Clone, Copy)]
-struct Acc {
-    n: u64,
-    peak: f32,
-    sx: f64,
-    sy: f64,
-    sxx: f64,
-    sxy: f64,
-    syy: f64,
-}
-
-#[inline(never)]
-pub(super) fn components(
-    best: &[f32],
-    arg: &[u8],
+/// 8-connected components of the `w` x `h` pixels that `keep` accepts, a pixel joining a
+/// neighbour only where `joins(pixel, neighbour)` holds: each pixel's label is its
+/// component's root ([`NONE`] where not kept), and every root is below the returned count.
+pub(super) fn label_components(
     w: usize,
     h: usize,
-    p: &Sanitized,
-) -> Vec<Component> {
-    const NONE: u32 = u32::MAX;
-    let n_ang = p.n_angles;
-    let link = p.link_bins.min(n_ang / 2);
-    let compat = |a: u8, b: u8| {
-        let d = (a as isize - b as isize).unsigned_abs();
-        d.min(n_ang - d) <= link
-    };
-    let thr = p.threshold;
+    keep: impl Fn(usize) -> bool,
+    joins: impl Fn(usize, usize) -> bool,
+) -> (Vec<u32>, usize) {
     let mut label = vec![NONE; w * h];
     let mut parent: Vec<u32> = Vec::new();
     for y in 0..h {
         for x in 0..w {
             let i = y * w + x;
-            if best[i].is_nan() || best[i] < thr {
+            if !keep(i) {
                 continue;
             }
-            let a = arg[i];
             let mut l = NONE;
             let consider = |ni: usize, l: &mut u32, parent: &mut Vec<u32>| {
                 let nl = label[ni];
-                if nl != NONE && compat(arg[ni], a) {
+                if nl != NONE && joins(i, ni) {
                     let r = find(parent, nl);
                     if *l == NONE {
                         *l = r;
@@ -90,15 +74,52 @@ pub(super) fn components(
             label[i] = l;
         }
     }
-    let mut accs = vec![Acc::default(); parent.len()];
+    for l in label.iter_mut().filter(|l| **l != NONE) {
+        *l = find(&mut parent, *l);
+    }
+    (label, parent.len())
+}
+
+#[derive(Default, Clone, Copy)]
+struct Acc {
+    n: u64,
+    peak: f32,
+    sx: f64,
+    sy: f64,
+    sxx: f64,
+    sxy: f64,
+    syy: f64,
+}
+
+#[inline(never)]
+pub(super) fn components(
+    best: &[f32],
+    arg: &[u8],
+    w: usize,
+    h: usize,
+    p: &Sanitized,
+) -> Vec<Component> {
+    let n_ang = p.n_angles;
+    let link = p.link_bins.min(n_ang / 2);
+    let compat = |a: u8, b: u8| {
+        let d = (a as isize - b as isize).unsigned_abs();
+        d.min(n_ang - d) <= link
+    };
+    let thr = p.threshold;
+    let (label, roots) = label_components(
+        w,
+        h,
+        |i| !(best[i].is_nan() || best[i] < thr),
+        |i, ni| compat(arg[ni], arg[i]),
+    );
+    let mut accs = vec![Acc::default(); roots];
     for y in 0..h {
         for x in 0..w {
             let i = y * w + x;
             if label[i] == NONE {
                 continue;
             }
-            let r = find(&mut parent, label[i]) as usize;
-            let a = &mut accs[r];
+            let a = &mut accs[label[i] as usize];
             let (xf, yf) = (x as f64, y as f64);
             a.n += 1;
             a.peak = a.peak.max(best[i]);

@@ -8,6 +8,7 @@
 //! uncertainty) is the trails', when enough of them share it. Point stars give round features,
 //! and a frame of them no common direction.
 
+use super::components::{NONE, label_components};
 use super::output::Candidate;
 use super::segment::angle_diff_deg;
 use super::stats::median_of;
@@ -347,57 +348,12 @@ fn binned(z: &[f32], w: usize, bw: usize, bh: usize) -> Vec<f32> {
 /// The bright features of the binned map `z` (`w` x `h`): 8-connected pixels of at least
 /// `FEATURE_SIGMA`, of at least `MIN_PIXELS`, in the frame's pixels.
 fn features(z: &[f32], w: usize, h: usize) -> Vec<Feature> {
-    const NONE: u32 = u32::MAX;
-    fn find(parent: &mut [u32], mut a: u32) -> u32 {
-        while parent[a as usize] != a {
-            let g = parent[parent[a as usize] as usize];
-            parent[a as usize] = g;
-            a = g;
-        }
-        a
-    }
-    let mut label = vec![NONE; w * h];
-    let mut parent: Vec<u32> = Vec::new();
-    for y in 0..h {
-        for x in 0..w {
-            let i = y * w + x;
-            if z[i].is_nan() || z[i] < FEATURE_SIGMA {
-                continue;
-            }
-            let mut l = NONE;
-            let mut join = |ni: usize, l: &mut u32| {
-                let nl = label[ni];
-                if nl == NONE {
-                    return;
-                }
-                let r = find(&mut parent, nl);
-                if *l == NONE {
-                    *l = r;
-                } else if r != *l {
-                    let (lo, hi) = if r < *l { (r, *l) } else { (*l, r) };
-                    parent[hi as usize] = lo;
-                    *l = lo;
-                }
-            };
-            if x > 0 {
-                join(i - 1, &mut l);
-            }
-            if y > 0 {
-                if x > 0 {
-                    join(i - w - 1, &mut l);
-                }
-                join(i - w, &mut l);
-                if x + 1 < w {
-                    join(i - w + 1, &mut l);
-                }
-            }
-            if l == NONE {
-                l = parent.len() as u32;
-                parent.push(l);
-            }
-            label[i] = l;
-        }
-    }
+    let (label, roots) = label_components(
+        w,
+        h,
+        |i| !(z[i].is_nan() || z[i] < FEATURE_SIGMA),
+        |_, _| true,
+    );
     // Per root: count, sum of levels, moments, and whether it reaches the edge.
     #[derive(Clone, Copy, Default)]
     struct Acc {
@@ -410,14 +366,14 @@ fn features(z: &[f32], w: usize, h: usize) -> Vec<Feature> {
         syy: f64,
         edge: bool,
     }
-    let mut accs = vec![Acc::default(); parent.len()];
+    let mut accs = vec![Acc::default(); roots];
     for y in 0..h {
         for x in 0..w {
             let i = y * w + x;
             if label[i] == NONE {
                 continue;
             }
-            let a = &mut accs[find(&mut parent, label[i]) as usize];
+            let a = &mut accs[label[i] as usize];
             let (xf, yf) = (x as f64, y as f64);
             a.n += 1;
             a.sz += z[i] as f64;
