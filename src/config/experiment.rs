@@ -125,6 +125,13 @@ pub fn of(campaign: &Campaign) -> Experiment {
                 empty_share: o.empty_share,
             }
         }),
+        catalogue: c.population.as_ref().map(|_| match c.pointing.stare {
+            Some(s) => scene::CatalogueScene::Stare {
+                ra_deg: s.ra_deg,
+                dec_deg: s.dec_deg,
+            },
+            None => scene::CatalogueScene::Target,
+        }),
     };
     let render = render::Settings {
         method: c.render.method,
@@ -253,6 +260,7 @@ pub fn inputs(campaign: &Campaign) -> Result<Inputs, Error> {
     Ok(Inputs {
         observer: campaign.observer.clone(),
         debris: campaign.debris.clone(),
+        population: campaign.population.clone(),
         stars,
         background: BackgroundModel::load(&frames)
             .map_err(|e| campaign.error_at("background.paths", e.to_string()))?,

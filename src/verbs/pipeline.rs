@@ -70,7 +70,9 @@ fn debris_mix(campaign: &Campaign, shown: impl Iterator<Item = Vec<usize>>) -> V
             images: 0,
         })
         .collect();
-    for objects in shown {
+    // A stare points at no debris object (its objects are the population's, in the truth).
+    let stare = campaign.resolved.pointing.stare.is_some();
+    for objects in shown.filter(|_| !stare) {
         let mut objects = objects;
         objects.sort_unstable();
         objects.dedup();
@@ -210,7 +212,9 @@ pub(crate) fn record_check(
                 r.index, share.start, share.end
             ));
         }
+        // A stare points at no debris object; a catalogue scene's objects are the population's.
         if let Some(i) = std::iter::once(r.debris_index)
+            .filter(|_| c.pointing.stare.is_none())
             .chain(r.objects.iter().flatten().copied())
             .find(|&i| i >= campaign.debris.len())
         {
@@ -534,10 +538,12 @@ fn render(
             let record = Record {
                 index: i,
                 debris_index: products.scene.debris_index,
+                // A catalogue scene's objects are in its truth, not the campaign's debris.
                 objects: products
                     .scene
                     .placed
                     .as_ref()
+                    .filter(|_| products.scene.unseen.is_none())
                     .map(|placed| placed.iter().map(|s| s.debris_index).collect()),
                 files: journal::hash_files(dir, &image.files)?,
                 png: image

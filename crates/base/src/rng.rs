@@ -33,6 +33,9 @@ pub enum Purpose {
     ObjectCount = 13,
     /// A placed object's own draws (`object_stream`): which debris and its draw, retried.
     ObjectScene = 15,
+    /// A catalogue object's own draws (size, tumble: `scene::catalogue`), keyed by its NORAD
+    /// number in place of the image, so an object keeps them in every image.
+    CatalogueObject = 17,
 }
 
 /// A purpose of draws per photon or per pixel; each has an independent [`PixelRng`] stream

@@ -32,6 +32,10 @@ pub struct CampaignFile {
     /// the one the pointing is drawn around (the paper's scenes, their bytes unchanged).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub objects: Option<Objects>,
+    /// `[population]`: a catalogue scene (issue #45): every object of a TLE population drawn
+    /// where its orbit puts it. Omitted from the resolved campaign when absent, so hashes stay.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub population: Option<Population>,
     #[serde(default)]
     pub window: Window,
     #[serde(default)]
@@ -200,6 +204,39 @@ pub struct Pointing {
     /// field radius (in each axis) from the image centre.
     #[serde(default = "defaults::placement_fraction")]
     pub placement_fraction: f64,
+    /// With `[population]`: a stare, the sensor fixed on this (RA, Dec) in every image instead
+    /// of pointed around a debris object (`mode` must be `fixed`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stare: Option<Stare>,
+}
+
+/// A fixed direction on the sky, degrees (GCRS axes, as the FITS WCS). The GEO belt seen from
+/// the Earth's centre lies on the celestial equator (`dec_deg = 0`); from a low orbit it is
+/// displaced by up to ~1.3 deg of parallax, away from the observer's side of the equator.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Stare {
+    pub ra_deg: f64,
+    pub dec_deg: f64,
+}
+
+/// A catalogue scene's population (issue #45): every object of `tle_file` is propagated with
+/// SGP4 over each exposure, and every one whose path crosses the field is rendered where it
+/// is, with its own motion, brightness (`[photometry]`, its size drawn once per object) and
+/// visibility (shadow, line of sight, magnitude limit and signal-to-noise gate; an object in
+/// the field that fails them is listed in the truth's `unseen` with the reason). The pointing
+/// is drawn around a debris object as without this table (and that object is shown too), or
+/// is a stare (`pointing.stare`).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Population {
+    /// A file of 2- or 3-line TLE sets, relative to the campaign file (any size: a full public
+    /// catalogue of ~30,000 objects is culled per image). The observer, if in it, is skipped.
+    pub tle_file: String,
+    /// sha256 of `tle_file`, filled in when the campaign is resolved (so the campaign hash
+    /// pins the population); a given one must match.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tle_sha256: Option<String>,
 }
 
 impl CampaignFile {

@@ -50,6 +50,8 @@ pub struct Campaign {
     pub hash: String,
     pub observer: Body,
     pub debris: Vec<Body>,
+    /// The objects of `[population]` (empty without).
+    pub population: Vec<Body>,
     pub window_start: Epoch,
     pub window_end: Epoch,
     /// Where outputs go.
@@ -200,6 +202,7 @@ impl Campaign {
             hash,
             observer: r.observer,
             debris: r.debris,
+            population: r.population,
             window_start: r.window_start,
             window_end: r.window_end,
             output_dir,

@@ -18,6 +18,8 @@ pub(super) struct Resolved {
     pub file: CampaignFile,
     pub observer: Body,
     pub debris: Vec<Body>,
+    /// The objects of `[population]` (empty without), the observer left out.
+    pub population: Vec<Body>,
     pub window_start: Epoch,
     pub window_end: Epoch,
 }
@@ -150,6 +152,11 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
         }
         resolved.detect.model_sha256 = Some(sha);
     }
+    let population = match resolved.population.as_mut() {
+        Some(p) => resolve_population(p, base_dir, observer.norad)
+            .map_err(|(f, m)| fail(&format!("population.{f}"), m))?,
+        None => Vec::new(),
+    };
     if let Stars::Catalog { path: p, .. } = &resolved.stars {
         let full = base_dir.join(p);
         if !full.is_file() {
@@ -184,9 +191,69 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
         file: resolved,
         observer,
         debris,
+        population,
         window_start,
         window_end,
     })
+}
+
+/// The bodies of a `[population]`, its sha256 recorded (the hash pins the population, which
+/// may be a whole catalogue: its lines are not copied into the campaign). The observer is left
+/// out (it cannot see itself); a NORAD number twice, or an orbit SGP4 refuses, is an error
+/// naming the line. Errors: (field under `population`, message).
+fn resolve_population(
+    p: &mut super::Population,
+    base_dir: &Path,
+    observer: u64,
+) -> Result<Vec<Body>, (String, String)> {
+    let fail = |m: String| ("tle_file".to_string(), m);
+    let full = base_dir.join(&p.tle_file);
+    let text = crate::input_file::read_text(&full)
+        .map_err(|why| fail(format!("{}: {why}", full.display())))?;
+    let sha = sha256_file(&full)
+        .map_err(|e| fail(format!("cannot read {}: {e}", full.display())))?
+        .0;
+    if let Some(given) = &p.tle_sha256
+        && *given != sha
+    {
+        return Err((
+            "tle_sha256".into(),
+            format!("is {given} but {} has sha256 {sha}", full.display()),
+        ));
+    }
+    p.tle_sha256 = Some(sha);
+    let tles = orbit::parse_tles(&text).map_err(|e| fail(format!("{}: {e}", full.display())))?;
+    if tles.is_empty() {
+        return Err(fail(format!("{} holds no TLE", full.display())));
+    }
+    let mut first_line = std::collections::BTreeMap::new();
+    let mut bodies = Vec::with_capacity(tles.len());
+    for tle in tles.iter().filter(|t| t.norad_id != observer) {
+        if let Some(line) = first_line.insert(tle.norad_id, tle.line) {
+            return Err(fail(format!(
+                "NORAD {} at line {} of {} is already at line {line}: each object once",
+                tle.norad_id,
+                tle.line,
+                full.display()
+            )));
+        }
+        let propagator = Propagator::from_tle(tle).map_err(|e| {
+            fail(format!(
+                "{e} (the TLE at line {} of {})",
+                tle.line,
+                full.display()
+            ))
+        })?;
+        bodies.push(Body {
+            name: tle
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("NORAD {}", tle.norad_id)),
+            norad: tle.norad_id,
+            propagator,
+        });
+    }
+    Ok(bodies)
 }
 
 /// Parse a UTC instant such as `2022-01-01T00:00:00 UTC` or `2022-01-01T00:00:00Z`.

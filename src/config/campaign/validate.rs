@@ -95,9 +95,9 @@ fn top(c: &CampaignFile) -> Checked {
         "must be between 1 and 10000000",
     )?;
     check(
-        !c.debris.is_empty(),
+        !c.debris.is_empty() || c.pointing.stare.is_some(),
         "debris",
-        "name at least one debris object",
+        "name at least one debris object (a stare, `pointing.stare`, needs none)",
     )?;
     if let Some(o) = &c.objects {
         let (min, max) = o.per_frame.bounds();
@@ -115,6 +115,42 @@ fn top(c: &CampaignFile) -> Checked {
             (0.0..=1.0).contains(&o.empty_share),
             "objects.empty_share",
             "must be in [0, 1]",
+        )?;
+    }
+    population(c)
+}
+
+/// `[population]` and `pointing.stare`: a catalogue scene shows where the orbits put every
+/// object, so it has no placed objects, and a stare is a fixed direction of a catalogue scene.
+fn population(c: &CampaignFile) -> Checked {
+    if c.population.is_some() {
+        check(
+            c.objects.is_none(),
+            "population",
+            "a catalogue scene shows every object of the population where its orbit puts it: \
+             drop `[objects]` (placed objects) or `[population]`",
+        )?;
+    }
+    if let Some(s) = &c.pointing.stare {
+        check(
+            c.population.is_some(),
+            "pointing.stare",
+            "a stare shows the objects of a `[population]`: add one",
+        )?;
+        check(
+            c.pointing.mode == PointingMode::Fixed,
+            "pointing.stare",
+            "a stare is a fixed direction: set `pointing.mode = \"fixed\"`",
+        )?;
+        check(
+            s.ra_deg.is_finite() && (0.0..360.0).contains(&s.ra_deg),
+            "pointing.stare.ra_deg",
+            "must be in [0, 360) degrees",
+        )?;
+        check(
+            s.dec_deg.is_finite() && (-90.0..=90.0).contains(&s.dec_deg),
+            "pointing.stare.dec_deg",
+            "must be in [-90, 90] degrees",
         )?;
     }
     Ok(())

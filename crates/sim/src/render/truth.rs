@@ -103,6 +103,10 @@ pub struct FrameTruth<'a> {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub collect: Option<CollectPlace>,
     pub objects: Vec<ObjectTruth<'a>>,
+    /// A catalogue scene's objects in the field that the checks left dark, with the reason
+    /// (`scene::catalogue`); absent in any other scene.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unseen: Option<&'a [crate::scene::Unseen]>,
 }
 
 /// A frame's place in its collect (a [`crate::scene::CollectFrame`] without the pointing
@@ -122,7 +126,12 @@ pub struct CollectPlace {
 pub struct ObjectTruth<'a> {
     pub object: &'a str,
     pub norad: u64,
+    /// In a catalogue scene, the index in the population when `source` says so.
     pub debris_index: usize,
+    /// In a catalogue scene: `debris` (the object the pointing was drawn around, index in the
+    /// campaign's debris) or `population` (index in `[population]`'s file, observer left out).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub source: Option<&'static str>,
     /// In a multi-frame collect: the object's id, the same in every frame of the collect
     /// (`scene::object_track_id`).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -151,12 +160,19 @@ pub struct ObjectTruth<'a> {
     pub snr_matched_filter: f64,
     pub attempts: u32,
     pub rejections: &'a std::collections::BTreeMap<crate::scene::Rejection, u32>,
+    /// A catalogue scene's object's place at start, middle and end and the states at
+    /// mid-exposure, as in [`Truth`] (a placed object has none: it is turned into the field).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ephemeris: Option<crate::sighting::Ephemeris>,
 }
 
 impl<'a> FrameTruth<'a> {
     /// The frame's truth from the image's own (`image`) and its objects' with their indices
     /// in the campaign's debris.
-    pub fn new(image: &'a Truth, objects: impl Iterator<Item = (&'a Truth, usize)>) -> Self {
+    pub fn new(
+        image: &'a Truth,
+        objects: impl Iterator<Item = (&'a Truth, usize, Option<&'static str>)>,
+    ) -> Self {
         FrameTruth {
             coordinates: &image.coordinates,
             image_index: image.image_index,
@@ -165,7 +181,11 @@ impl<'a> FrameTruth<'a> {
             pointing: &image.pointing,
             jitter_mean_px: image.jitter_mean_px,
             frame: &image.frame,
-            pointing_object: format!("{} (NORAD {})", image.object, image.norad),
+            // NORAD 0: no object, a stare (`scene::catalogue`).
+            pointing_object: match image.norad {
+                0 => image.object.clone(),
+                n => format!("{} (NORAD {n})", image.object),
+            },
             stars_in_cone: image.stars_in_cone,
             stars_traced: image.stars_traced,
             background_sigma_adu: image.background_sigma_adu,
@@ -179,10 +199,11 @@ impl<'a> FrameTruth<'a> {
                 frames: k.frames,
             }),
             objects: objects
-                .map(|(t, debris_index)| ObjectTruth {
+                .map(|(t, debris_index, source)| ObjectTruth {
                     object: &t.object,
                     norad: t.norad,
                     debris_index,
+                    source,
                     track_id: t.collect.map(|k| k.track_id),
                     streak_start_px: t.streak_start_px,
                     streak_end_px: t.streak_end_px,
@@ -208,8 +229,10 @@ impl<'a> FrameTruth<'a> {
                     snr_matched_filter: t.snr_matched_filter,
                     attempts: t.attempts,
                     rejections: &t.rejections,
+                    ephemeris: t.ephemeris,
                 })
                 .collect(),
+            unseen: None,
         }
     }
 }

@@ -90,6 +90,10 @@ pub struct Scene {
     /// the image's one object.
     #[serde(skip)]
     pub placed: Option<Vec<Scene>>,
+    /// In a catalogue scene (`catalogue`): the population's objects in the field that the
+    /// checks rejected, with the reason; None in any other scene.
+    #[serde(skip)]
+    pub unseen: Option<Vec<super::Unseen>>,
 }
 
 /// A frame's place in its collect, recorded in the truth: the object keeps its `track_id`
@@ -252,6 +256,7 @@ impl Scene {
             rejections: BTreeMap::new(),
             collect: None,
             placed: None,
+            unseen: None,
         }
     }
 

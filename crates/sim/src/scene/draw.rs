@@ -11,12 +11,15 @@ use rand::RngExt;
 use rand_chacha::ChaCha12Rng;
 
 use super::accepted::{Exposure, Object};
+use super::catalogue::{draw_stare, in_field};
 use super::object_draws::{draw_tumble, pick_debris};
 use super::place::place;
 use super::pointing::point_sensor;
 use super::trajectory::{Shot, trajectory};
 use super::visibility::{gate_snr, in_sight, visibility};
-use super::{CollectFrame, Inputs, NoScene, Pointing, Rejection, Scene, Spec, Tumble};
+use super::{
+    CatalogueScene, CollectFrame, Inputs, NoScene, Pointing, Rejection, Scene, Spec, Tumble,
+};
 use crate::background::{BackgroundModel, FrameChoice};
 use crate::sensor::Sensor;
 use crate::sighting::Sighting;
@@ -42,11 +45,12 @@ pub fn draw(
     seed: u64,
     image: u64,
 ) -> Result<Scene, NoScene> {
+    if let Some(CatalogueScene::Stare { ra_deg, dec_deg }) = spec.catalogue {
+        return draw_stare(spec, sensor, inputs, seed, image, (ra_deg, dec_deg));
+    }
     let (collect, frame) = spec.collect_of(image);
     let debris_index = choose_debris(spec, inputs.debris.len(), seed, collect);
-    // Drawn only in a mixed campaign, so that every other keeps its streams.
-    let on_frame = spec.frame_share >= 1.0
-        || stream(seed, collect, Purpose::BackgroundKind).random::<f64>() < spec.frame_share;
+    let on_frame = on_frame(spec, seed, collect);
     let rng = &mut stream(seed, collect, Purpose::Scene);
     let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
     let max = spec.gate.max_attempts;
@@ -91,12 +95,41 @@ pub fn draw(
                 };
                 let scene = later.unwrap_or(first);
                 let collect_frame = CollectFrame::of(spec, image, collect);
-                return Ok(scene.accept(attempt, rejections, collect_frame, placed));
+                let scene = scene.accept(attempt, rejections, collect_frame, placed);
+                if spec.catalogue.is_some() {
+                    return Ok(with_population(spec, sensor, inputs, seed, scene));
+                }
+                return Ok(scene);
             }
             Err(reason) => *rejections.entry(reason).or_default() += 1,
         }
     }
     Err(no_scene(max, rejections))
+}
+
+/// Whether image `image`'s collect has a real frame under it: drawn only in a mixed campaign,
+/// so that every other keeps its streams.
+pub(super) fn on_frame(spec: &Spec, seed: u64, collect: u64) -> bool {
+    spec.frame_share >= 1.0
+        || stream(seed, collect, Purpose::BackgroundKind).random::<f64>() < spec.frame_share
+}
+
+/// The target mode of a catalogue scene (accepted): the frame's own object first, as it was
+/// drawn, then the population's objects in its field, the frame's own left out.
+fn with_population(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    seed: u64,
+    scene: Scene,
+) -> Scene {
+    let (mut seen, unseen) = in_field(spec, sensor, inputs, seed, &scene, Some(scene.norad));
+    seen.insert(0, scene.clone());
+    Scene {
+        placed: Some(seen),
+        unseen: Some(unseen),
+        ..scene
+    }
 }
 
 /// Whether every later frame of the collect that starts with the draws `d` starts inside the
@@ -129,12 +162,12 @@ fn judge_later_frames(
 }
 
 /// The random values of one draw attempt, in the scene stream's order.
-struct Draws {
-    exposure_s: f64,
-    start: Epoch,
+pub(super) struct Draws {
+    pub exposure_s: f64,
+    pub start: Epoch,
     area_m2: f64,
     placement: (f64, f64),
-    background: Option<FrameChoice>,
+    pub background: Option<FrameChoice>,
     tumble: Option<Tumble>,
 }
 
@@ -146,7 +179,12 @@ enum Plan<'a> {
     Later { frame: u64, first: &'a Scene },
 }
 
-fn draw_values(spec: &Spec, inputs: &Inputs, on_frame: bool, rng: &mut ChaCha12Rng) -> Draws {
+pub(super) fn draw_values(
+    spec: &Spec,
+    inputs: &Inputs,
+    on_frame: bool,
+    rng: &mut ChaCha12Rng,
+) -> Draws {
     let span_s = (spec.window_end - spec.window_start).to_seconds();
     let exposure_s = if spec.exposure_max_s > spec.exposure_min_s {
         rng.random_range(spec.exposure_min_s..=spec.exposure_max_s)
@@ -319,7 +357,7 @@ fn boresight(
 
 /// Field stars in the cone `(ra, dec, radius)` at mid-exposure; a star brighter than the limit
 /// spoils the image (paper 3.2.3).
-fn field_stars(
+pub(super) fn field_stars(
     spec: &Spec,
     sensor: &Sensor,
     inputs: &Inputs,

@@ -12,10 +12,12 @@
 //! - `spec`: the values a draw reads; `accepted`: the scene it gives; `rejection`: why not;
 //! - `draw`: one image's draw and its retries; `place`: the extra objects of a frame;
 //!   `object_draws`: which debris object and its tumble, for both;
+//! - `catalogue`: a catalogue scene's objects where their orbits put them, and its stare;
 //! - `pointing`: where the sensor points; `trajectory`: the debris path over the exposure;
 //!   `visibility`: the checks and the signal-to-noise gate.
 
 mod accepted;
+mod catalogue;
 mod draw;
 mod object_draws;
 mod place;
@@ -26,13 +28,14 @@ mod trajectory;
 mod visibility;
 
 pub use accepted::{CollectFrame, Geometry, Scene, TrajectorySample, Tumble};
+pub use catalogue::Unseen;
 pub use draw::{choose_debris, draw};
 pub use place::object_track_id;
 pub use rejection::{NoScene, Rejection};
 pub use soig_sky::pointing::{Pointing, SurveyTrack, TargetTrack};
 pub use spec::{
-    Body, Gate, Inputs, ObjectCount, PointingMode, SnrDefinition, Spec, StarField, TumbleRange,
-    julian_year,
+    Body, CatalogueScene, Gate, Inputs, ObjectCount, PointingMode, SnrDefinition, Spec, StarField,
+    TumbleRange, julian_year,
 };
 pub use trajectory::{
     MAX_SAMPLE_SPACING_PSF_SIGMAS, MAX_TRAJECTORY_SAMPLES, max_sample_spacing_px,

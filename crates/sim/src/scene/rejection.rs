@@ -110,11 +110,22 @@ impl NoScene {
         rejections: BTreeMap<Rejection, u32>,
     ) -> NoScene {
         let debris = &inputs.debris[debris_index];
+        let object = (debris_index, debris.name.clone(), debris.norad);
+        NoScene::named(image, object, attempts, rejections)
+    }
+
+    /// Image `image`'s `(debris index, name, NORAD number)` never accepted in `attempts` draws.
+    pub(super) fn named(
+        image: u64,
+        (debris_index, object, norad): (usize, String, u64),
+        attempts: u32,
+        rejections: BTreeMap<Rejection, u32>,
+    ) -> NoScene {
         NoScene {
             image,
             debris_index,
-            object: debris.name.clone(),
-            norad: debris.norad,
+            object,
+            norad,
             attempts,
             reasons: rejections
                 .iter()

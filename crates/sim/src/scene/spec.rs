@@ -24,6 +24,8 @@ pub struct Body {
 pub struct Inputs {
     pub observer: Body,
     pub debris: Vec<Body>,
+    /// The population of a catalogue scene (`Spec::catalogue`), empty without one.
+    pub population: Vec<Body>,
     pub stars: StarField,
     pub background: BackgroundModel,
 }
@@ -146,6 +148,19 @@ pub struct Spec {
     /// How many objects each image shows (`[objects]`); None: the one the pointing is drawn
     /// around (the paper's scenes).
     pub objects: Option<ObjectCount>,
+    /// A catalogue scene (`[population]`): every object of `Inputs::population` in the field
+    /// is shown where its orbit puts it; None: the debris objects as drawn.
+    pub catalogue: Option<CatalogueScene>,
+}
+
+/// Where a catalogue scene points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CatalogueScene {
+    /// As without a catalogue: around an image's debris object drawn by the weights (which is
+    /// shown with the population's objects in the field).
+    Target,
+    /// A stare: the sensor fixed on (RA, Dec), degrees, in every image.
+    Stare { ra_deg: f64, dec_deg: f64 },
 }
 
 /// How many debris objects an image shows: none with probability `empty_share`, else a number

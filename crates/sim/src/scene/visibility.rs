@@ -58,9 +58,9 @@ pub(super) fn visibility(
 
 /// The angles of a line of sight from the Earth's centre, the Sun and the Moon, degrees.
 pub(super) struct Angles {
-    earth_angle_deg: f64,
-    sun_angle_deg: f64,
-    moon_angle_deg: f64,
+    pub earth_angle_deg: f64,
+    pub sun_angle_deg: f64,
+    pub moon_angle_deg: f64,
 }
 
 fn angles(sight: &Sight, (sun, mid): (Vec3, Epoch)) -> Angles {

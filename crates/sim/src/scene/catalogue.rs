@@ -1,0 +1,343 @@
+//! Catalogue scenes (issue #45): every object of a population (`Inputs::population`) drawn
+//! where its orbit puts it. A frame's pointing is drawn as without a catalogue (around a debris
+//! object, which is shown too) or is a stare (`stare`); then every object whose apparent path
+//! crosses the field is traced over the exposure with its own motion and brightness and judged
+//! by the checks of a scene's object (line of sight, shadow, magnitude limit, signal to noise):
+//! an object that passes is shown, one that fails is listed as unseen with the reason.
+//!
+//! The cost grows with the objects near the field, not the population: each object is
+//! propagated once, at mid-exposure, and kept only if it can reach the field within half the
+//! exposure (`candidates`); only those are traced.
+
+use std::collections::BTreeMap;
+
+use hifitime::{Duration, Epoch};
+use serde::Serialize;
+
+use super::accepted::{Exposure, Object};
+use super::draw::{draw_values, field_stars, on_frame};
+use super::object_draws::draw_tumble;
+use super::trajectory::{Shot, trajectory};
+use super::visibility::{Snr, gate_snr, in_sight, visibility};
+use super::{CollectFrame, Geometry, Inputs, NoScene, Pointing, Rejection, Scene, Spec};
+use crate::sensor::Sensor;
+use crate::sighting::{Sight, Sighting};
+use soig_base::rng::{Purpose, stream};
+use soig_sky::ephemeris::sun_position_km;
+use soig_sky::frames::teme_to_gcrs_matrix;
+use soig_sky::{angle_deg, mat_vec, norm, radec_unit, scale, sub};
+
+/// An object of the population in the field that the checks left dark, and why.
+#[derive(Clone, Debug, Serialize)]
+pub struct Unseen {
+    pub object: String,
+    pub norad: u64,
+    pub reason: Rejection,
+}
+
+/// Largest acceleration of one body relative to another in Earth orbit, km/s^2: each feels at
+/// most the surface gravity, 9.8e-3 km/s^2 (drag and other forces are thousands of times less).
+const MAX_RELATIVE_ACCEL_KM_S2: f64 = 2.0 * 9.81e-3;
+
+/// Extra angle of the coarse test: apparent places (aberration, up to ~26", and light time)
+/// move an object from its geometric direction by well under this.
+const CULL_MARGIN_DEG: f64 = 0.02;
+
+/// The objects of the population seen in frame `at` (its pointing and time set), in the
+/// population's order, and those in the field the checks rejected. `shown` (the frame's own
+/// object, in the target mode) is left out: the frame shows it already.
+pub(super) fn in_field(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    seed: u64,
+    at: &Scene,
+    shown: Option<u64>,
+) -> (Vec<Scene>, Vec<Unseen>) {
+    let mut seen = Vec::new();
+    let mut unseen = Vec::new();
+    for i in candidates(sensor, inputs, at) {
+        let body = &inputs.population[i];
+        if Some(body.norad) == shown {
+            continue;
+        }
+        match sight_object(spec, sensor, inputs, seed, at, i) {
+            None => {}
+            Some(Ok(scene)) => seen.push(scene),
+            Some(Err(reason)) => unseen.push(Unseen {
+                object: body.name.clone(),
+                norad: body.norad,
+                reason,
+            }),
+        }
+    }
+    (seen, unseen)
+}
+
+/// The coarse test: the population's objects that may cross the field of `at`. Each is
+/// propagated at mid-exposure only; over half the exposure its line of sight moves by at most
+/// `d = |v_rel| h + a_max h^2 / 2` (h half the exposure), which turns it by at most
+/// `asin(d / range)` (any angle when `d` reaches the range); it is kept if its direction then
+/// lies within that turn, plus the field's half-diagonal, the boresight's own motion and a
+/// margin, of the mid-exposure boresight. An object SGP4 cannot propagate then is left out.
+fn candidates(sensor: &Sensor, inputs: &Inputs, at: &Scene) -> Vec<usize> {
+    let h = at.exposure_s / 2.0;
+    let mid = at.start + Duration::from_seconds(h);
+    let m = teme_to_gcrs_matrix(mid);
+    let gcrs = |(r, v): ([f64; 3], [f64; 3])| (mat_vec(&m, r), mat_vec(&m, v));
+    let Ok(observer) = inputs.observer.propagator.state_teme(mid).map(gcrs) else {
+        return Vec::new();
+    };
+    let (ra, dec) = at.pointing.mid_radec_deg();
+    let boresight = radec_unit(ra, dec);
+    let half_diag_deg =
+        sensor.pixel_scale_deg() * (sensor.width_px as f64).hypot(sensor.height_px as f64) / 2.0;
+    let pointing_reach_deg = match &at.pointing {
+        Pointing::Fixed { .. } => 0.0,
+        Pointing::Survey(t) => t.drift_deg / 2.0,
+        Pointing::Track(t) => t.reach_deg(),
+    };
+    let reach_deg = half_diag_deg + pointing_reach_deg + CULL_MARGIN_DEG;
+    let max_accel_km = 0.5 * MAX_RELATIVE_ACCEL_KM_S2 * h * h;
+    inputs
+        .population
+        .iter()
+        .enumerate()
+        .filter_map(|(i, body)| {
+            let (r, v) = body.propagator.state_teme(mid).map(gcrs).ok()?;
+            let los = sub(r, observer.0);
+            let range = norm(los);
+            let moved = norm(sub(v, observer.1)) * h + max_accel_km;
+            let turn_deg = if moved < range {
+                (moved / range).asin().to_degrees()
+            } else {
+                180.0
+            };
+            let off_deg = angle_deg(los, boresight);
+            (off_deg.is_finite() && off_deg <= reach_deg + turn_deg).then_some(i)
+        })
+        .collect()
+}
+
+/// Population object `index` in frame `at`: None if its path does not cross the field (or it
+/// cannot be propagated over the exposure), else the scene of it or why the checks reject it.
+/// Its size and light curve come from its own stream, keyed by its NORAD number.
+fn sight_object(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    seed: u64,
+    at: &Scene,
+    index: usize,
+) -> Option<Result<Scene, Rejection>> {
+    let body = &inputs.population[index];
+    let (start, exposure_s) = (at.start, at.exposure_s);
+    let mid = start + Duration::from_seconds(exposure_s / 2.0);
+    let sighting = Sighting::new(
+        &inputs.observer.propagator,
+        &body.propagator,
+        mid,
+        spec.apparent_positions,
+    );
+    let rng = &mut stream(seed, body.norad, Purpose::CatalogueObject);
+    let area_m2 = spec.area.draw(rng);
+    let tumble = draw_tumble(spec, rng);
+    let sun = sun_position_km(mid);
+    let track = sighting.track(start, exposure_s)?;
+    let shot = Shot {
+        exposure_s,
+        sun,
+        area_m2,
+        tumble,
+        pointing: &at.pointing,
+        mid_tan: &at.projection(sensor),
+        shadowed: false,
+    };
+    // A path too fast to sample has samples in the field (`trajectory`): it crossed it.
+    let trajectory = match trajectory(spec, sensor, &|t_s| track.at(t_s), &shot) {
+        Ok(t) => t,
+        Err(reason) => return Some(Err(reason)),
+    };
+    if !trajectory.iter().any(|p| sensor.contains(p.x_px, p.y_px)) {
+        return None;
+    }
+    let sight = sighting.at(mid)?;
+    let judged =
+        visibility(spec, sensor, &sight, (sun, mid), area_m2, true).and_then(|(geometry, _)| {
+            let frame = inputs.frame(at.background);
+            let snr = gate_snr(spec, sensor, &trajectory, exposure_s, frame, true)?;
+            Ok((geometry, snr))
+        });
+    let (geometry, snr) = match judged {
+        Ok(g) => g,
+        Err(reason) => return Some(Err(reason)),
+    };
+    let exposure = Exposure {
+        image_index: at.image_index,
+        start,
+        exposure_s,
+        pointing: at.pointing.clone(),
+        stars: Vec::new(),
+        background: at.background,
+    };
+    let object = Object {
+        debris_index: index,
+        debris_name: body.name.clone(),
+        norad: body.norad,
+        area_m2,
+        tumble,
+        geometry,
+        ephemeris: sighting.ephemeris(start, exposure_s),
+        trajectory,
+        snr,
+    };
+    // Across a collect's frames an object keeps its NORAD number as its track id.
+    let collect = CollectFrame::of(spec, at.image_index, body.norad);
+    Some(Ok(Scene::assemble(exposure, object).accept(
+        1,
+        BTreeMap::new(),
+        collect,
+        None,
+    )))
+}
+
+/// Far enough along the boresight to stand for it in the line-of-sight checks: a ray from a
+/// satellite that clears the Earth within this clears it for good.
+const BORESIGHT_REACH_KM: f64 = 1.0e6;
+
+/// The scene of image `image` of a stare at `(ra, dec)`: its time, exposure and background
+/// drawn on the scene stream as without a catalogue, retried until the boresight passes the
+/// checks of a line of sight (Earth, Sun and Moon angles, clear of the Earth) and no star in
+/// the field is brighter than the limit, judged on the collect's first frame; then every
+/// object of the population in the field (`in_field`). A frame of a collect starts
+/// `k (exposure + gap)` after its first, all inside the window.
+pub(super) fn draw_stare(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    seed: u64,
+    image: u64,
+    (ra, dec): (f64, f64),
+) -> Result<Scene, NoScene> {
+    let (collect, frame) = spec.collect_of(image);
+    let on_frame = on_frame(spec, seed, collect);
+    let rng = &mut stream(seed, collect, Purpose::Scene);
+    let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
+    let name = format!("stare at RA {ra} deg, Dec {dec} deg");
+    for attempt in 1..=spec.gate.max_attempts {
+        let d = draw_values(spec, inputs, on_frame, rng);
+        let step_s = d.exposure_s + spec.collect_gap_s;
+        let at = |k: u64| d.start + Duration::from_seconds(k as f64 * step_s);
+        let judged = if at(spec.collect_frames.max(1) - 1) >= spec.window_end {
+            Err(Rejection::CollectPastWindow)
+        } else {
+            judge_boresight(spec, sensor, inputs, (ra, dec), at(0), d.exposure_s)
+        };
+        let geometry = match judged {
+            Ok(g) => g,
+            Err(reason) => {
+                *rejections.entry(reason).or_default() += 1;
+                continue;
+            }
+        };
+        let start = at(frame);
+        let mid = start + Duration::from_seconds(d.exposure_s / 2.0);
+        // The same direction in every frame: the first frame's check holds for them all.
+        let stars = field_stars(
+            spec,
+            sensor,
+            inputs,
+            (ra, dec, spec.star_cone_deg),
+            mid,
+            false,
+        )
+        .unwrap_or_default();
+        let exposure = Exposure {
+            image_index: image,
+            start,
+            exposure_s: d.exposure_s,
+            pointing: Pointing::Fixed {
+                ra_deg: ra,
+                dec_deg: dec,
+            },
+            stars,
+            background: d.background,
+        };
+        // The stare's own "object" is the boresight: no light, no path, NORAD 0.
+        let object = Object {
+            debris_index: 0,
+            debris_name: name.clone(),
+            norad: 0,
+            area_m2: 0.0,
+            tumble: None,
+            geometry,
+            ephemeris: None,
+            trajectory: Vec::new(),
+            snr: Snr {
+                judged: 0.0,
+                noise_level: 0.0,
+                noise_sigma: 0.0,
+            },
+        };
+        let pointed = Scene::assemble(exposure, object);
+        let (seen, unseen) = in_field(spec, sensor, inputs, seed, &pointed, None);
+        let collect_frame = CollectFrame::of(spec, image, collect);
+        let mut scene = pointed.accept(attempt, rejections, collect_frame, Some(seen));
+        scene.unseen = Some(unseen);
+        return Ok(scene);
+    }
+    Err(NoScene::named(
+        image,
+        (0, name, 0),
+        spec.gate.max_attempts,
+        rejections,
+    ))
+}
+
+/// The checks of the stare's boresight at the mid-exposure of the exposure from `start`: the
+/// line of sight's, and no star brighter than the limit in the field; the geometry of the
+/// boresight (its angles; no range, no light) for the truth.
+fn judge_boresight(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    (ra, dec): (f64, f64),
+    start: Epoch,
+    exposure_s: f64,
+) -> Result<Geometry, Rejection> {
+    let mid = start + Duration::from_seconds(exposure_s / 2.0);
+    let observer_km = inputs
+        .observer
+        .propagator
+        .position_gcrs_km(mid)
+        .map_err(|_| Rejection::PropagationFailed)?;
+    let direction = radec_unit(ra, dec);
+    let far = scale(direction, BORESIGHT_REACH_KM);
+    let sight = Sight {
+        observer_km,
+        debris_km: [
+            observer_km[0] + far[0],
+            observer_km[1] + far[1],
+            observer_km[2] + far[2],
+        ],
+        direction,
+    };
+    let angles = in_sight(spec, &sight, (sun_position_km(mid), mid))?;
+    field_stars(
+        spec,
+        sensor,
+        inputs,
+        (ra, dec, spec.star_cone_deg),
+        mid,
+        true,
+    )?;
+    Ok(Geometry {
+        range_km: 0.0,
+        phase_angle_deg: 0.0,
+        earth_angle_deg: angles.earth_angle_deg,
+        sun_angle_deg: angles.sun_angle_deg,
+        moon_angle_deg: angles.moon_angle_deg,
+        // No object: no light.
+        magnitude: f64::INFINITY,
+    })
+}
