@@ -261,6 +261,7 @@ pub fn inputs(campaign: &Campaign) -> Result<Inputs, Error> {
         observer: campaign.observer.clone(),
         debris: campaign.debris.clone(),
         population: campaign.population.clone(),
+        population_coarse: coarse_orbits(campaign),
         stars,
         background: BackgroundModel::load(&frames)
             .map_err(|e| campaign.error_at("background.paths", e.to_string()))?,
@@ -299,4 +300,17 @@ fn photometry_area(p: &crate::campaign::Photometry) -> debris_sizes::AreaModel {
             exponent: debris_sizes::SBM_COLLISION_EXPONENT,
         },
     }
+}
+
+/// The cheap orbit of each object of the population, measured against SGP4 over every instant
+/// an exposure may cover (the window and one longest exposure after it).
+fn coarse_orbits(campaign: &Campaign) -> Vec<crate::sky::orbit::CoarseOrbit> {
+    use rayon::prelude::*;
+    let end = campaign.window_end
+        + hifitime::Duration::from_seconds(campaign.resolved.exposure.max_s);
+    campaign
+        .population
+        .par_iter()
+        .map(|b| crate::sky::orbit::CoarseOrbit::new(&b.propagator, (campaign.window_start, end)))
+        .collect()
 }

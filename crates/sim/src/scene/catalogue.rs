@@ -5,9 +5,10 @@
 //! by the checks of a scene's object (line of sight, shadow, magnitude limit, signal to noise):
 //! an object that passes is shown, one that fails is listed as unseen with the reason.
 //!
-//! The cost grows with the objects near the field, not the population: each object is
-//! propagated once, at mid-exposure, and kept only if it can reach the field within half the
-//! exposure (`candidates`); only those are traced.
+//! The cost grows with the objects near the field, not the population: each object is placed
+//! once, at mid-exposure, by a cheap orbit with a measured error (`CoarseOrbit`), and kept only
+//! if it can reach the field within half the exposure (`candidates`); only those are
+//! propagated with SGP4 and traced.
 
 use std::collections::BTreeMap;
 
@@ -25,7 +26,8 @@ use crate::sighting::{Sight, Sighting};
 use soig_base::rng::{Purpose, stream};
 use soig_sky::ephemeris::sun_position_km;
 use soig_sky::frames::teme_to_gcrs_matrix;
-use soig_sky::{angle_deg, mat_vec, norm, radec_unit, scale, sub};
+use soig_sky::orbit::coarse_seconds as seconds;
+use soig_sky::{dot, norm, radec_unit, scale, sub};
 
 /// An object of the population in the field that the checks left dark, and why.
 #[derive(Clone, Debug, Serialize)]
@@ -74,22 +76,25 @@ pub(super) fn in_field(
     (seen, unseen)
 }
 
-/// The coarse test: the population's objects that may cross the field of `at`. Each is
-/// propagated at mid-exposure only; over half the exposure its line of sight moves by at most
-/// `d = |v_rel| h + a_max h^2 / 2` (h half the exposure), which turns it by at most
-/// `asin(d / range)` (any angle when `d` reaches the range); it is kept if its direction then
-/// lies within that turn, plus the field's half-diagonal, the boresight's own motion and a
-/// margin, of the mid-exposure boresight. An object SGP4 cannot propagate then is left out.
+/// The coarse test: the population's objects that may cross the field of `at`. Each is placed
+/// at mid-exposure by its cheap orbit (`CoarseOrbit`), within `u = 2 error + 20 km` of SGP4
+/// (by SGP4 itself, and its own speed, when the cheap orbit strays beyond `EXACT_BEYOND_KM`);
+/// over half the exposure its line of sight moves by at most `d = (v_max + |v_obs|) h +
+/// a_max h^2 / 2` (h half the exposure), so its direction lies within `asin((d + u) / range)`
+/// of the cheap one (any direction when that reaches the range); it is kept if that cone
+/// meets the field's half-diagonal, widened by the boresight's own motion and a margin, about
+/// the mid-exposure boresight. All in TEME, the observer by SGP4.
 fn candidates(sensor: &Sensor, inputs: &Inputs, at: &Scene) -> Vec<usize> {
     let h = at.exposure_s / 2.0;
     let mid = at.start + Duration::from_seconds(h);
-    let m = teme_to_gcrs_matrix(mid);
-    let gcrs = |(r, v): ([f64; 3], [f64; 3])| (mat_vec(&m, r), mat_vec(&m, v));
-    let Ok(observer) = inputs.observer.propagator.state_teme(mid).map(gcrs) else {
+    let Ok((observer_km, observer_km_s)) = inputs.observer.propagator.state_teme(mid) else {
         return Vec::new();
     };
     let (ra, dec) = at.pointing.mid_radec_deg();
-    let boresight = radec_unit(ra, dec);
+    // GCRS -> TEME is the transpose of the rotation.
+    let m = teme_to_gcrs_matrix(mid);
+    let b = radec_unit(ra, dec);
+    let boresight = [0, 1, 2].map(|k| m[0][k] * b[0] + m[1][k] * b[1] + m[2][k] * b[2]);
     let half_diag_deg =
         sensor.pixel_scale_deg() * (sensor.width_px as f64).hypot(sensor.height_px as f64) / 2.0;
     let pointing_reach_deg = match &at.pointing {
@@ -97,27 +102,50 @@ fn candidates(sensor: &Sensor, inputs: &Inputs, at: &Scene) -> Vec<usize> {
         Pointing::Survey(t) => t.drift_deg / 2.0,
         Pointing::Track(t) => t.reach_deg(),
     };
-    let reach_deg = half_diag_deg + pointing_reach_deg + CULL_MARGIN_DEG;
-    let max_accel_km = 0.5 * MAX_RELATIVE_ACCEL_KM_S2 * h * h;
+    let reach_rad = (half_diag_deg + pointing_reach_deg + CULL_MARGIN_DEG).to_radians();
+    // The field's cone is degrees wide (a right angle at most here), so field + w stays
+    // within a half-turn, where cos(field + w) bounds the angle.
+    let (sin_field, cos_field) = reach_rad.min(std::f64::consts::FRAC_PI_2).sin_cos();
+    let t_s = seconds(mid);
+    let observer_speed = norm(observer_km_s);
+    let accel_km = 0.5 * MAX_RELATIVE_ACCEL_KM_S2 * h * h;
+    let observer_v = observer_km_s;
     inputs
-        .population
+        .population_coarse
         .iter()
         .enumerate()
-        .filter_map(|(i, body)| {
-            let (r, v) = body.propagator.state_teme(mid).map(gcrs).ok()?;
-            let los = sub(r, observer.0);
-            let range = norm(los);
-            let moved = norm(sub(v, observer.1)) * h + max_accel_km;
-            let turn_deg = if moved < range {
-                (moved / range).asin().to_degrees()
+        .filter_map(|(i, orbit)| {
+            let (los, reach) = if orbit.error_km <= EXACT_BEYOND_KM {
+                let los = sub(orbit.position_teme_km(t_s), observer_km);
+                let slack = 2.0 * orbit.error_km + COARSE_MARGIN_KM;
+                let speed = orbit.speed_max_km_s + observer_speed;
+                (los, speed * h + accel_km + slack)
             } else {
-                180.0
+                // Too far from SGP4 over the window (drag, long after the epoch): by SGP4
+                // itself; an object it cannot propagate then is not shown (`sight_object`).
+                let (r, v) = inputs.population[i].propagator.state_teme(mid).ok()?;
+                (sub(r, observer_km), norm(sub(v, observer_v)) * h + accel_km)
             };
-            let off_deg = angle_deg(los, boresight);
-            (off_deg.is_finite() && off_deg <= reach_deg + turn_deg).then_some(i)
+            let range = norm(los);
+            // Near the observer (or an orbit gone non-finite) any direction is possible.
+            if reach >= range || range.is_nan() {
+                return Some(i);
+            }
+            // Inside the field's cone widened by w = asin(reach / range), by cosines:
+            // cos(off) >= cos(field + w), expanded (no acos, asin or cos per object).
+            let sin_w = reach / range;
+            let cos_limit = cos_field * (1.0 - sin_w * sin_w).sqrt() - sin_field * sin_w;
+            (dot(los, boresight) >= cos_limit * range).then_some(i)
         })
         .collect()
 }
+
+/// A cheap orbit further than this from SGP4 over the window, km, would widen the test so much
+/// that SGP4 at mid-exposure is cheaper than the objects it would let through.
+const EXACT_BEYOND_KM: f64 = 200.0;
+
+/// Slack on a cheap orbit's distance from SGP4 beyond twice its largest measured one, km.
+const COARSE_MARGIN_KM: f64 = 20.0;
 
 /// Population object `index` in frame `at`: None if its path does not cross the field (or it
 /// cannot be propagated over the exposure), else the scene of it or why the checks reject it.

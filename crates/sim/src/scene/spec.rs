@@ -24,8 +24,10 @@ pub struct Body {
 pub struct Inputs {
     pub observer: Body,
     pub debris: Vec<Body>,
-    /// The population of a catalogue scene (`Spec::catalogue`), empty without one.
+    /// The population of a catalogue scene (`Spec::catalogue`), empty without one, and the
+    /// cheap orbit of each over the campaign's window (`catalogue::candidates` culls with it).
     pub population: Vec<Body>,
+    pub population_coarse: Vec<soig_sky::orbit::CoarseOrbit>,
     pub stars: StarField,
     pub background: BackgroundModel,
 }

@@ -12,12 +12,14 @@
 //! 2.0.1.5). Measured: TEME positions agree with python-sgp4 to 2.5e-7 km at worst (40989,
 //! resonant deep space, 343 days after its epoch; 40649: 1.2e-8 km).
 
+mod coarse;
 mod propagate;
 mod tle;
 
 use hifitime::Epoch;
 use sgp4::chrono::{Datelike, Timelike};
 
+pub use coarse::{CoarseOrbit, seconds as coarse_seconds};
 pub use propagate::{OrbitError, OrbitalElements, Propagator, Regime};
 pub use tle::{Tle, TleError, parse_tles};
 // The frame rotation and its matrix helpers were first defined here; their paths still work.

@@ -11,11 +11,11 @@ use crate::frames::teme_to_gcrs;
 use crate::norm;
 
 /// WGS72 equatorial radius (km): the radius SGP4 uses with the WGS72 constants.
-const EARTH_RADIUS_KM: f64 = 6378.135;
+pub(super) const EARTH_RADIUS_KM: f64 = 6378.135;
 /// WGS84 equatorial radius (km): a perigee below it is inside the Earth.
 const SURFACE_RADIUS_KM: f64 = 6378.137;
 /// WGS72 gravitational parameter (km^3/s^2), for the period check of [`OrbitalElements`].
-const MU_KM3_S2: f64 = 398_600.8;
+pub(super) const MU_KM3_S2: f64 = 398_600.8;
 /// SGP4 switches to the deep-space (SDP4) branch for periods of 225 min and more.
 const DEEP_SPACE_PERIOD_MIN: f64 = 225.0;
 
@@ -92,6 +92,8 @@ pub struct Propagator {
     norad_id: u64,
     /// Resonant deep-space orbits only (GEO, 12 h): see [`Resonance`].
     resonance: Option<Arc<Resonance>>,
+    /// The Brouwer mean elements at the epoch (`super::coarse` propagates them cheaply).
+    pub(super) mean: sgp4::Orbit,
 }
 
 /// The resonance integrator states a resonant deep-space orbit has reached, by 720-min step.
@@ -270,6 +272,7 @@ impl Propagator {
             regime,
             norad_id,
             resonance,
+            mean: orbit,
         })
     }
 
