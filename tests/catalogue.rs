@@ -55,18 +55,28 @@ fn check_against_reference(out: &Path) -> (usize, usize) {
         for o in truth["objects"].as_array().unwrap() {
             let norad = o["norad"].as_u64().unwrap();
             assert_eq!(o["source"], "population", "{stem}: {norad}");
-            let r = by_norad
-                .get(&norad)
-                .unwrap_or_else(|| panic!("{stem}: NORAD {norad} shown, the reference has it out of the field"));
-            assert!(r["in_field"].as_bool().unwrap(), "{stem}: {norad} not in the field");
+            let r = by_norad.get(&norad).unwrap_or_else(|| {
+                panic!("{stem}: NORAD {norad} shown, the reference has it out of the field")
+            });
+            assert!(
+                r["in_field"].as_bool().unwrap(),
+                "{stem}: {norad} not in the field"
+            );
             // python-sgp4 and the sgp4 crate agree to 2.5e-7 km and astropy's TEME -> GCRS
             // matches soig's to milliarcseconds (crates/sky/src/orbit): measured 0.03"
             // (astropy's polar motion, which soig leaves out); 1" is the issue's bar.
-            let sep = separation_arcsec(&o["ephemeris"]["debris_radec_mid_deg"], &r["radec_mid_deg"]);
-            assert!(sep < 1.0, "{stem}: NORAD {norad} {sep}\" from its catalogue place");
+            let sep =
+                separation_arcsec(&o["ephemeris"]["debris_radec_mid_deg"], &r["radec_mid_deg"]);
+            assert!(
+                sep < 1.0,
+                "{stem}: NORAD {norad} {sep}\" from its catalogue place"
+            );
             // 1" is 0.071 px at 14.06"/px; no jitter in this campaign, so the first and last
             // trajectory samples land on the reference's pixels of those instants.
-            for (truth_px, ref_px) in [("streak_start_px", "first_sample_px"), ("streak_end_px", "last_sample_px")] {
+            for (truth_px, ref_px) in [
+                ("streak_start_px", "first_sample_px"),
+                ("streak_end_px", "last_sample_px"),
+            ] {
                 let off = px_off(&o[truth_px], &r[ref_px]);
                 assert!(off < 0.071, "{stem}: NORAD {norad} {truth_px} {off} px off");
             }
@@ -80,7 +90,10 @@ fn check_against_reference(out: &Path) -> (usize, usize) {
         }
         for (norad, r) in &by_norad {
             if r["in_field"].as_bool().unwrap() {
-                assert!(accounted.contains(norad), "{stem}: NORAD {norad} is in the field but neither shown nor unseen");
+                assert!(
+                    accounted.contains(norad),
+                    "{stem}: NORAD {norad} is in the field but neither shown nor unseen"
+                );
             }
         }
     }
@@ -99,7 +112,9 @@ fn geo_stare_shows_every_object_where_its_orbit_puts_it() {
     let n = truth["objects"].as_array().unwrap().len();
     let labels: usize = ["train", "val", "test"]
         .iter()
-        .filter_map(|s| std::fs::read_to_string(out.join(format!("labels/{s}/img_000000.txt"))).ok())
+        .filter_map(|s| {
+            std::fs::read_to_string(out.join(format!("labels/{s}/img_000000.txt"))).ok()
+        })
         .map(|t| t.lines().count())
         .sum();
     assert_eq!(labels, n);
@@ -146,10 +161,19 @@ fn refused_with(extra: &[&str], expect: &str) {
 #[test]
 fn bad_population_settings_are_refused_naming_the_field() {
     refused_with(&["pointing.mode=\"survey\""], "field `pointing.stare`");
-    refused_with(&["pointing.stare.dec_deg=91"], "field `pointing.stare.dec_deg`");
+    refused_with(
+        &["pointing.stare.dec_deg=91"],
+        "field `pointing.stare.dec_deg`",
+    );
     refused_with(&["objects.per_frame=2"], "field `population`");
-    refused_with(&["population.tle_file=\"nowhere.tle\""], "field `population.tle_file`");
-    refused_with(&["population.tle_sha256=\"00\""], "field `population.tle_sha256`");
+    refused_with(
+        &["population.tle_file=\"nowhere.tle\""],
+        "field `population.tle_file`",
+    );
+    refused_with(
+        &["population.tle_sha256=\"00\""],
+        "field `population.tle_sha256`",
+    );
     // A population TLE with a broken checksum: its line is named.
     let tmp = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(repo("campaigns/data/geo-belt-2022-01-22.tle")).unwrap();

@@ -154,6 +154,10 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "371096f25008c5f6e2440eea2d542da8ce7fea59d213e36ae3192797d07cbdf8",
     ),
     (
+        "campaigns/geo-stare.toml",
+        "d4cb0b92ffd2d978c902cba8062653009b7656ff3698747fc482883694e93cad",
+    ),
+    (
         "campaigns/track-quickstart.toml",
         "c5d62dec9fb0b5ce4d553ffd1ac6b5091f9bdbe8f5048543de3d649696d93ec8",
     ),

@@ -301,14 +301,12 @@ impl NativeCampaign {
         out.set_item("clean", clean.into_pyarray(py).reshape([h, w])?)?;
         // The truth sidecar as `soig run` writes it: one object, or the frame and its objects.
         let truth = match (&exposure.objects, &products.scene.placed) {
-            (Some(objects), Some(placed)) => to_python(
+            (Some(objects), Some(_)) => to_python(
                 py,
-                &soig::render::FrameTruth::new(
+                &soig::render::FrameTruth::of_scene(
                     &exposure.truth,
-                    objects
-                        .iter()
-                        .zip(placed)
-                        .map(|(o, s)| (&o.truth, s.debris_index)),
+                    objects.iter().map(|o| &o.truth),
+                    &products.scene,
                 ),
             )?,
             _ => to_python(py, &exposure.truth)?,

@@ -306,8 +306,8 @@ fn photometry_area(p: &crate::campaign::Photometry) -> debris_sizes::AreaModel {
 /// an exposure may cover (the window and one longest exposure after it).
 fn coarse_orbits(campaign: &Campaign) -> Vec<crate::sky::orbit::CoarseOrbit> {
     use rayon::prelude::*;
-    let end = campaign.window_end
-        + hifitime::Duration::from_seconds(campaign.resolved.exposure.max_s);
+    let end =
+        campaign.window_end + hifitime::Duration::from_seconds(campaign.resolved.exposure.max_s);
     campaign
         .population
         .par_iter()

@@ -111,27 +111,11 @@ pub fn write_image(
     }
     let truth_path = dir.join("truth").join(format!("{stem}.json"));
     let truth = match (&exposure.objects, &products.scene.placed) {
-        (Some(objects), Some(placed)) => {
-            let scene = &products.scene;
-            // A catalogue scene's objects: its pointing's own first (none in a stare), then
-            // the population's.
-            let source = |k: usize| {
-                scene.unseen.as_ref().map(|_| match (k, scene.norad) {
-                    (0, n) if n != 0 => "debris",
-                    _ => "population",
-                })
-            };
-            let mut truth = FrameTruth::new(
-                &exposure.truth,
-                objects
-                    .iter()
-                    .zip(placed)
-                    .enumerate()
-                    .map(|(k, (o, s))| (&o.truth, s.debris_index, source(k))),
-            );
-            truth.unseen = scene.unseen.as_deref();
-            serde_json::to_string_pretty(&truth)?
-        }
+        (Some(objects), Some(_)) => serde_json::to_string_pretty(&FrameTruth::of_scene(
+            &exposure.truth,
+            objects.iter().map(|o| &o.truth),
+            &products.scene,
+        ))?,
         _ => serde_json::to_string_pretty(&exposure.truth)?,
     };
     store::fs::create(&truth_path, truth + "\n")?;

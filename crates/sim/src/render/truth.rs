@@ -167,6 +167,34 @@ pub struct ObjectTruth<'a> {
 }
 
 impl<'a> FrameTruth<'a> {
+    /// The frame's truth of `scene` (with placed or catalogue objects) from the image's own
+    /// (`image`) and its objects' as rendered, in `scene.placed`'s order: in a catalogue scene
+    /// each says its source (the pointing's debris object first, none in a stare) and the
+    /// frame lists its unseen objects.
+    pub fn of_scene(
+        image: &'a Truth,
+        objects: impl Iterator<Item = &'a Truth>,
+        scene: &'a crate::scene::Scene,
+    ) -> Self {
+        let placed = scene.placed.as_deref().unwrap_or_default();
+        let source = |k: usize| {
+            scene.unseen.as_ref().map(|_| match (k, scene.norad) {
+                // NORAD 0: a stare, which points at no object.
+                (0, n) if n != 0 => "debris",
+                _ => "population",
+            })
+        };
+        let mut truth = FrameTruth::new(
+            image,
+            objects
+                .zip(placed)
+                .enumerate()
+                .map(|(k, (t, s))| (t, s.debris_index, source(k))),
+        );
+        truth.unseen = scene.unseen.as_deref();
+        truth
+    }
+
     /// The frame's truth from the image's own (`image`) and its objects' with their indices
     /// in the campaign's debris.
     pub fn new(

@@ -62,7 +62,10 @@ impl CoarseOrbit {
             cos_i,
             sin_i,
             raan: (m.right_ascension, -1.5 * k * cos_i),
-            argp: (m.argument_of_perigee, 0.75 * k * (5.0 * cos_i * cos_i - 1.0)),
+            argp: (
+                m.argument_of_perigee,
+                0.75 * k * (5.0 * cos_i * cos_i - 1.0),
+            ),
             mean_anomaly: (
                 m.mean_anomaly,
                 n + 0.75 * k * sqrt_1_e2 * (3.0 * cos_i * cos_i - 1.0),
@@ -138,7 +141,11 @@ mod tests {
                     p.position_teme_km(t).unwrap(),
                     c.position_teme_km(seconds(t)),
                 ));
-                assert!(d <= 2.0 * c.error_km + 20.0, "{}: {d} km at {k}", tle.norad_id);
+                assert!(
+                    d <= 2.0 * c.error_km + 20.0,
+                    "{}: {d} km at {k}",
+                    tle.norad_id
+                );
             }
         }
     }
