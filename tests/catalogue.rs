@@ -185,3 +185,54 @@ fn bad_population_settings_are_refused_naming_the_field() {
     let set = format!("population.tle_file=\"{}\"", bad.display());
     refused_with(&[&set], "TLE line 5: bad checksum");
 }
+
+/// The target mode with rate tracking: the pointing follows one GEO object drawn as a debris
+/// object (shown first, `source` debris, a point), and the population's other objects in the
+/// field are shown too, each with its own motion against the tracked one.
+#[test]
+fn track_mode_follows_its_object_and_shows_the_population_around_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(repo("campaigns/geo-stare.toml")).unwrap();
+    let data = repo("campaigns/data");
+    let text = text
+        .replace("name = \"geo-stare\"", "name = \"geo-track\"")
+        .replace("images = 6", "images = 2")
+        .replace("debris = []\n", "")
+        .replace("mode = \"fixed\"", "mode = \"track\"")
+        .replace(
+            "stare = { ra_deg = 152.6, dec_deg = 2.6 }",
+            "placement_fraction = 0.3",
+        )
+        .replace(
+            "tle_file = \"data/",
+            &format!("tle_file = \"{}/", data.display()),
+        )
+        + &format!(
+            "\n[[debris]]\ntle_file = \"{}/geo-belt-2022-01-22.tle\"\nnorad = 90227\n",
+            data.display()
+        );
+    let c = tmp.path().join("track.toml");
+    std::fs::write(&c, text).unwrap();
+    let out = tmp.path().join("out");
+    let o = soig(&[
+        "run",
+        c.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for k in 0..2 {
+        let t = json(&out.join(format!("truth/img_00000{k}.json")));
+        assert_eq!(t["pointing"]["mode"], "track");
+        let objects = t["objects"].as_array().unwrap();
+        assert_eq!(objects[0]["norad"], 90227);
+        assert_eq!(objects[0]["source"], "debris");
+        // Tracked: its first and last samples on one pixel (measured 0.00 px).
+        assert!(px_off(&objects[0]["streak_start_px"], &objects[0]["streak_end_px"]) < 0.01);
+        // Its neighbours on the belt (measured 5-7 of them) drift by their own motion.
+        assert!(objects.len() > 2, "{}", objects.len());
+        assert!(objects[1..].iter().all(|o| o["source"] == "population"));
+        assert!(objects[1..].iter().all(|o| o["norad"] != 90227));
+    }
+}

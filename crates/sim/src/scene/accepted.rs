@@ -216,6 +216,21 @@ pub(super) struct Exposure {
     pub background: Option<FrameChoice>,
 }
 
+impl Exposure {
+    /// Frame `at`'s exposure, for another of its objects (a placed or catalogue one): its
+    /// time, pointing and background; its stars stay with the frame's own scene.
+    pub(super) fn of_frame(at: &Scene) -> Exposure {
+        Exposure {
+            image_index: at.image_index,
+            start: at.start,
+            exposure_s: at.exposure_s,
+            pointing: at.pointing.clone(),
+            stars: Vec::new(),
+            background: at.background,
+        }
+    }
+}
+
 /// A scene's object as one draw saw it: which debris, its own draws, and what the visibility
 /// checks and the signal-to-noise gate measured.
 pub(super) struct Object {

@@ -200,14 +200,7 @@ fn sight_object(
         Ok(g) => g,
         Err(reason) => return Some(Err(reason)),
     };
-    let exposure = Exposure {
-        image_index: at.image_index,
-        start,
-        exposure_s,
-        pointing: at.pointing.clone(),
-        stars: Vec::new(),
-        background: at.background,
-    };
+    let exposure = Exposure::of_frame(at);
     let object = Object {
         debris_index: index,
         debris_name: body.name.clone(),

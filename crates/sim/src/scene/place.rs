@@ -200,14 +200,7 @@ fn try_place(
         gated,
     )?;
     let debris = &inputs.debris[debris_index];
-    let exposure = Exposure {
-        image_index: at.image_index,
-        start,
-        exposure_s,
-        pointing: at.pointing.clone(),
-        stars: Vec::new(),
-        background: at.background,
-    };
+    let exposure = Exposure::of_frame(at);
     let object = Object {
         debris_index,
         debris_name: debris.name.clone(),
