@@ -89,6 +89,8 @@ fn several_objects_or_none_per_frame_agree_everywhere() {
             assert!(truth.get("object").is_none(), "{stem}: a one-object truth");
             let listed = truth["objects"].as_array().unwrap();
             for o in listed {
+                // Turned into the field, not where its orbit puts it: marked so (#45).
+                assert_eq!(o["source"], "placed", "{stem}");
                 *shown.entry(o["norad"].as_u64().unwrap()).or_default() += 1;
             }
             let labelled: Vec<&Value> = listed

@@ -128,7 +128,8 @@ pub struct ObjectTruth<'a> {
     pub norad: u64,
     /// In a catalogue scene, the index in the population when `source` says so.
     pub debris_index: usize,
-    /// In a catalogue scene: `debris` (the object the pointing was drawn around, index in the
+    /// `placed` (`[objects]`: turned into the field, not where its orbit puts it), or in a
+    /// catalogue scene `debris` (the object the pointing was drawn around, index in the
     /// campaign's debris) or `population` (index in `[population]`'s file, observer left out).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub source: Option<&'static str>,
@@ -168,9 +169,9 @@ pub struct ObjectTruth<'a> {
 
 impl<'a> FrameTruth<'a> {
     /// The frame's truth of `scene` (with placed or catalogue objects) from the image's own
-    /// (`image`) and its objects' as rendered, in `scene.placed`'s order: in a catalogue scene
-    /// each says its source (the pointing's debris object first, none in a stare) and the
-    /// frame lists its unseen objects.
+    /// (`image`) and its objects' as rendered, in `scene.placed`'s order, each with its source
+    /// (placed; in a catalogue scene the pointing's debris object first, none in a stare, then
+    /// the population's), and a catalogue scene's unseen objects.
     pub fn of_scene(
         image: &'a Truth,
         objects: impl Iterator<Item = &'a Truth>,
@@ -178,10 +179,12 @@ impl<'a> FrameTruth<'a> {
     ) -> Self {
         let placed = scene.placed.as_deref().unwrap_or_default();
         let source = |k: usize| {
-            scene.unseen.as_ref().map(|_| match (k, scene.norad) {
+            Some(match (&scene.unseen, k, scene.norad) {
+                // `[objects]`: turned into the field, not where its orbit puts it.
+                (None, _, _) => "placed",
                 // NORAD 0: a stare, which points at no object.
-                (0, n) if n != 0 => "debris",
-                _ => "population",
+                (Some(_), 0, n) if n != 0 => "debris",
+                (Some(_), _, _) => "population",
             })
         };
         let mut truth = FrameTruth::new(
