@@ -561,6 +561,39 @@ fn render(
     Ok((done, count, seconds))
 }
 
+/// What each image of `records` left for the detect stage, its files in `dir` (a run's
+/// staging directory, a merge's, or a shard's).
+pub(crate) fn written(campaign: &Campaign, dir: &Path, records: &[Record]) -> Vec<Written> {
+    let c = &campaign.resolved;
+    let dataset_stage = c.stages.contains(&Stage::Dataset);
+    let subsets = dataset::assign_collects(
+        c.seed,
+        c.images as usize,
+        c.collect_frames() as usize,
+        c.split.train,
+        c.split.val,
+    );
+    records
+        .iter()
+        .map(|r| {
+            let subset = dataset_stage.then(|| subsets[r.index as usize]);
+            Written {
+                index: r.index,
+                subset,
+                png: r.png.as_ref().map(|p| WrittenPng {
+                    path: dir.join(artifacts::dataset_paths(r.index, subset).0),
+                    width: p.width,
+                    height: p.height,
+                    labels: p.labels(),
+                    seconds: 0.0,
+                }),
+                conversion_s: r.conversion_s,
+                trail_angle_deg: r.trail_angle_bits.map(f64::from_bits),
+            }
+        })
+        .collect()
+}
+
 /// The steps after rendering, on the images of `records` (every image of the campaign, by
 /// index) in `dir`: `data.yaml`, training, detection and report, and the manifest, whose
 /// digest is returned with the debris mix and each step's wall time. A single run and a merge
@@ -588,25 +621,7 @@ pub(crate) fn finish(
         c.split.train,
         c.split.val,
     );
-    let written: Vec<Written> = records
-        .iter()
-        .map(|r| {
-            let subset = dataset_stage.then(|| subsets[r.index as usize]);
-            Written {
-                index: r.index,
-                subset,
-                png: r.png.as_ref().map(|p| WrittenPng {
-                    path: dir.join(artifacts::dataset_paths(r.index, subset).0),
-                    width: p.width,
-                    height: p.height,
-                    labels: p.labels(),
-                    seconds: 0.0,
-                }),
-                conversion_s: r.conversion_s,
-                trail_angle_deg: r.trail_angle_bits.map(f64::from_bits),
-            }
-        })
-        .collect();
+    let written = written(campaign, dir, records);
 
     if dataset_stage {
         store::fs::create(

@@ -619,6 +619,31 @@ pub struct Detect {
     /// `detect::streak::StreakParams`). Left out of the resolved campaign while all are default.
     #[serde(default, skip_serializing_if = "StreakParams::is_default")]
     pub streak: StreakParams,
+    /// What the classical detector is told of the stars. Left out of the resolved campaign
+    /// while it is the default, so a campaign's hash is the same as before it existed.
+    #[serde(default, skip_serializing_if = "StarHint::is_default")]
+    pub stars: StarHint,
+}
+
+/// What the classical streak detector of the detect stage is told of the stars in an image.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum StarHint {
+    /// The campaign's knowledge, as a plate-solved frame gives it: survey images get the
+    /// catalogued stars' trails, predicted from the commanded pointing and the star catalogue
+    /// (each placed by the pointing offset measured on the image); other images get the trail
+    /// direction of the pointing.
+    #[default]
+    Catalogue,
+    /// Nothing: the detector measures the star trails on the frame itself (their direction,
+    /// length and profile), as `soig detect` does on a bare frame with no catalogue or angle.
+    Frame,
+}
+
+impl StarHint {
+    fn is_default(&self) -> bool {
+        *self == StarHint::default()
+    }
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
