@@ -352,10 +352,15 @@ mod tests {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
         for stars in ["catalogue", "frame"] {
             let sets = ["images=4".to_string(), format!("detect.stars=\"{stars}\"")];
-            let campaign =
-                Campaign::load_with_overrides(&root.join("campaigns/survey-quickstart.toml"), &sets)
-                    .unwrap();
-            assert_eq!(format!("{:?}", campaign.resolved.detect.stars).to_lowercase(), stars);
+            let campaign = Campaign::load_with_overrides(
+                &root.join("campaigns/survey-quickstart.toml"),
+                &sets,
+            )
+            .unwrap();
+            assert_eq!(
+                format!("{:?}", campaign.resolved.detect.stars).to_lowercase(),
+                stars
+            );
             let tmp = tempfile::tempdir().unwrap();
             // A shard index of the count is refused, not a panic (the library's callers).
             let beyond = RunOptions {
@@ -370,12 +375,11 @@ mod tests {
                 ..RunOptions::default()
             };
             run_with(&campaign, &dir, options, None, &crate::progress::Silent).unwrap();
-            let records: Vec<crate::journal::Record> =
-                std::fs::read_to_string(dir.join(RECORDS))
-                    .unwrap()
-                    .lines()
-                    .map(|l| serde_json::from_str(l).unwrap())
-                    .collect();
+            let records: Vec<crate::journal::Record> = std::fs::read_to_string(dir.join(RECORDS))
+                .unwrap()
+                .lines()
+                .map(|l| serde_json::from_str(l).unwrap())
+                .collect();
             let written = written(&campaign, &dir, &records);
             let chosen: Vec<&Written> = written.iter().filter(|w| w.png.is_some()).collect();
             assert_eq!(chosen.len(), 4);
