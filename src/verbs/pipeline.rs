@@ -192,17 +192,8 @@ pub(crate) fn record_check(
     share: std::ops::Range<u64>,
 ) -> impl Fn(&Record) -> Result<(), String> + Sync + use<'_> {
     let c = &campaign.resolved;
-    let n = c.images as usize;
     let enhance = c.stages.contains(&Stage::Enhance);
-    let subsets = c.stages.contains(&Stage::Dataset).then(|| {
-        dataset::assign_collects(
-            c.seed,
-            n,
-            c.collect_frames() as usize,
-            c.split.train,
-            c.split.val,
-        )
-    });
+    let subsets = subsets(c);
     move |r: &Record| {
         if !share.contains(&r.index) {
             return Err(format!(
@@ -436,16 +427,9 @@ fn render(
     progress: &dyn Progress,
 ) -> anyhow::Result<(Vec<Record>, usize, f64)> {
     let c = &campaign.resolved;
-    let n = c.images as usize;
     let enhance_stage = c.stages.contains(&Stage::Enhance);
     let dataset_stage = c.stages.contains(&Stage::Dataset);
-    let subsets = dataset::assign_collects(
-        c.seed,
-        n,
-        c.collect_frames() as usize,
-        c.split.train,
-        c.split.val,
-    );
+    let subsets = subsets(c);
 
     let mut dirs = vec![dir.join("truth")];
     if c.artifacts.fits || c.artifacts.noise_free_fits {
@@ -483,7 +467,7 @@ fn render(
         .par_iter()
         .map(|&i| -> anyhow::Result<Record> {
             crate::progress::check(progress)?;
-            let subset = dataset_stage.then(|| subsets[i as usize]);
+            let subset = subsets.as_ref().map(|s| s[i as usize]);
             let products = simulate::image(&x, &inputs, i).map_err(|e| {
                 // Draws meet the checks in turn, so a rare reason can be the one that matters.
                 let fields: Vec<String> = e
@@ -561,22 +545,28 @@ fn render(
     Ok((done, count, seconds))
 }
 
+/// Each image's subset of the split (collects kept together), where the campaign has a dataset
+/// stage; None without one (no split).
+fn subsets(c: &crate::campaign::CampaignFile) -> Option<Vec<Subset>> {
+    c.stages.contains(&Stage::Dataset).then(|| {
+        dataset::assign_collects(
+            c.seed,
+            c.images as usize,
+            c.collect_frames() as usize,
+            c.split.train,
+            c.split.val,
+        )
+    })
+}
+
 /// What each image of `records` left for the detect stage, its files in `dir` (a run's
 /// staging directory, a merge's, or a shard's).
 pub(crate) fn written(campaign: &Campaign, dir: &Path, records: &[Record]) -> Vec<Written> {
-    let c = &campaign.resolved;
-    let dataset_stage = c.stages.contains(&Stage::Dataset);
-    let subsets = dataset::assign_collects(
-        c.seed,
-        c.images as usize,
-        c.collect_frames() as usize,
-        c.split.train,
-        c.split.val,
-    );
+    let subsets = subsets(&campaign.resolved);
     records
         .iter()
         .map(|r| {
-            let subset = dataset_stage.then(|| subsets[r.index as usize]);
+            let subset = subsets.as_ref().map(|s| s[r.index as usize]);
             Written {
                 index: r.index,
                 subset,
@@ -614,13 +604,7 @@ pub(crate) fn finish(
     let c = &campaign.resolved;
     let stages = &c.stages;
     let dataset_stage = stages.contains(&Stage::Dataset);
-    let subsets = dataset::assign_collects(
-        c.seed,
-        c.images as usize,
-        c.collect_frames() as usize,
-        c.split.train,
-        c.split.val,
-    );
+    let subsets = subsets(c);
     let written = written(campaign, dir, records);
 
     if dataset_stage {
@@ -631,7 +615,7 @@ pub(crate) fn finish(
     }
     if c.collect_frames() > 1 {
         let indices: Vec<u64> = records.iter().map(|r| r.index).collect();
-        let subset = |i: u64| dataset_stage.then(|| subsets[i as usize]);
+        let subset = |i: u64| subsets.as_ref().map(|s| s[i as usize]);
         crate::collect::write_manifests(dir, &indices, subset)?;
     }
     journal::abort_if_testing("dataset");
