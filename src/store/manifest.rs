@@ -60,8 +60,13 @@ pub struct Manifest {
 
 /// Whether `rel` is the label cache Ultralytics writes beside a split's label folder when it
 /// trains on the dataset (`labels/train.cache` for `labels/train/`): derived from the labels, so
-/// a dataset trained by plain `yolo train data=OUT/data.yaml` still verifies.
+/// a dataset trained by plain `yolo train data=OUT/data.yaml` still verifies; the same in the
+/// streak-shaped label sets (`obb/labels/train.cache`).
 fn is_ultralytics_cache(rel: &str) -> bool {
+    let rel = ["obb/", "keypoints/"]
+        .iter()
+        .find_map(|set| rel.strip_prefix(set))
+        .unwrap_or(rel);
     rel.strip_prefix("labels/")
         .and_then(|name| name.strip_suffix(".cache"))
         .is_some_and(|split| !split.is_empty() && !split.contains('/'))

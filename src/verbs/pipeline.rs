@@ -461,6 +461,8 @@ fn render(
             dirs.push(dir.join("images"));
             dirs.push(dir.join("labels"));
         }
+        let streak_sets = crate::streak_labels::dirs(&c.artifacts, dataset_stage);
+        dirs.extend(streak_sets.iter().map(|d| dir.join(d)));
     }
     for d in &dirs {
         store::fs::create_dir_all(d)?;
@@ -613,6 +615,12 @@ pub(crate) fn finish(
             &dir.join("data.yaml"),
             dataset::data_yaml(&c.name, &campaign.hash),
         )?;
+        for set in crate::streak_labels::sets(&c.artifacts) {
+            store::fs::create(
+                &dir.join(set.dir()).join("data.yaml"),
+                set.data_yaml(&c.name, &campaign.hash),
+            )?;
+        }
     }
     if c.collect_frames() > 1 {
         let indices: Vec<u64> = records.iter().map(|r| r.index).collect();
