@@ -397,13 +397,15 @@ pub struct ExportArgs {
 /// `soig eval`.
 #[derive(clap::Args)]
 pub struct EvalArgs {
-    /// Directory of label files (`cls xc yc w h`, normalised), one per image.
+    /// Directory of label files (`cls xc yc w h`, normalised; with `--mode ultralytics-obb`
+    /// YOLO-OBB corners `cls x1 y1 x2 y2 x3 y3 x4 y4`), one per image.
     #[arg(long)]
     pub labels: PathBuf,
     /// Directory of prediction files, paired with labels by file stem.
     #[arg(long)]
     pub predictions: PathBuf,
-    /// Which convention to report: Ultralytics' `ap_per_class` or pycocotools' COCOeval.
+    /// Which convention to report: Ultralytics' `ap_per_class`, pycocotools' COCOeval, or
+    /// Ultralytics' OBB validator (oriented boxes, probabilistic IoU).
     #[arg(long, value_enum, default_value = "ultralytics")]
     pub mode: EvalMode,
     /// Images, to scale boxes to their pixel size (Ultralytics' IoU has a 1e-7 term, so
@@ -456,6 +458,7 @@ pub enum DetectorChoice {
 pub enum EvalMode {
     Ultralytics,
     Coco,
+    UltralyticsObb,
 }
 
 /// What `soig slurm` and `soig k8s` take.

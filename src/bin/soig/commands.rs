@@ -233,6 +233,7 @@ pub fn eval(a: EvalArgs) -> ExitCode {
             mode: match mode {
                 EvalMode::Ultralytics => soig::metrics::EvalMode::Ultralytics,
                 EvalMode::Coco => soig::metrics::EvalMode::Coco,
+                EvalMode::UltralyticsObb => soig::metrics::EvalMode::UltralyticsObb,
             },
             images: images.as_deref(),
             image_size,
