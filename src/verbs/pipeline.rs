@@ -667,12 +667,19 @@ pub(crate) fn finish(
     }
     // The exports read the labels and the predictions back, so they come after the report.
     let a = &c.artifacts;
-    if a.coco || a.ds9_regions {
+    if a.coco || a.ds9_regions || a.tdm {
         let formats = crate::export::Formats {
             coco: a.coco,
             ds9: a.ds9_regions,
+            tdm: a.tdm,
         };
-        crate::export::write(dir, &dir.join(crate::export::EXPORT_DIR), formats)?;
+        let resolved = serde_json::to_value(c)?;
+        crate::export::write(
+            dir,
+            &resolved,
+            &dir.join(crate::export::EXPORT_DIR),
+            formats,
+        )?;
     }
     let mut volatile: Vec<String> = report::VOLATILE
         .iter()

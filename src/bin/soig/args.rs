@@ -68,7 +68,8 @@ pub enum Command {
     Experiment(ExperimentArgs),
     /// Export a finished output for other tools: the dataset and the detect stage's predictions
     /// as COCO JSON (OUT/coco/) and the truth and detections as DS9 region files over the FITS
-    /// (OUT/ds9/); see src/product/export/. Both unless one is chosen.
+    /// (OUT/ds9/), and with --tdm the truth's observations as a CCSDS TDM (OUT/tdm/); see
+    /// src/product/export/. COCO and DS9 unless one is chosen.
     Export(ExportArgs),
     /// Score YOLO-format predictions (`cls xc yc w h score`) against YOLO labels, exactly as
     /// Ultralytics and pycocotools compute their metrics.
@@ -392,6 +393,10 @@ pub struct ExportArgs {
     /// Only DS9 regions.
     #[arg(long)]
     pub ds9: bool,
+    /// The truth's observations as a CCSDS TDM (`tdm/truth.tdm`, RA/Dec angles); with --coco
+    /// or --ds9, those too.
+    #[arg(long)]
+    pub tdm: bool,
 }
 
 /// `soig eval`.

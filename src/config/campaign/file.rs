@@ -536,6 +536,11 @@ pub struct Artifacts {
     /// when off, so hashes stay.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub keypoint_labels: bool,
+    /// The truth's observations as a CCSDS Tracking Data Message (RA/Dec angles seen from the
+    /// observer), `export/tdm/truth.tdm` (src/product/export/tdm.rs). Omitted from the
+    /// resolved campaign when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub tdm: bool,
 }
 
 /// Training through Ultralytics (`soig train`); the paper's hyperparameters by default.
