@@ -54,7 +54,7 @@
 // The layers below, re-exported: `soig::rng`, `soig::sky`, ... name the same modules as before.
 pub use soig_base::{build_id, hash, input_file, progress, python, rng};
 pub use soig_detect::{self as detect, metrics};
-pub use soig_image::{enhance, fits, frames, geometry, hint, imaging, psf};
+pub use soig_image::{enhance, fits, frames, geometry, hint, imaging, psf, streak_label};
 pub use soig_sim::{background, noise, render, scene, sensor, sighting, simulate};
 pub use soig_sky as sky;
 
@@ -81,7 +81,7 @@ pub mod verbs;
 // `soig::pipeline`, ...
 pub use config::{campaign, experiment, work};
 pub(crate) use product::artifacts;
-pub use product::{collect, dataset, export, light_curve, shard, star_trails};
+pub use product::{collect, dataset, export, light_curve, shard, star_trails, streak_labels};
 pub use verbs::{
     compare, convert, detect_frames, launch, merge, pipeline, study, summary, sweep, tables,
 };

@@ -137,6 +137,9 @@ pub fn write_image(
     let png_path = dir.join(&png_rel);
     store::fs::create(&png_path, enhance::png_bytes(&product.png))?;
     store::fs::create(&dir.join(&label_rel), label_line)?;
+    crate::streak_labels::write(
+        dir, index, subset, products, artifacts, &png_rel, &mut files,
+    )?;
     files.extend([png_rel, label_rel]);
     // Pixel-edge coordinates: pixel i spans [i, i + 1).
     let edges = product
@@ -182,6 +185,11 @@ pub fn expected_files(
         let (p, l) = dataset_paths(index, subset);
         files.insert(p);
         files.insert(l);
+        for set in crate::streak_labels::sets(artifacts) {
+            let (p, l) = crate::streak_labels::paths(set, index, subset);
+            files.insert(p);
+            files.insert(l);
+        }
     }
     files
 }

@@ -445,6 +445,8 @@ fn render(
             dirs.push(dir.join("images"));
             dirs.push(dir.join("labels"));
         }
+        let streak_sets = crate::streak_labels::dirs(&c.artifacts, dataset_stage);
+        dirs.extend(streak_sets.iter().map(|d| dir.join(d)));
     }
     for d in &dirs {
         store::fs::create_dir_all(d)?;
@@ -612,6 +614,12 @@ pub(crate) fn finish(
             &dir.join("data.yaml"),
             dataset::data_yaml(&c.name, &campaign.hash),
         )?;
+        for set in crate::streak_labels::sets(&c.artifacts) {
+            store::fs::create(
+                &dir.join(set.dir()).join("data.yaml"),
+                set.data_yaml(&c.name, &campaign.hash),
+            )?;
+        }
     }
     if c.collect_frames() > 1 {
         let indices: Vec<u64> = records.iter().map(|r| r.index).collect();
@@ -658,12 +666,19 @@ pub(crate) fn finish(
     }
     // The exports read the labels and the predictions back, so they come after the report.
     let a = &c.artifacts;
-    if a.coco || a.ds9_regions {
+    if a.coco || a.ds9_regions || a.tdm {
         let formats = crate::export::Formats {
             coco: a.coco,
             ds9: a.ds9_regions,
+            tdm: a.tdm,
         };
-        crate::export::write(dir, &dir.join(crate::export::EXPORT_DIR), formats)?;
+        let resolved = serde_json::to_value(c)?;
+        crate::export::write(
+            dir,
+            &resolved,
+            &dir.join(crate::export::EXPORT_DIR),
+            formats,
+        )?;
     }
     let mut volatile: Vec<String> = report::VOLATILE
         .iter()

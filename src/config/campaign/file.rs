@@ -523,6 +523,24 @@ pub struct Artifacts {
     /// resolved campaign when off, so hashes stay.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub light_curve: bool,
+    /// Streak-shaped labels beside the axis-aligned ones: each object's oriented box
+    /// (Ultralytics' YOLO-OBB) as `obb/labels/...`, the PNGs hard-linked as `obb/images/...` and
+    /// `obb/data.yaml`, so `yolo obb train data=obb/data.yaml` reads it unedited
+    /// (crates/image/src/streak_label.rs); needs the `enhance` stage. Omitted from the resolved
+    /// campaign when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub obb_labels: bool,
+    /// The streak's two ends as keypoints (Ultralytics' pose format, `kpt_shape: [2, 3]`) with
+    /// the axis-aligned box, as `keypoints/labels/...` beside hard-linked `keypoints/images/...`
+    /// and `keypoints/data.yaml`; needs the `enhance` stage. Omitted from the resolved campaign
+    /// when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub keypoint_labels: bool,
+    /// The truth's observations as a CCSDS Tracking Data Message (RA/Dec angles seen from the
+    /// observer), `export/tdm/truth.tdm` (src/product/export/tdm.rs). Omitted from the
+    /// resolved campaign when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub tdm: bool,
 }
 
 /// Training through Ultralytics (`soig train`); the paper's hyperparameters by default.

@@ -512,6 +512,16 @@ fn detect(c: &CampaignFile) -> Checked {
         "artifacts.coco",
         "the COCO export is of the dataset's PNGs and labels: it needs the `enhance` stage",
     )?;
+    for (on, field) in [
+        (c.artifacts.obb_labels, "artifacts.obb_labels"),
+        (c.artifacts.keypoint_labels, "artifacts.keypoint_labels"),
+    ] {
+        check(
+            !on || c.stages.contains(&Stage::Enhance),
+            field,
+            "streak-shaped labels are of the PNGs: they need the `enhance` stage",
+        )?;
+    }
     let sp = &c.split;
     for (f, x) in [
         ("split.train", sp.train),
