@@ -12,6 +12,7 @@ pub mod orbit;
 pub mod photometry;
 pub mod pointing;
 pub mod projection;
+pub mod site;
 pub mod stars;
 #[cfg(test)]
 mod testing;
