@@ -3,6 +3,7 @@
 objects of the repository's TLE catalogue seen from ground sites at three latitudes.
 
 Run: pip install sgp4==2.27 astropy==8.0.2; python tests/reference/site_reference.py > tests/fixtures/sky/site.rs
+     and python tests/reference/site_reference.py night > tests/fixtures/sky/night.rs
 (in this project: /work/.venv-satsim/bin/python; no network: astropy's IERS download is off).
 
 Earth orientation is set to zero (UT1 = UTC, no polar motion, no celestial pole offsets) by
@@ -21,6 +22,8 @@ at the start (GEO), the start and 10 h later; prints:
     AltAz with pressure 0, through astropy's topocentric ITRS (its recipe for near objects);
   * its refracted altitude, deg: the same AltAz with 1010 hPa, 10 C, dry air, 0.55 um (ERFA
     `refco`'s model, independent of the Saemundsson formula soig uses).
+With `night`: the hours in 2022-01-22T00:00 .. 2022-01-24T00:00 UTC when the Sun (astropy
+`get_sun`, geometric altitude, pressure 0) is at most -12 deg up at La Palma, on a 30 s grid.
 """
 import math
 import warnings
@@ -29,7 +32,7 @@ import erfa
 import numpy as np
 import astropy.units as u
 from astropy.coordinates import (GCRS, ITRS, TEME, AltAz, CartesianDifferential,
-                                 CartesianRepresentation, EarthLocation)
+                                 CartesianRepresentation, EarthLocation, get_sun)
 from astropy.time import Time, TimeDelta
 from astropy.utils import iers
 from sgp4.api import Satrec
@@ -139,5 +142,15 @@ def main():
     print("];")
 
 
+def night():
+    lat, lon, h = SITES[1][1:]
+    loc = EarthLocation.from_geodetic(lon * u.deg, lat * u.deg, h * u.m)
+    t = START + TimeDelta(np.arange(0, 2 * 86400 // 30 + 1) * 30.0, format="sec")
+    alt = get_sun(t).transform_to(AltAz(obstime=t, location=loc)).alt.deg
+    print(f"// tests/reference/site_reference.py night (astropy {__import__('astropy').__version__})")
+    print(f"const LA_PALMA_NAUTICAL_NIGHT_H: f64 = {np.count_nonzero(alt <= -12.0) * 30.0 / 3600.0:.4f};")
+
+
 if __name__ == "__main__":
-    main()
+    import sys
+    night() if sys.argv[1:] == ["night"] else main()

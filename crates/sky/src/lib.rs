@@ -8,6 +8,7 @@ pub mod debris_sizes;
 pub mod ephemeris;
 pub mod frames;
 pub mod motion;
+pub mod night;
 pub mod orbit;
 pub mod photometry;
 pub mod pointing;

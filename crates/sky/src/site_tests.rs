@@ -152,7 +152,7 @@ fn site_turns_once_a_sidereal_day() {
     };
     let t = Epoch::from_gregorian_utc_hms(2022, 1, 22, 0, 0, 0);
     let (r0, v0) = site.gcrs_state(t);
-    let (r1, _) = site.gcrs_state(t + 86_164.0905 * Unit::Second);
+    let (r1, _) = site.gcrs_state(t + 86_164.090_5 * Unit::Second);
     // Precession moves the equinox 50.3 arcsec a year, 0.138 arcsec a day: 4.3 m on the
     // Earth's radius (measured 4.07 m at 28.8 deg).
     assert!(norm(sub(r0, r1)) < 5e-3, "{} m", norm(sub(r0, r1)) * 1e3);
