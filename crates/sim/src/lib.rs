@@ -8,6 +8,7 @@
 //! - [`render`]: photons to electrons to ADU, labels and truth;
 //! - [`simulate`]: one image's products in memory, a pure function of (values, inputs, index).
 
+pub mod atmosphere;
 pub mod background;
 pub mod noise;
 pub mod render;
