@@ -117,6 +117,15 @@ impl Site {
         let w = [ca * sz, ca * cz, sa];
         mat_vec(&transpose(&[e, n, u]), w)
     }
+
+    /// The axis (GCRS unit vector: the pole of date) and rate (deg/s) about which a direction
+    /// held fixed in altitude and azimuth turns over the sky at `t`: a telescope staring at
+    /// GEO is the survey pointing of `pointing::SurveyTrack` with these (stars trail at 15
+    /// arcsec/s cos dec, geostationary objects stand). Precession moves the pole ~1e-6 arcsec/s.
+    pub fn stare_axis(&self, t: Epoch) -> (Vec3, f64) {
+        let axis = mat_vec(&teme_to_gcrs_matrix(t), [0.0, 0.0, 1.0]);
+        (axis, EARTH_RATE_RAD_S.to_degrees())
+    }
 }
 
 /// Standard air for [`refraction_deg`]: 1010 hPa and 10 C, Meeus' reference conditions.

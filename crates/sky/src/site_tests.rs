@@ -166,3 +166,29 @@ fn site_turns_once_a_sidereal_day() {
         norm(v0)
     );
 }
+
+/// A direction fixed in altitude and azimuth turns about `stare_axis` at its rate: after 600 s
+/// the rotated direction and the one `direction_of` gives agree.
+#[test]
+fn a_stare_turns_about_the_pole() {
+    let site = Site {
+        lat_deg: -31.27,
+        lon_deg: 149.06,
+        height_m: 1165.0,
+    };
+    let t0 = Epoch::from_gregorian_utc_hms(2022, 1, 22, 12, 0, 0);
+    let (axis, rate_deg_s) = site.stare_axis(t0);
+    for (alt, az) in [(45.0, 0.0), (50.0, 350.0), (80.0, 120.0)] {
+        let d0 = site.direction_of(t0, alt, az);
+        for dt in [60.0, 600.0] {
+            let d1 = site.direction_of(t0 + dt * Unit::Second, alt, az);
+            let turned = crate::rotate(d0, axis, (rate_deg_s * dt).to_radians());
+            // Precession and nutation move the pole by < 1e-3 arcsec in 600 s.
+            assert!(
+                arcsec_between(turned, d1) < 1e-3,
+                "{}",
+                arcsec_between(turned, d1)
+            );
+        }
+    }
+}
