@@ -11,6 +11,7 @@
 pub mod atmosphere;
 pub mod background;
 pub mod noise;
+pub mod observer;
 pub mod render;
 pub mod scene;
 pub mod sensor;

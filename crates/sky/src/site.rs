@@ -24,6 +24,8 @@ const WGS84_F: f64 = 1.0 / 298.257_223_563;
 /// The Earth's rotation rate, rad per UT1 second (ERFA's `OM`: 1.00273781191135448 turns per
 /// UT1 day).
 const EARTH_RATE_RAD_S: f64 = 1.002_737_811_911_354_5 * std::f64::consts::TAU / 86_400.0;
+/// The same in degrees per second (15.04 arcsec/s).
+pub const EARTH_RATE_DEG_S: f64 = 1.002_737_811_911_354_5 * 360.0 / 86_400.0;
 
 /// A place on the ground, WGS84 geodetic.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -79,10 +81,16 @@ impl Site {
     /// Position (km) and velocity (km/s) in the GCRS at UTC instant `t`. The velocity is the
     /// Earth's rotation alone (precession-nutation turn the frame ~1e-11 rad/s: 1e-7 m/s here).
     pub fn gcrs_state(&self, t: Epoch) -> (Vec3, Vec3) {
-        let r_teme = turn_z(self.itrs_km(), gmst82_rad(t));
-        let v_teme = cross([0.0, 0.0, EARTH_RATE_RAD_S], r_teme);
+        let (r, v) = self.teme_state(t);
         let m = teme_to_gcrs_matrix(t);
-        (mat_vec(&m, r_teme), mat_vec(&m, v_teme))
+        (mat_vec(&m, r), mat_vec(&m, v))
+    }
+
+    /// Position (km) and velocity (km/s) in SGP4's TEME frame at `t`, as a propagator gives
+    /// them (the simulator turns both bodies to GCRS with one matrix per exposure).
+    pub fn teme_state(&self, t: Epoch) -> (Vec3, Vec3) {
+        let r = turn_z(self.itrs_km(), gmst82_rad(t));
+        (r, cross([0.0, 0.0, EARTH_RATE_RAD_S], r))
     }
 
     /// East, north and up unit vectors of the site's horizon in GCRS axes at `t` (north and up
