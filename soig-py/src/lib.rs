@@ -147,6 +147,7 @@ impl NativeCampaign {
                         campaign_hash: c.hash.clone(),
                         seed: c.resolved.seed,
                         observer: c.observer.name().to_string(),
+                        site: c.observer.ground().map(|g| g.site),
                     },
                 })
             })

@@ -473,6 +473,7 @@ fn render(
         campaign_hash: campaign.hash.clone(),
         seed: c.seed,
         observer: campaign.observer.name().to_string(),
+        site: campaign.observer.ground().map(|g| g.site),
     };
     let have: std::collections::BTreeSet<u64> = done.iter().map(|r| r.index).collect();
     let todo: Vec<u64> = share.filter(|i| !have.contains(i)).collect();
