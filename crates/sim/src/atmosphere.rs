@@ -1,8 +1,9 @@
 //! The air over a ground telescope: how much of it a line of sight crosses (airmass), what it
 //! takes from the light (extinction), how it blurs a point (seeing, a Moffat profile), how
 //! bright it glows (sky background) and how it makes a bright source twinkle (scintillation).
-//! Each is a published formula, cited where it is used; the twilight sky and the Moon's light
-//! are not modelled (a dark-sky background only).
+//! Each is a published formula, cited where it is used. The sky's glow in mag/arcsec^2 is the
+//! physical noise model's (`noise::sky_e_per_s`, `[noise] sky_mag_per_arcsec2`): a dark-sky
+//! value, the twilight sky and the Moon's light not modelled.
 
 use std::f64::consts::PI;
 
@@ -55,14 +56,6 @@ impl Moffat {
     pub fn enclosed(&self, r: f64) -> f64 {
         1.0 - (1.0 + r * r / (self.alpha * self.alpha)).powf(1.0 - self.beta)
     }
-}
-
-/// A sky surface brightness `mag_per_arcsec2` as photo-electrons per second per pixel of
-/// `pixel_arcsec` on a side, with the sensor's zero point (the magnitude that gives 1 e-/s):
-/// 10^(-0.4 (mu - ZP)) per arcsec^2 times the pixel's area. A dark site's V sky is ~21.5-22
-/// mag/arcsec^2 (Benn & Ellison 1998, La Palma: 21.9 V at solar minimum).
-pub fn sky_e_per_s_per_px(mag_per_arcsec2: f64, zero_point_mag: f64, pixel_arcsec: f64) -> f64 {
-    10f64.powf(-0.4 * (mag_per_arcsec2 - zero_point_mag)) * pixel_arcsec * pixel_arcsec
 }
 
 /// Relative rms of a source's flux from scintillation: Young's (1967, AJ 72, 747) formula as
@@ -129,14 +122,6 @@ mod tests {
             assert!((vol - m.enclosed(r_max)).abs() < 1e-5, "{vol}");
             assert!(m.enclosed(r_max) > 0.999_99);
         }
-    }
-
-    #[test]
-    fn sky_background_in_electrons() {
-        // 21 mag/arcsec^2 with ZP 21: 1 e-/s per arcsec^2; a 2" pixel holds 4.
-        assert!((sky_e_per_s_per_px(21.0, 21.0, 2.0) - 4.0).abs() < 1e-12);
-        // 2.5 mag fainter: ten times less.
-        assert!((sky_e_per_s_per_px(23.5, 21.0, 2.0) - 0.4).abs() < 1e-12);
     }
 
     #[test]
