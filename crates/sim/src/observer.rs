@@ -5,7 +5,10 @@ use hifitime::{Duration, Epoch};
 use soig_sky::Vec3;
 use soig_sky::night::NightRule;
 use soig_sky::orbit::Propagator;
-use soig_sky::site::Site;
+use soig_sky::site::{STANDARD_PRESSURE_HPA, STANDARD_TEMPERATURE_C, Site, refraction_deg};
+use soig_sky::{dot, unit};
+
+use crate::atmosphere::{airmass, extinction_mag};
 
 use crate::scene::Body;
 
@@ -53,9 +56,37 @@ pub struct GroundGate {
     pub site: Site,
     pub night: NightRule,
     pub spans: Vec<Vec<(Epoch, Epoch)>>,
+    /// The band's extinction, magnitudes per airmass (0: none).
+    pub extinction_mag_per_airmass: f64,
+}
+
+/// The air's dimming of a source over one exposure: the site's zenith at mid-exposure (it
+/// turns 2 arcmin in 8 s, nothing to an airmass) and the extinction coefficient.
+#[derive(Clone, Copy, Debug)]
+pub struct Extinction {
+    pub up: Vec3,
+    pub k_mag_per_airmass: f64,
+}
+
+impl Extinction {
+    /// Magnitudes taken from a source in GCRS direction `dir`: k X, X the Kasten-Young airmass of
+    /// its refracted altitude.
+    pub fn mag(&self, dir: Vec3) -> f64 {
+        let alt = dot(unit(dir), self.up).clamp(-1.0, 1.0).asin().to_degrees();
+        let seen = alt + refraction_deg(alt, STANDARD_PRESSURE_HPA, STANDARD_TEMPERATURE_C);
+        extinction_mag(self.k_mag_per_airmass, airmass(seen))
+    }
 }
 
 impl GroundGate {
+    /// The extinction over an exposure whose middle is `mid`; None when there is none.
+    pub fn extinction(&self, mid: Epoch) -> Option<Extinction> {
+        (self.extinction_mag_per_airmass > 0.0).then(|| Extinction {
+            up: self.site.up(mid),
+            k_mag_per_airmass: self.extinction_mag_per_airmass,
+        })
+    }
+
     /// The instant `u` in [0, 1) of the way through the object's spans, laid end to end.
     pub fn instant(&self, debris_index: usize, u: f64) -> Option<Epoch> {
         let spans = self.spans.get(debris_index)?;

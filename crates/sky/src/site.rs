@@ -107,6 +107,11 @@ impl Site {
         ]
     }
 
+    /// The site's zenith (geodetic up) as a GCRS unit vector at `t`.
+    pub fn up(&self, t: Epoch) -> Vec3 {
+        self.horizon_axes(t)[2]
+    }
+
     /// Altitude and azimuth (north through east), degrees, of the GCRS direction `dir` seen from
     /// the site at `t`; geometric (no refraction: [`refraction_deg`] lifts it).
     pub fn alt_az_deg(&self, t: Epoch, dir: Vec3) -> (f64, f64) {

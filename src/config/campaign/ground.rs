@@ -30,6 +30,11 @@ pub struct SiteSpec {
     /// The object's geometric altitude must be at least this, degrees.
     #[serde(default = "twenty")]
     pub min_alt_deg: f64,
+    /// The band's atmospheric extinction, magnitudes per airmass (Bouguer's k: ~0.12-0.2 in V
+    /// at a good site), dimming the debris at each trajectory sample and the field's stars at
+    /// the boresight's airmass. 0 (default): no air.
+    #[serde(default)]
+    pub extinction_mag_per_airmass: f64,
 }
 
 fn nautical() -> f64 {
@@ -66,6 +71,12 @@ pub(super) fn ground_of(spec: &ObjectSpec) -> Result<Option<Ground>, (String, St
         (".site.height_m", s.height_m, -500.0, 10_000.0),
         (".site.sun_max_alt_deg", s.sun_max_alt_deg, -90.0, 90.0),
         (".site.min_alt_deg", s.min_alt_deg, 0.0, 90.0),
+        (
+            ".site.extinction_mag_per_airmass",
+            s.extinction_mag_per_airmass,
+            0.0,
+            5.0,
+        ),
     ];
     for (field, v, lo, hi) in checks {
         if !(lo..=hi).contains(&v) {
@@ -116,5 +127,6 @@ pub(super) fn night_spans(
         site: *site,
         night,
         spans,
+        extinction_mag_per_airmass: spec.extinction_mag_per_airmass,
     })
 }

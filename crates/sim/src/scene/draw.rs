@@ -23,7 +23,7 @@ use crate::sighting::Sighting;
 use soig_base::rng::{Purpose, stream};
 use soig_sky::ephemeris::sun_position_km;
 use soig_sky::stars::Star;
-use soig_sky::{Vec3, radec_deg};
+use soig_sky::{Vec3, radec_deg, radec_unit};
 
 /// The debris object of image `image`, by the spec's weights, from the image's own debris
 /// stream (so the retries of the scene draw never change which object an image shows).
@@ -263,6 +263,7 @@ fn try_draw(
             pointing: &pointing,
             mid_tan: &mid_tan,
             shadowed,
+            extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
         },
     )?;
 
@@ -338,9 +339,15 @@ fn field_stars(
     mid: Epoch,
     gated: bool,
 ) -> Result<Vec<Star>, Rejection> {
-    let field = inputs
+    let mut field = inputs
         .stars
         .stars_in_cone(ra, dec, cone, sensor.mag_limit, mid);
+    // A ground site's air dims the field by the boresight's airmass (the field's few tenths
+    // of a degree change it little).
+    if let Some(e) = spec.ground.as_ref().and_then(|g| g.extinction(mid)) {
+        let dm = e.mag(radec_unit(ra, dec));
+        field.iter_mut().for_each(|s| s.mag += dm);
+    }
     if gated && field.iter().any(|s| s.mag < spec.gate.brightest_star_mag) {
         return Err(Rejection::BrightStar);
     }

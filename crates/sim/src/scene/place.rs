@@ -189,6 +189,7 @@ fn try_place(
             pointing: &at.pointing,
             mid_tan: &at.projection(sensor),
             shadowed,
+            extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
         },
     )?;
     let snr = gate_snr(

@@ -41,7 +41,9 @@ pub(super) fn visibility(
     }
     let phase_angle_deg = angle_deg(sub(sun, deb), sub(obs, deb));
     let range_km = norm(los);
-    let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km);
+    let extinction = spec.ground.as_ref().and_then(|g| g.extinction(mid));
+    let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km)
+        + extinction.map_or(0.0, |e| e.mag(los));
     if gated && (magnitude.is_nan() || magnitude > sensor.mag_limit) {
         return Err(Rejection::TooFaint);
     }
