@@ -106,7 +106,7 @@ impl GroundGate {
 /// The observer of a campaign.
 #[derive(Clone, Debug)]
 pub enum Observer {
-    Orbit(Body),
+    Orbit(Box<Body>),
     Ground(Ground),
 }
 
@@ -127,7 +127,7 @@ impl Observer {
 
     pub fn orbit(&self) -> Option<&Body> {
         match self {
-            Observer::Orbit(b) => Some(b),
+            Observer::Orbit(b) => Some(b.as_ref()),
             Observer::Ground(_) => None,
         }
     }

@@ -58,10 +58,10 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
     let ground = ground_of(&file.observer).map_err(|(f, m)| fail(&format!("observer{f}"), m))?;
     let observer = match ground {
         Some(g) => Observer::Ground(g),
-        None => Observer::Orbit(
+        None => Observer::Orbit(Box::new(
             resolve_object(&mut resolved.observer, base_dir, window_start)
                 .map_err(|(f, m)| fail(&format!("observer{f}"), m))?,
-        ),
+        )),
     };
     let mut debris = Vec::new();
     for (i, spec) in resolved.debris.iter_mut().enumerate() {
@@ -77,7 +77,7 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
         );
     }
     let orbit = match &observer {
-        Observer::Orbit(b) => Some(b),
+        Observer::Orbit(b) => Some(b.as_ref()),
         Observer::Ground(_) => None,
     };
     // The observer cannot observe itself: every draw would fail its geometry.
