@@ -7,9 +7,10 @@ use hifitime::Epoch;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::{Body, ObjectSpec};
+use super::{Body, CampaignFile, MAX_SURVEY_DRIFT_DEG, ObjectSpec, Observer, PointingMode};
 use crate::sky::frames::teme_to_gcrs;
 use crate::sky::night::{self, NightRule};
+use crate::sky::site::EARTH_RATE_DEG_S;
 use crate::sky::site::Site;
 use soig_sim::observer::{Ground, GroundGate};
 
@@ -95,9 +96,45 @@ pub(super) fn ground_of(spec: &ObjectSpec) -> Result<Option<Ground>, (String, St
     }))
 }
 
+/// Only the observer can stand on the ground.
+pub(super) fn no_debris_sites(file: &CampaignFile) -> Result<(), (String, String)> {
+    match file.debris.iter().position(|d| d.site.is_some()) {
+        Some(i) => Err((
+            format!("debris[{i}].site"),
+            "only the observer can be a ground site".into(),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// A ground observer's gate: the spans where each object can be seen (refused if one never
+/// can), and the stare's drift (the Earth's 15 arcsec/s) bounded as a survey's. None for a
+/// satellite observer.
+pub(super) fn ground_gate(
+    resolved: &CampaignFile,
+    observer: &Observer,
+    debris: &[Body],
+    window: (Epoch, Epoch),
+) -> Result<Option<GroundGate>, (String, String)> {
+    let (Observer::Ground(g), Some(spec)) = (observer, &resolved.observer.site) else {
+        return Ok(None);
+    };
+    let max_s = resolved.exposure.max_s;
+    let drift = EARTH_RATE_DEG_S * max_s;
+    if resolved.pointing.mode == PointingMode::Survey && drift > MAX_SURVEY_DRIFT_DEG {
+        return Err((
+            "exposure.max_s".into(),
+            format!(
+                "a ground stare drifts {drift:.1} deg in {max_s} s; at most {MAX_SURVEY_DRIFT_DEG} deg is supported: shorten the exposure"
+            ),
+        ));
+    }
+    night_spans(spec, &g.site, debris, window).map(Some)
+}
+
 /// The spans of the window where each debris object can be seen from the site; Err (field,
 /// message) naming the first object that never can, with why.
-pub(super) fn night_spans(
+fn night_spans(
     spec: &SiteSpec,
     site: &Site,
     debris: &[Body],

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use hifitime::Epoch;
 
-use super::ground::{ground_of, night_spans};
+use super::ground::{ground_gate, ground_of, no_debris_sites};
 use super::{
     Background, Body, CampaignFile, GroundGate, ObjectSpec, Observer, PointingMode, Stars,
 };
@@ -63,23 +63,15 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
                 .map_err(|(f, m)| fail(&format!("observer{f}"), m))?,
         )),
     };
+    no_debris_sites(file)?;
     let mut debris = Vec::new();
     for (i, spec) in resolved.debris.iter_mut().enumerate() {
-        if spec.site.is_some() {
-            return Err(fail(
-                &format!("debris[{i}].site"),
-                "only the observer can be a ground site".into(),
-            ));
-        }
         debris.push(
             resolve_object(spec, base_dir, window_start)
                 .map_err(|(f, m)| fail(&format!("debris[{i}]{f}"), m))?,
         );
     }
-    let orbit = match &observer {
-        Observer::Orbit(b) => Some(b.as_ref()),
-        Observer::Ground(_) => None,
-    };
+    let orbit = observer.orbit();
     // The observer cannot observe itself: every draw would fail its geometry.
     if let Some(i) = orbit.and_then(|o| debris.iter().position(|d| d.norad == o.norad)) {
         return Err(fail(
@@ -203,29 +195,7 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
         }
     }
 
-    // A ground site: the spans where each object can be seen (refused if one never can),
-    // and the stare's drift (the Earth's 15 arcsec/s) bounded as a survey's.
-    let ground = match (&observer, &file.observer.site) {
-        (Observer::Ground(g), Some(spec)) => {
-            let drift = crate::sky::site::EARTH_RATE_DEG_S * resolved.exposure.max_s;
-            if resolved.pointing.mode == PointingMode::Survey && drift > MAX_SURVEY_DRIFT_DEG {
-                return Err(fail(
-                    "exposure.max_s",
-                    format!(
-                        "a ground stare drifts {drift:.1} deg in {} s; at most {MAX_SURVEY_DRIFT_DEG} deg is supported: shorten the exposure",
-                        resolved.exposure.max_s
-                    ),
-                ));
-            }
-            Some(night_spans(
-                spec,
-                &g.site,
-                &debris,
-                (window_start, window_end),
-            )?)
-        }
-        _ => None,
-    };
+    let ground = ground_gate(&resolved, &observer, &debris, (window_start, window_end))?;
 
     Ok(Resolved {
         file: resolved,
