@@ -1,7 +1,8 @@
 //! FITS keywords of a ground observer (issue #46), as observatories write them: the site
-//! (SITELAT, SITELONG, SITEELEV, as MaxIm DL and most small-telescope software do) and where the
-//! telescope pointed at mid-exposure (ALTITUDE, AZIMUTH of the boresight, geometric, and the
-//! AIRMASS of its refracted altitude, Kasten & Young).
+//! (SITELAT, SITELONG, SITEELEV, in decimal degrees and metres; some acquisition software
+//! writes sexagesimal strings instead) and where the telescope pointed at mid-exposure
+//! (ALTITUDE, AZIMUTH of the boresight, geometric, and the AIRMASS of its refracted altitude,
+//! Kasten & Young).
 
 use crate::fits::Card;
 use crate::sky::radec_unit;
