@@ -569,7 +569,11 @@ fn orbits_below_the_surface_are_refused_naming_file_and_line() {
 fn near_perigee_at_high_speed() {
     use soig::sky::{angle_deg, norm, radec_unit, sub, unit};
     let probe = campaign(ELEMENTS_40649, "");
-    let obs = &probe.observer.propagator;
+    let obs = &probe
+        .observer
+        .orbit()
+        .expect("a satellite observer")
+        .propagator;
     // A day-side instant: the Sun 40-80 deg from the observer's zenith.
     let t0 = (0..1440)
         .map(|k| {

@@ -3,6 +3,10 @@
 //! streak boxes at several angles, a duplicate, a miss, a wrong class, an image without
 //! objects). The figures are Ultralytics' own, from tests/reference/obb_metrics_reference.py.
 
+// Tests, benches and examples write their fixtures with std::fs; the product writes through the
+// store (clippy.toml's disallowed-methods, checked on every target by scripts/test.sh).
+#![allow(clippy::disallowed_methods)]
+
 mod common;
 
 use common::{ok, repo, soig};

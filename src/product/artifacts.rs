@@ -24,6 +24,8 @@ pub struct Provenance {
     pub campaign_hash: String,
     pub seed: u64,
     pub observer: String,
+    /// A ground observer's site (its FITS keywords, `site_cards`); None for a satellite.
+    pub site: Option<crate::sky::site::Site>,
 }
 
 /// File stem of image i.
@@ -300,21 +302,25 @@ fn objects_cards(push: &mut Push, scene: &Scene, t: &Truth) {
 
 /// Who observed when: the observer, the exposure's times and the observer's state.
 fn observation_cards(push: &mut Push, p: &Provenance, scene: &Scene, t: &Truth) {
-    push(
-        "TELESCOP",
-        Card::Str(p.observer.clone()),
-        "satellite carrying the simulated telescope",
-    );
+    let (telescope, observer) = match p.site {
+        None => (
+            "satellite carrying the simulated telescope",
+            "observing satellite",
+        ),
+        Some(_) => ("ground telescope's site", "observing site"),
+    };
+    push("TELESCOP", Card::Str(p.observer.clone()), telescope);
     push(
         "INSTRUME",
         Card::Str("soig simulated imager".into()),
         "sensor of the campaign's [sensor] table",
     );
-    push(
-        "OBSERVER",
-        Card::Str(p.observer.clone()),
-        "observing satellite",
-    );
+    push("OBSERVER", Card::Str(p.observer.clone()), observer);
+    if let Some(site) = &p.site {
+        for (k, v, c) in crate::product::site_cards::site_cards(site, scene) {
+            push(&k, v, &c);
+        }
+    }
     push(
         "DATE-OBS",
         Card::Str(t.start_utc.clone()),

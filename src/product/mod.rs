@@ -8,5 +8,6 @@ pub mod dataset;
 pub mod export;
 pub mod light_curve;
 pub mod shard;
+pub(crate) mod site_cards;
 pub mod star_trails;
 pub mod streak_labels;

@@ -458,7 +458,8 @@ fn render(
         campaign: c.name.clone(),
         campaign_hash: campaign.hash.clone(),
         seed: c.seed,
-        observer: campaign.observer.name.clone(),
+        observer: campaign.observer.name().to_string(),
+        site: campaign.observer.ground().map(|g| g.site),
     };
     let have: std::collections::BTreeSet<u64> = done.iter().map(|r| r.index).collect();
     let todo: Vec<u64> = share.filter(|i| !have.contains(i)).collect();
@@ -722,5 +723,7 @@ fn rejection_fields(reason: Rejection) -> &'static str {
             "`exposure.max_s` (track pointing follows the debris' apparent motion)"
         }
         Rejection::CollectPastWindow => "`collect.frames`, `collect.gap_s` and the `window`",
+        Rejection::Daylight => "`observer.site.sun_max_alt_deg` and the `window`",
+        Rejection::BelowHorizon => "`observer.site.min_alt_deg` and the debris' orbits",
     }
 }

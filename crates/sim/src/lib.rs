@@ -12,8 +12,10 @@
 // store (clippy.toml's disallowed-methods, checked on every target by scripts/test.sh).
 #![cfg_attr(test, allow(clippy::disallowed_methods))]
 
+pub mod atmosphere;
 pub mod background;
 pub mod noise;
+pub mod observer;
 pub mod render;
 pub mod scene;
 pub mod sensor;

@@ -12,10 +12,12 @@ pub mod debris_sizes;
 pub mod ephemeris;
 pub mod frames;
 pub mod motion;
+pub mod night;
 pub mod orbit;
 pub mod photometry;
 pub mod pointing;
 pub mod projection;
+pub mod site;
 pub mod stars;
 #[cfg(test)]
 mod testing;

@@ -111,6 +111,9 @@ pub struct ObjectSpec {
     /// Mean orbital elements, for objects with no public TLE (the paper's NORAD 40649).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub elements: Option<ElementsSpec>,
+    /// Observer only: a telescope on the ground in place of an orbit (`ground::SiteSpec`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub site: Option<super::ground::SiteSpec>,
     /// Debris only: relative weight in the draw of each image's object (default 1, all equal):
     /// an object of weight 2 is shown twice as often as one of weight 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -7,7 +7,10 @@ use std::path::Path;
 
 use hifitime::Epoch;
 
-use super::{Background, Body, CampaignFile, ObjectSpec, PointingMode, Stars};
+use super::ground::{ground_gate, ground_of, no_debris_sites};
+use super::{
+    Background, Body, CampaignFile, GroundGate, ObjectSpec, Observer, PointingMode, Stars,
+};
 use crate::hash::sha256_file;
 use crate::sky::orbit::{self, OrbitalElements, Propagator, Tle};
 
@@ -16,8 +19,9 @@ pub use crate::scene::MAX_SURVEY_DRIFT_DEG;
 /// A resolved campaign: what its hash covers, and the bodies and window the scenes use.
 pub(super) struct Resolved {
     pub file: CampaignFile,
-    pub observer: Body,
+    pub observer: Observer,
     pub debris: Vec<Body>,
+    pub ground: Option<GroundGate>,
     pub window_start: Epoch,
     pub window_end: Epoch,
 }
@@ -51,8 +55,15 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
     }
 
     let mut resolved = file.clone();
-    let observer = resolve_object(&mut resolved.observer, base_dir, window_start)
-        .map_err(|(f, m)| fail(&format!("observer{f}"), m))?;
+    let ground = ground_of(&file.observer).map_err(|(f, m)| fail(&format!("observer{f}"), m))?;
+    let observer = match ground {
+        Some(g) => Observer::Ground(g),
+        None => Observer::Orbit(Box::new(
+            resolve_object(&mut resolved.observer, base_dir, window_start)
+                .map_err(|(f, m)| fail(&format!("observer{f}"), m))?,
+        )),
+    };
+    no_debris_sites(file)?;
     let mut debris = Vec::new();
     for (i, spec) in resolved.debris.iter_mut().enumerate() {
         debris.push(
@@ -60,26 +71,30 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
                 .map_err(|(f, m)| fail(&format!("debris[{i}]{f}"), m))?,
         );
     }
+    let orbit = observer.orbit();
     // The observer cannot observe itself: every draw would fail its geometry.
-    if let Some(i) = debris.iter().position(|d| d.norad == observer.norad) {
+    if let Some(i) = orbit.and_then(|o| debris.iter().position(|d| d.norad == o.norad)) {
         return Err(fail(
             &format!("debris[{i}].norad"),
             format!(
                 "NORAD {} is the observer itself: the debris must be other objects",
-                observer.norad
+                orbit.map_or(0, |o| o.norad)
             ),
         ));
     }
     // An object SGP4 cannot propagate anywhere in the window (decayed before it opens,
     // or diverged) would fail every scene draw, ending in "no acceptable scene" after
     // max_attempts draws: refuse it here, naming its field and its TLE.
-    let specs = std::iter::once(("observer".to_string(), &file.observer, &observer)).chain(
-        file.debris
-            .iter()
-            .zip(&debris)
-            .enumerate()
-            .map(|(i, (spec, body))| (format!("debris[{i}]"), spec, body)),
-    );
+    let specs = orbit
+        .map(|o| ("observer".to_string(), &file.observer, o))
+        .into_iter()
+        .chain(
+            file.debris
+                .iter()
+                .zip(&debris)
+                .enumerate()
+                .map(|(i, (spec, body))| (format!("debris[{i}]"), spec, body)),
+        );
     for (field, spec, body) in specs {
         let problem = match check_propagates(body, window_start, window_end) {
             Err(e) => Some(format!(
@@ -159,10 +174,10 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
             ));
         }
     }
-    if resolved.pointing.mode == PointingMode::Survey {
+    if let (Some(o), PointingMode::Survey) = (orbit, resolved.pointing.mode) {
         // The boresight turns at the observer's orbital rate: beyond a few degrees of drift
         // the star cone and the trails grow without bound, so refuse it up front.
-        let p = &observer.propagator;
+        let p = &o.propagator;
         let t1 = window_start + hifitime::Duration::from_seconds(1.0);
         if let (Ok(a), Ok(b)) = (p.position_teme_km(window_start), p.position_teme_km(t1)) {
             let drift = crate::sky::angle_deg(a, b) * resolved.exposure.max_s;
@@ -180,10 +195,13 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
         }
     }
 
+    let ground = ground_gate(&resolved, &observer, &debris, (window_start, window_end))?;
+
     Ok(Resolved {
         file: resolved,
         observer,
         debris,
+        ground,
         window_start,
         window_end,
     })

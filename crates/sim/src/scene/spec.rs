@@ -7,6 +7,7 @@ use rand::RngExt;
 use serde::Serialize;
 
 use crate::background::{BackgroundModel, FrameChoice, RealFrame};
+use crate::observer::{GroundGate, Observer};
 use soig_base::rng::{Purpose, stream};
 use soig_sky::orbit::Propagator;
 use soig_sky::stars::{ProceduralSky, Star, StarCatalog};
@@ -22,7 +23,7 @@ pub struct Body {
 /// What a campaign reads before its first image: the bodies, the star source and the
 /// background frames.
 pub struct Inputs {
-    pub observer: Body,
+    pub observer: Observer,
     pub debris: Vec<Body>,
     pub stars: StarField,
     pub background: BackgroundModel,
@@ -146,6 +147,9 @@ pub struct Spec {
     /// How many objects each image shows (`[objects]`); None: the one the pointing is drawn
     /// around (the paper's scenes).
     pub objects: Option<ObjectCount>,
+    /// A ground observer's site, night and observable spans (`[observer] site`); None for a
+    /// satellite observer.
+    pub ground: Option<GroundGate>,
 }
 
 /// How many debris objects an image shows: none with probability `empty_share`, else a number
