@@ -3,6 +3,10 @@
 //! (WCS at mid-exposure, start and end; DATE-OBS, EXPTIME), and the star-aware detector keeps
 //! the debris and drops the trails. Bad inputs fail naming the file and what is missing.
 
+// Tests, benches and examples write their fixtures with std::fs; the product writes through the
+// store (clippy.toml's disallowed-methods, checked on every target by scripts/test.sh).
+#![allow(clippy::disallowed_methods)]
+
 use std::path::{Path, PathBuf};
 
 use soig::campaign::Campaign;
@@ -35,15 +39,25 @@ fn render(dir: &Path, mode: &str) -> (PathBuf, Campaign) {
 /// The stars of image `index`'s scene as a plain catalogue CSV (ra, dec, mag; no proper
 /// motion), 10 decimals (4e-7 arcsec; 1e-10 mag).
 fn write_catalog(c: &Campaign, index: u64, path: &Path) {
+    write_catalog_as(c, index, path, |_, ra, dec| Some((ra, dec)));
+}
+
+/// `write_catalog`, each star `k` at (ra, dec) listed where `listed` puts it, or left out.
+fn write_catalog_as(
+    c: &Campaign,
+    index: u64,
+    path: &Path,
+    listed: impl Fn(usize, f64, f64) -> Option<(f64, f64)>,
+) {
     let x = experiment::of(c);
     let inputs = experiment::inputs(c).unwrap();
     let scene = soig::scene::draw(&x.scene, &x.sensor, &inputs, x.seed, index).unwrap();
     let mut csv = String::from("ra,dec,mag\n");
-    for s in &scene.stars {
-        csv.push_str(&format!(
-            "{:.10},{:.10},{:.10}\n",
-            s.ra_deg, s.dec_deg, s.mag
-        ));
+    for (k, s) in scene.stars.iter().enumerate() {
+        let Some((ra, dec)) = listed(k, s.ra_deg, s.dec_deg) else {
+            continue;
+        };
+        csv.push_str(&format!("{ra:.10},{dec:.10},{:.10}\n", s.mag));
     }
     std::fs::write(path, csv).unwrap();
 }
@@ -133,6 +147,21 @@ fn prediction_gap_px(mode: &str) -> f64 {
                 continue;
             }
             assert_eq!(a.len(), b.len(), "image {index}: nodes of {m:?}");
+            // The on-frame nodes' times, from the start and end WCS, are the renderer's
+            // (issue #44): 1e-9 s, float rounding of the same grid.
+            assert_eq!(m.times_s.len(), m.nodes.len());
+            let timed = |nodes: &[[f64; 2]], times: &[f64]| {
+                let on_times = nodes.iter().zip(times).filter(|(n, _)| on(n));
+                on_times.map(|(_, &t)| t).collect::<Vec<_>>()
+            };
+            let (tm, tt) = (timed(&m.nodes, &m.times_s), timed(&t.nodes, &t.times_s));
+            assert_eq!(tm.len(), tt.len(), "image {index}: timed nodes of {m:?}");
+            for (a, b) in tm.iter().zip(&tt) {
+                assert!(
+                    (a - b).abs() < 1e-9,
+                    "image {index}: node time {a} against {b}"
+                );
+            }
             for (a, b) in a.iter().zip(&b) {
                 gap = gap.max((a[0] - b[0]).hypot(a[1] - b[1]));
             }
@@ -379,6 +408,78 @@ print(json.dumps({k: WCS(h, key=k).all_pix2world(pixels, 0).tolist() for k in "S
                 dra.abs() < 1e-9 && (dec - tdec).abs() < 1e-9,
                 "WCS {key} at {p:?}: soig ({ra}, {dec}), astropy ({tra}, {tdec})"
             );
+        }
+    }
+}
+
+/// A catalogue that misses every tenth star, or places every star 1" off at random, adds no
+/// false box (issue #44): the lines it leaves unexplained have a star trail's shape (along the
+/// trails near them, a trail's length or cut by the frame's edge) and are dropped, and the
+/// debris streak of each of the four images is still the one box. Before, the pass reported
+/// every trail a catalogue missed (`scripts/catalog-robustness.py`: P 0.53 with 10% missing,
+/// 0.78 with 1" errors, on 40 survey images; now 1.000 and 0.976).
+#[test]
+fn an_incomplete_or_misplaced_catalogue_adds_no_false_box() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (toml, c) = render(tmp.path(), "survey");
+    // A fixed pseudo-random sequence (the test must not depend on a generator's version):
+    // splitmix64 of the star's index, as a uniform in [0, 1).
+    let uniform = |k: u64| {
+        let mut z = k.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for index in 0..4u64 {
+        let truth: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(tmp.path().join(format!("run/truth/img_{index:06}.json")))
+                .unwrap(),
+        )
+        .unwrap();
+        let p = |k: &str| [0, 1].map(|i| truth[k][i].as_f64().unwrap() + 0.5);
+        let (t0, t1) = (p("streak_start_px"), p("streak_end_px"));
+        let missing = tmp.path().join(format!("missing{index}.csv"));
+        write_catalog_as(&c, index, &missing, |k, ra, dec| {
+            (k % 10 != 3).then_some((ra, dec))
+        });
+        let moved = tmp.path().join(format!("moved{index}.csv"));
+        write_catalog_as(&c, index, &moved, |k, ra, dec| {
+            // 1" in a uniform direction (Box-Muller would give a Gaussian; a fixed size is the
+            // harder case at the same rms).
+            let a = std::f64::consts::TAU * uniform(k as u64 + 1000 * index);
+            let r = 1.0 / 3600.0;
+            Some((ra + r * a.cos() / dec.to_radians().cos(), dec + r * a.sin()))
+        });
+        let fits = tmp.path().join(format!("run/fits/img_{index:06}.fits"));
+        for (name, cat) in [("missing", &missing), ("moved", &moved)] {
+            let out = tmp.path().join(format!("det-{name}{index}"));
+            ok(soig(&[
+                "detect",
+                "--campaign",
+                toml.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "--catalog",
+                cat.to_str().unwrap(),
+                fits.to_str().unwrap(),
+            ]));
+            let found: serde_json::Value = serde_json::from_str(
+                &std::fs::read_to_string(out.join("detections.json")).unwrap(),
+            )
+            .unwrap();
+            let (mut debris, mut other) = (0, 0);
+            for d in found["frames"][0]["detections"].as_array().unwrap() {
+                if d["confidence"].as_f64().unwrap() < 0.5 {
+                    continue;
+                }
+                let e = [0, 1].map(|k| [0, 1].map(|i| d["ends"][k][i].as_f64().unwrap()));
+                if to_segment(e[0], t0, t1) < 5.0 && to_segment(e[1], t0, t1) < 5.0 {
+                    debris += 1;
+                } else {
+                    other += 1;
+                }
+            }
+            assert_eq!((debris, other), (1, 0), "{name} image {index}: {found}");
         }
     }
 }

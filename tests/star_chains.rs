@@ -3,6 +3,10 @@
 //! false boxes) is not a streak, because stretches of it hold no light; a streak beside it, as
 //! bright per pixel, is found. `detect_streaks_explained` says why the chain was dropped.
 
+// Tests, benches and examples write their fixtures with std::fs; the product writes through the
+// store (clippy.toml's disallowed-methods, checked on every target by scripts/test.sh).
+#![allow(clippy::disallowed_methods)]
+
 use soig::detect::streak::{Reason, StreakParams, detect_streaks_explained};
 
 const W: usize = 512;

@@ -146,7 +146,8 @@ impl NativeCampaign {
                         campaign: c.resolved.name.clone(),
                         campaign_hash: c.hash.clone(),
                         seed: c.resolved.seed,
-                        observer: c.observer.name.clone(),
+                        observer: c.observer.name().to_string(),
+                        site: c.observer.ground().map(|g| g.site),
                     },
                 })
             })

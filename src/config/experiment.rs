@@ -117,6 +117,7 @@ pub fn of(campaign: &Campaign) -> Experiment {
         },
         collect_frames: c.collect_frames() as u64,
         collect_gap_s: c.collect.as_ref().map_or(0.0, |k| k.gap_s),
+        ground: campaign.ground.clone(),
         objects: c.objects.as_ref().map(|o| {
             let (min, max) = o.per_frame.bounds();
             scene::ObjectCount {

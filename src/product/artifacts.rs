@@ -24,6 +24,8 @@ pub struct Provenance {
     pub campaign_hash: String,
     pub seed: u64,
     pub observer: String,
+    /// A ground observer's site (its FITS keywords, `site_cards`); None for a satellite.
+    pub site: Option<crate::sky::site::Site>,
 }
 
 /// File stem of image i.
@@ -135,6 +137,9 @@ pub fn write_image(
     let png_path = dir.join(&png_rel);
     store::fs::create(&png_path, enhance::png_bytes(&product.png))?;
     store::fs::create(&dir.join(&label_rel), label_line)?;
+    crate::streak_labels::write(
+        dir, index, subset, products, artifacts, &png_rel, &mut files,
+    )?;
     files.extend([png_rel, label_rel]);
     // Pixel-edge coordinates: pixel i spans [i, i + 1).
     let edges = product
@@ -180,6 +185,11 @@ pub fn expected_files(
         let (p, l) = dataset_paths(index, subset);
         files.insert(p);
         files.insert(l);
+        for set in crate::streak_labels::sets(artifacts) {
+            let (p, l) = crate::streak_labels::paths(set, index, subset);
+            files.insert(p);
+            files.insert(l);
+        }
     }
     files
 }
@@ -290,21 +300,25 @@ fn objects_cards(push: &mut Push, scene: &Scene, t: &Truth) {
 
 /// Who observed when: the observer, the exposure's times and the observer's state.
 fn observation_cards(push: &mut Push, p: &Provenance, scene: &Scene, t: &Truth) {
-    push(
-        "TELESCOP",
-        Card::Str(p.observer.clone()),
-        "satellite carrying the simulated telescope",
-    );
+    let (telescope, observer) = match p.site {
+        None => (
+            "satellite carrying the simulated telescope",
+            "observing satellite",
+        ),
+        Some(_) => ("ground telescope's site", "observing site"),
+    };
+    push("TELESCOP", Card::Str(p.observer.clone()), telescope);
     push(
         "INSTRUME",
         Card::Str("soig simulated imager".into()),
         "sensor of the campaign's [sensor] table",
     );
-    push(
-        "OBSERVER",
-        Card::Str(p.observer.clone()),
-        "observing satellite",
-    );
+    push("OBSERVER", Card::Str(p.observer.clone()), observer);
+    if let Some(site) = &p.site {
+        for (k, v, c) in crate::product::site_cards::site_cards(site, scene) {
+            push(&k, v, &c);
+        }
+    }
     push(
         "DATE-OBS",
         Card::Str(t.start_utc.clone()),

@@ -1,6 +1,6 @@
 //! The product: an image's files (`artifacts`), the dataset's split and layout, collects, the
-//! exports (COCO, DS9), the star trails a detector is told of, light curves, and a shard's share
-//! of the images. Every file goes through the store.
+//! exports (COCO, DS9), the star trails a detector is told of, light curves, a shard's share
+//! of the images, and the streak-shaped label sets. Every file goes through the store.
 
 pub(crate) mod artifacts;
 pub mod collect;
@@ -8,4 +8,6 @@ pub mod dataset;
 pub mod export;
 pub mod light_curve;
 pub mod shard;
+pub(crate) mod site_cards;
 pub mod star_trails;
+pub mod streak_labels;

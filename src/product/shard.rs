@@ -124,6 +124,14 @@ impl Shard {
 
     /// Refuse more shards than the campaign has images (a shard would be empty).
     pub fn check_against(&self, images: u64) -> anyhow::Result<()> {
+        // `parse` refuses these, but the library takes a `Shard` built in code too.
+        if self.index >= self.count {
+            bail!(
+                "--shard {}/{}: the shard index must be below the shard count (0 <= K < N)",
+                self.index,
+                self.count
+            );
+        }
         if self.count > images {
             bail!(
                 "--shard {}/{}: {} shards for the campaign's {images} images: at most one shard per image",

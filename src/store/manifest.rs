@@ -60,8 +60,13 @@ pub struct Manifest {
 
 /// Whether `rel` is the label cache Ultralytics writes beside a split's label folder when it
 /// trains on the dataset (`labels/train.cache` for `labels/train/`): derived from the labels, so
-/// a dataset trained by plain `yolo train data=OUT/data.yaml` still verifies.
+/// a dataset trained by plain `yolo train data=OUT/data.yaml` still verifies; the same in the
+/// streak-shaped label sets (`obb/labels/train.cache`).
 fn is_ultralytics_cache(rel: &str) -> bool {
+    let rel = ["obb/", "keypoints/"]
+        .iter()
+        .find_map(|set| rel.strip_prefix(set))
+        .unwrap_or(rel);
     rel.strip_prefix("labels/")
         .and_then(|name| name.strip_suffix(".cache"))
         .is_some_and(|split| !split.is_empty() && !split.contains('/'))
@@ -299,9 +304,20 @@ mod tests {
         // What `yolo train` leaves: one cache per split, beside the split's folder.
         std::fs::write(d.join("labels/train.cache"), b"c").unwrap();
         std::fs::write(d.join("labels/val.cache"), b"c").unwrap();
+        // And `yolo obb` / `yolo pose` on the streak-shaped label sets.
+        for set in ["obb", "keypoints"] {
+            std::fs::create_dir_all(d.join(set).join("labels")).unwrap();
+            std::fs::write(d.join(set).join("labels/train.cache"), b"c").unwrap();
+        }
         assert_eq!(verify(d).unwrap().1, vec![]);
         // Anything else named .cache is still an extra file.
-        for other in ["train.cache", "labels/train/a.cache", "images/train.cache"] {
+        for other in [
+            "train.cache",
+            "labels/train/a.cache",
+            "images/train.cache",
+            "obb/train.cache",
+            "other/labels/train.cache",
+        ] {
             std::fs::create_dir_all(d.join(other).parent().unwrap()).unwrap();
             std::fs::write(d.join(other), b"c").unwrap();
         }
@@ -310,6 +326,8 @@ mod tests {
             vec![
                 Problem::Extra("images/train.cache".into()),
                 Problem::Extra("labels/train/a.cache".into()),
+                Problem::Extra("obb/train.cache".into()),
+                Problem::Extra("other/labels/train.cache".into()),
                 Problem::Extra("train.cache".into()),
             ]
         );

@@ -109,6 +109,10 @@ fn write_staged<T>(
         _ => {}
     }
     register(&staging, resume.is_some());
+    let cleanup = OnPanic {
+        staging: &staging,
+        remove: resume.is_none(),
+    };
     let result = match write(&staging) {
         Ok(value) => put_in_place(&staging, &target, output, &name).map(|()| value),
         // Stopped by the user (Python's Ctrl-C): the staging stays to be resumed, as a kill
@@ -119,9 +123,29 @@ fn write_staged<T>(
             Err(e)
         }
     };
+    drop(cleanup);
     unregister(&staging);
     drop(lock);
     result
+}
+
+/// What a panic in a writer (a bug) leaves: nothing of a one-shot output (its staging directory
+/// is removed as the panic unwinds, as a failure's is), and a resumable run's staging directory
+/// for the next run to resume, as a kill leaves it.
+struct OnPanic<'a> {
+    staging: &'a Path,
+    remove: bool,
+}
+
+impl Drop for OnPanic<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            if self.remove {
+                let _ = fs::remove_dir_all(self.staging);
+            }
+            unregister(self.staging);
+        }
+    }
 }
 
 /// Move the finished `staging` directory to `target`, whole or not at all: an old output is
@@ -569,6 +593,33 @@ impl Drop for Lock {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A writer that panics leaves neither an output nor its staging directory, and the lock is
+    /// released (a second write of the same output succeeds).
+    #[test]
+    fn a_panicking_writer_leaves_nothing() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("out");
+        let panicked = std::panic::catch_unwind(|| {
+            write_replacing(&out, &[], |dir| -> anyhow::Result<()> {
+                fs::create_dir_all(dir)?;
+                fs::create(&dir.join("half.txt"), "half")?;
+                panic!("a writer's bug");
+            })
+        });
+        assert!(panicked.is_err(), "{:?}", panicked.as_ref().ok());
+        let left: Vec<_> = std::fs::read_dir(tmp.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert!(left.is_empty(), "left behind: {left:?}");
+        write_replacing(&out, &[], |dir| {
+            fs::create_dir_all(dir)?;
+            fs::create(&dir.join("whole.txt"), "whole")
+        })
+        .unwrap();
+        assert!(out.join("whole.txt").is_file());
+    }
 
     #[test]
     fn mount_points_are_read_with_their_escapes() {

@@ -1,6 +1,9 @@
 //! The detect stage of a run: each detector over the test split (every image when there is no
-//! split), then the report. The stages in order: the test images and their truth
-//! (`test_images`), the streak detector (`streak_run`), YOLO (`yolo_run`), the report.
+//! split), then the report. The stages in order: the test frames (`test_frames`: PNG paths and
+//! sizes, nothing of the truth), the streak detector (`streak_run`), YOLO (`yolo_run`); only
+//! then the truth (`test_images`), which the report scores against. The detectors are given
+//! `TestFrame`s, which hold no truth, and run before any truth file is opened (issue #44; the
+//! test `detectors_open_no_truth` runs them with the truth folder gone).
 
 use std::path::Path;
 use std::time::Instant;
@@ -9,10 +12,10 @@ use anyhow::Context;
 use rayon::prelude::*;
 
 use crate::artifacts::WrittenPng;
-use crate::campaign::{Campaign, PointingMode};
+use crate::campaign::{Campaign, PointingMode, StarHint};
 use crate::dataset::Subset;
 use crate::detect::Detection;
-use crate::detect::streak::detect_streaks_among_stars;
+use crate::detect::streak::{detect_streaks_among_stars, detect_streaks_on_frame};
 use crate::detect::yolo::{YoloDetector, YoloParams};
 use crate::experiment;
 use crate::geometry::FrameKind;
@@ -57,14 +60,8 @@ pub(crate) fn detect_and_report(
         .iter()
         .filter(|w| w.png.is_some() && matches!(w.subset, None | Some(Subset::Test)))
         .collect();
+    let runs = run_detectors(campaign, &chosen, model, progress)?;
     let images = test_images(dir, &chosen)?;
-    let mut runs = Vec::new();
-    if c.detect.classical {
-        runs.push(streak_run(campaign, &images, &chosen, progress)?);
-    }
-    if let Some(path) = model {
-        runs.push(yolo_run(campaign, path, &images, progress)?);
-    }
     let conversion: Vec<f64> = written.iter().filter_map(|w| w.conversion_s).collect();
     report::write(
         dir,
@@ -78,6 +75,43 @@ pub(crate) fn detect_and_report(
         &conversion,
         progress,
     )
+}
+
+/// Each detector of the campaign over the chosen images: what a detector sees of an image is
+/// its `TestFrame` (the PNG and its size) and the campaign, never its truth.
+fn run_detectors(
+    campaign: &Campaign,
+    chosen: &[&Written],
+    model: Option<&Path>,
+    progress: &dyn Progress,
+) -> anyhow::Result<Vec<DetectorRun>> {
+    let frames: Vec<TestFrame> = chosen.iter().map(|w| TestFrame::of(w)).collect();
+    let mut runs = Vec::new();
+    if campaign.resolved.detect.classical {
+        runs.push(streak_run(campaign, &frames, chosen, progress)?);
+    }
+    if let Some(path) = model {
+        runs.push(yolo_run(campaign, path, &frames, progress)?);
+    }
+    Ok(runs)
+}
+
+/// What a detector is given of a test image: its PNG and size, nothing of its truth.
+struct TestFrame {
+    png: std::path::PathBuf,
+    width: usize,
+    height: usize,
+}
+
+impl TestFrame {
+    fn of(w: &Written) -> TestFrame {
+        let png = w.png.as_ref().expect("only images with a PNG are chosen");
+        TestFrame {
+            png: png.path.clone(),
+            width: png.width,
+            height: png.height,
+        }
+    }
 }
 
 /// Each chosen image's PNG and truth, its sidecar's facts checked against its label boxes.
@@ -130,7 +164,7 @@ fn test_images(dir: &Path, chosen: &[&Written]) -> anyhow::Result<Vec<TestImage>
 }
 
 /// An image's grey pixels.
-fn load(img: &TestImage) -> anyhow::Result<Vec<u8>> {
+fn load(img: &TestFrame) -> anyhow::Result<Vec<u8>> {
     Ok(image::open(&img.png)
         .with_context(|| format!("reading {}", img.png.display()))?
         .to_luma8()
@@ -141,9 +175,9 @@ fn load(img: &TestImage) -> anyhow::Result<Vec<u8>> {
 /// detections and the seconds the detector spent on it.
 fn run_detector(
     name: &str,
-    images: &[TestImage],
+    images: &[TestFrame],
     progress: &dyn Progress,
-    detect: impl Fn(usize, &TestImage) -> anyhow::Result<(Vec<Detection>, f64)> + Sync,
+    detect: impl Fn(usize, &TestFrame) -> anyhow::Result<(Vec<Detection>, f64)> + Sync,
 ) -> anyhow::Result<(Vec<Vec<Detection>>, Vec<f64>)> {
     progress.start(name, images.len() as u64);
     let results: Vec<(Vec<Detection>, f64)> = images
@@ -166,16 +200,21 @@ fn run_detector(
 /// recovers debris moving along the trails, and a tracked object does not move; its prediction
 /// misses trails bent by the pointing jitter (up to 8 px at the ends of 300 px trails, which it
 /// then reported as debris in the track quickstart; with the direction alone, none).
+/// With `[detect] stars = "frame"`, no image gets either: the detector measures the star trails
+/// on the image itself (`detect_streaks_on_frame`), as on a user's bare frame.
 fn streak_run(
     campaign: &Campaign,
-    images: &[TestImage],
+    images: &[TestFrame],
     chosen: &[&Written],
     progress: &dyn Progress,
 ) -> anyhow::Result<DetectorRun> {
     let params = &campaign.resolved.detect.streak;
+    let told = campaign.resolved.detect.stars == StarHint::Catalogue;
     let sky = match campaign.resolved.pointing.mode {
-        PointingMode::Survey => Some((experiment::of(campaign), experiment::inputs(campaign)?)),
-        PointingMode::Fixed | PointingMode::Track => None,
+        PointingMode::Survey if told => {
+            Some((experiment::of(campaign), experiment::inputs(campaign)?))
+        }
+        PointingMode::Survey | PointingMode::Fixed | PointingMode::Track => None,
     };
     let (detections, seconds) = run_detector("streak", images, progress, |i, img| {
         let pixels = load(img)?;
@@ -192,14 +231,18 @@ fn streak_run(
             )?),
             None => None,
         };
-        let found = detect_streaks_among_stars(
-            &pixels,
-            img.width,
-            img.height,
-            params,
-            chosen[i].trail_angle_deg,
-            stars.as_deref(),
-        );
+        let found = if told {
+            detect_streaks_among_stars(
+                &pixels,
+                img.width,
+                img.height,
+                params,
+                chosen[i].trail_angle_deg,
+                stars.as_deref(),
+            )
+        } else {
+            detect_streaks_on_frame(&pixels, img.width, img.height, params, None, None).0
+        };
         Ok((
             found.into_iter().map(|c| c.detection).collect(),
             t.elapsed().as_secs_f64(),
@@ -207,7 +250,11 @@ fn streak_run(
     })?;
     Ok(DetectorRun {
         name: "streak".into(),
-        description: "classical streak detector (background mesh, oriented line filters, components, moments; no model)".into(),
+        description: if told {
+            "classical streak detector (background mesh, oriented line filters, components, moments; no model)".into()
+        } else {
+            "classical streak detector (background mesh, oriented line filters, components, moments; no model), star trails measured on each frame".into()
+        },
         model_sha256: None,
         detections,
         seconds,
@@ -222,7 +269,7 @@ fn streak_run(
 fn yolo_run(
     campaign: &Campaign,
     path: &Path,
-    images: &[TestImage],
+    images: &[TestFrame],
     progress: &dyn Progress,
 ) -> anyhow::Result<DetectorRun> {
     let d = &campaign.resolved.detect;
@@ -288,4 +335,64 @@ fn row_kind(campaign: &Campaign) -> String {
         PointingMode::Track => "track",
     };
     format!("{mode}, {geometry}, {kind}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::{RunOptions, run_with, written};
+    use crate::shard::{RECORDS, Shard};
+
+    /// The detectors open no truth file: a shard of the survey quickstart (its images' PNGs,
+    /// labels, truth and records, nothing detected) has its truth folder taken away, and each
+    /// detector still runs on every test image, told of the stars by the catalogue and, with
+    /// `stars = "frame"`, by nothing.
+    #[test]
+    fn detectors_open_no_truth() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        for stars in ["catalogue", "frame"] {
+            let sets = ["images=4".to_string(), format!("detect.stars=\"{stars}\"")];
+            let campaign = Campaign::load_with_overrides(
+                &root.join("campaigns/survey-quickstart.toml"),
+                &sets,
+            )
+            .unwrap();
+            assert_eq!(
+                format!("{:?}", campaign.resolved.detect.stars).to_lowercase(),
+                stars
+            );
+            let tmp = tempfile::tempdir().unwrap();
+            // A shard index of the count is refused, not a panic (the library's callers).
+            let beyond = RunOptions {
+                shard: Some(Shard { index: 1, count: 1 }),
+                ..RunOptions::default()
+            };
+            let out = tmp.path().join("beyond");
+            assert!(run_with(&campaign, &out, beyond, None, &crate::progress::Silent).is_err());
+            let dir = tmp.path().join("shard");
+            let options = RunOptions {
+                shard: Some(Shard { index: 0, count: 1 }),
+                ..RunOptions::default()
+            };
+            run_with(&campaign, &dir, options, None, &crate::progress::Silent).unwrap();
+            let records: Vec<crate::journal::Record> = std::fs::read_to_string(dir.join(RECORDS))
+                .unwrap()
+                .lines()
+                .map(|l| serde_json::from_str(l).unwrap())
+                .collect();
+            let written = written(&campaign, &dir, &records);
+            let chosen: Vec<&Written> = written.iter().filter(|w| w.png.is_some()).collect();
+            assert_eq!(chosen.len(), 4);
+            let hidden = tmp.path().join("hidden-truth");
+            std::fs::rename(dir.join("truth"), &hidden).unwrap();
+            let runs = run_detectors(&campaign, &chosen, None, &crate::progress::Silent).unwrap();
+            assert_eq!(runs.len(), 1, "the streak detector");
+            let found: usize = runs[0].detections.iter().map(Vec::len).sum();
+            assert!(found > 0, "{stars}: the detector ran and found streaks");
+            // The truth is gone indeed: the report's half cannot read it.
+            assert!(test_images(&dir, &chosen).is_err());
+            std::fs::rename(&hidden, dir.join("truth")).unwrap();
+            assert_eq!(test_images(&dir, &chosen).unwrap().len(), 4);
+        }
+    }
 }

@@ -194,17 +194,8 @@ pub(crate) fn record_check(
     share: std::ops::Range<u64>,
 ) -> impl Fn(&Record) -> Result<(), String> + Sync + use<'_> {
     let c = &campaign.resolved;
-    let n = c.images as usize;
     let enhance = c.stages.contains(&Stage::Enhance);
-    let subsets = c.stages.contains(&Stage::Dataset).then(|| {
-        dataset::assign_collects(
-            c.seed,
-            n,
-            c.collect_frames() as usize,
-            c.split.train,
-            c.split.val,
-        )
-    });
+    let subsets = subsets(c);
     move |r: &Record| {
         if !share.contains(&r.index) {
             return Err(format!(
@@ -440,16 +431,9 @@ fn render(
     progress: &dyn Progress,
 ) -> anyhow::Result<(Vec<Record>, usize, f64)> {
     let c = &campaign.resolved;
-    let n = c.images as usize;
     let enhance_stage = c.stages.contains(&Stage::Enhance);
     let dataset_stage = c.stages.contains(&Stage::Dataset);
-    let subsets = dataset::assign_collects(
-        c.seed,
-        n,
-        c.collect_frames() as usize,
-        c.split.train,
-        c.split.val,
-    );
+    let subsets = subsets(c);
 
     let mut dirs = vec![dir.join("truth")];
     if c.artifacts.fits || c.artifacts.noise_free_fits {
@@ -465,6 +449,8 @@ fn render(
             dirs.push(dir.join("images"));
             dirs.push(dir.join("labels"));
         }
+        let streak_sets = crate::streak_labels::dirs(&c.artifacts, dataset_stage);
+        dirs.extend(streak_sets.iter().map(|d| dir.join(d)));
     }
     for d in &dirs {
         store::fs::create_dir_all(d)?;
@@ -476,7 +462,8 @@ fn render(
         campaign: c.name.clone(),
         campaign_hash: campaign.hash.clone(),
         seed: c.seed,
-        observer: campaign.observer.name.clone(),
+        observer: campaign.observer.name().to_string(),
+        site: campaign.observer.ground().map(|g| g.site),
     };
     let have: std::collections::BTreeSet<u64> = done.iter().map(|r| r.index).collect();
     let todo: Vec<u64> = share.filter(|i| !have.contains(i)).collect();
@@ -487,7 +474,7 @@ fn render(
         .par_iter()
         .map(|&i| -> anyhow::Result<Record> {
             crate::progress::check(progress)?;
-            let subset = dataset_stage.then(|| subsets[i as usize]);
+            let subset = subsets.as_ref().map(|s| s[i as usize]);
             let products = simulate::image(&x, &inputs, i).map_err(|e| {
                 // Draws meet the checks in turn, so a rare reason can be the one that matters.
                 let fields: Vec<String> = e
@@ -567,6 +554,45 @@ fn render(
     Ok((done, count, seconds))
 }
 
+/// Each image's subset of the split (collects kept together), where the campaign has a dataset
+/// stage; None without one (no split).
+fn subsets(c: &crate::campaign::CampaignFile) -> Option<Vec<Subset>> {
+    c.stages.contains(&Stage::Dataset).then(|| {
+        dataset::assign_collects(
+            c.seed,
+            c.images as usize,
+            c.collect_frames() as usize,
+            c.split.train,
+            c.split.val,
+        )
+    })
+}
+
+/// What each image of `records` left for the detect stage, its files in `dir` (a run's
+/// staging directory, a merge's, or a shard's).
+pub(crate) fn written(campaign: &Campaign, dir: &Path, records: &[Record]) -> Vec<Written> {
+    let subsets = subsets(&campaign.resolved);
+    records
+        .iter()
+        .map(|r| {
+            let subset = subsets.as_ref().map(|s| s[r.index as usize]);
+            Written {
+                index: r.index,
+                subset,
+                png: r.png.as_ref().map(|p| WrittenPng {
+                    path: dir.join(artifacts::dataset_paths(r.index, subset).0),
+                    width: p.width,
+                    height: p.height,
+                    labels: p.labels(),
+                    seconds: 0.0,
+                }),
+                conversion_s: r.conversion_s,
+                trail_angle_deg: r.trail_angle_bits.map(f64::from_bits),
+            }
+        })
+        .collect()
+}
+
 /// The steps after rendering, on the images of `records` (every image of the campaign, by
 /// index) in `dir`: `data.yaml`, training, detection and report, and the manifest, whose
 /// digest is returned with the debris mix and each step's wall time. A single run and a merge
@@ -587,42 +613,24 @@ pub(crate) fn finish(
     let c = &campaign.resolved;
     let stages = &c.stages;
     let dataset_stage = stages.contains(&Stage::Dataset);
-    let subsets = dataset::assign_collects(
-        c.seed,
-        c.images as usize,
-        c.collect_frames() as usize,
-        c.split.train,
-        c.split.val,
-    );
-    let written: Vec<Written> = records
-        .iter()
-        .map(|r| {
-            let subset = dataset_stage.then(|| subsets[r.index as usize]);
-            Written {
-                index: r.index,
-                subset,
-                png: r.png.as_ref().map(|p| WrittenPng {
-                    path: dir.join(artifacts::dataset_paths(r.index, subset).0),
-                    width: p.width,
-                    height: p.height,
-                    labels: p.labels(),
-                    seconds: 0.0,
-                }),
-                conversion_s: r.conversion_s,
-                trail_angle_deg: r.trail_angle_bits.map(f64::from_bits),
-            }
-        })
-        .collect();
+    let subsets = subsets(c);
+    let written = written(campaign, dir, records);
 
     if dataset_stage {
         store::fs::create(
             &dir.join("data.yaml"),
             dataset::data_yaml(&c.name, &campaign.hash),
         )?;
+        for set in crate::streak_labels::sets(&c.artifacts) {
+            store::fs::create(
+                &dir.join(set.dir()).join("data.yaml"),
+                set.data_yaml(&c.name, &campaign.hash),
+            )?;
+        }
     }
     if c.collect_frames() > 1 {
         let indices: Vec<u64> = records.iter().map(|r| r.index).collect();
-        let subset = |i: u64| dataset_stage.then(|| subsets[i as usize]);
+        let subset = |i: u64| subsets.as_ref().map(|s| s[i as usize]);
         crate::collect::write_manifests(dir, &indices, subset)?;
     }
     journal::abort_if_testing("dataset");
@@ -665,12 +673,19 @@ pub(crate) fn finish(
     }
     // The exports read the labels and the predictions back, so they come after the report.
     let a = &c.artifacts;
-    if a.coco || a.ds9_regions {
+    if a.coco || a.ds9_regions || a.tdm {
         let formats = crate::export::Formats {
             coco: a.coco,
             ds9: a.ds9_regions,
+            tdm: a.tdm,
         };
-        crate::export::write(dir, &dir.join(crate::export::EXPORT_DIR), formats)?;
+        let resolved = serde_json::to_value(c)?;
+        crate::export::write(
+            dir,
+            &resolved,
+            &dir.join(crate::export::EXPORT_DIR),
+            formats,
+        )?;
     }
     let mut volatile: Vec<String> = report::VOLATILE
         .iter()
@@ -714,5 +729,7 @@ fn rejection_fields(reason: Rejection) -> &'static str {
             "`exposure.max_s` (track pointing follows the debris' apparent motion)"
         }
         Rejection::CollectPastWindow => "`collect.frames`, `collect.gap_s` and the `window`",
+        Rejection::Daylight => "`observer.site.sun_max_alt_deg` and the `window`",
+        Rejection::BelowHorizon => "`observer.site.min_alt_deg` and the debris' orbits",
     }
 }

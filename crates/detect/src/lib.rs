@@ -3,6 +3,10 @@
 //! pycocotools do. It imports soig's base and image layers only: a detector sees pixels and the
 //! image layer's `hint`, never the simulator (which its tests use to draw streaks to find).
 
+// Unit tests write their fixtures with std::fs; everything the product writes goes through the
+// store (clippy.toml's disallowed-methods, checked on every target by scripts/test.sh).
+#![cfg_attr(test, allow(clippy::disallowed_methods))]
+
 /// An axis-aligned box in pixel-edge coordinates (the image spans [0, width] x [0, height],
 /// Ultralytics' xyxy convention) with a confidence score and class.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

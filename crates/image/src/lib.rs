@@ -7,7 +7,12 @@
 //! - [`frames`]: real frames (FITS or PNG) and their sky region, for `soig detect`;
 //! - [`enhance`]: the paper's FITS -> 8-bit conversion (stretch, CLAHE) and PNG;
 //! - [`psf`]: the streak flux model shared by the renderer's labels and the streak detector;
-//! - [`hint`]: what a detector may be told besides the pixels (predicted star trails).
+//! - [`hint`]: what a detector may be told besides the pixels (predicted star trails);
+//! - [`streak_label`]: the oriented box and end keypoints of a streak (YOLO-OBB, YOLO pose).
+
+// Unit tests write their fixtures with std::fs; everything the product writes goes through the
+// store (clippy.toml's disallowed-methods, checked on every target by scripts/test.sh).
+#![cfg_attr(test, allow(clippy::disallowed_methods))]
 
 pub mod enhance;
 pub mod fits;
@@ -16,3 +21,4 @@ pub mod geometry;
 pub mod hint;
 pub mod imaging;
 pub mod psf;
+pub mod streak_label;

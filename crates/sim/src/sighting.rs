@@ -10,6 +10,8 @@ use soig_sky::frames::teme_to_gcrs_matrix;
 use soig_sky::orbit::Propagator;
 use soig_sky::{Mat3, Vec3, mat_vec, radec_deg, sub};
 
+use crate::observer::Viewpoint;
+
 /// The observer and the debris at one instant, GCRS km, and the debris direction in the image
 /// frame (not normalised).
 #[derive(Clone, Copy, Debug)]
@@ -40,7 +42,7 @@ pub struct Ephemeris {
 /// milliarcsecond over an exposure, so one matrix (at mid-exposure) serves it all, and so does
 /// one Earth velocity (it turns by 0.01 arcsec of aberration in 600 s).
 pub struct Sighting<'a> {
-    observer: &'a Propagator,
+    observer: &'a dyn Viewpoint,
     debris: &'a Propagator,
     teme_to_gcrs: Mat3,
     /// The Earth's barycentric velocity, km/s, when apparent places are on.
@@ -49,7 +51,7 @@ pub struct Sighting<'a> {
 
 impl<'a> Sighting<'a> {
     pub fn new(
-        observer: &'a Propagator,
+        observer: &'a dyn Viewpoint,
         debris: &'a Propagator,
         mid: Epoch,
         apparent: bool,
@@ -68,8 +70,8 @@ impl<'a> Sighting<'a> {
     }
 
     /// GCRS position (km) and velocity (km/s) of a body; None if it cannot be propagated.
-    fn state(&self, body: &Propagator, t: Epoch) -> Option<(Vec3, Vec3)> {
-        let (r, v) = body.state_teme(t).ok()?;
+    fn state(&self, body: &dyn Viewpoint, t: Epoch) -> Option<(Vec3, Vec3)> {
+        let (r, v) = body.teme_state(t)?;
         let (r, v) = (
             mat_vec(&self.teme_to_gcrs, r),
             mat_vec(&self.teme_to_gcrs, v),
@@ -78,6 +80,11 @@ impl<'a> Sighting<'a> {
             .chain(v.iter())
             .all(|x| x.is_finite())
             .then_some((r, v))
+    }
+
+    /// The axis and rate of a ground telescope's stare (`Viewpoint::stare_axis`).
+    pub fn stare_axis(&self, t: Epoch) -> Option<(Vec3, f64)> {
+        self.observer.stare_axis(t)
     }
 
     /// The observer's GCRS position (km) at `t`; None if it cannot be propagated.

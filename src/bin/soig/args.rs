@@ -68,7 +68,8 @@ pub enum Command {
     Experiment(ExperimentArgs),
     /// Export a finished output for other tools: the dataset and the detect stage's predictions
     /// as COCO JSON (OUT/coco/) and the truth and detections as DS9 region files over the FITS
-    /// (OUT/ds9/); see src/product/export/. Both unless one is chosen.
+    /// (OUT/ds9/), and with --tdm the truth's observations as a CCSDS TDM (OUT/tdm/); see
+    /// src/product/export/. COCO and DS9 unless one is chosen.
     Export(ExportArgs),
     /// Score YOLO-format predictions (`cls xc yc w h score`) against YOLO labels, exactly as
     /// Ultralytics and pycocotools compute their metrics.
@@ -392,18 +393,24 @@ pub struct ExportArgs {
     /// Only DS9 regions.
     #[arg(long)]
     pub ds9: bool,
+    /// The truth's observations as a CCSDS TDM (`tdm/truth.tdm`, RA/Dec angles); with --coco
+    /// or --ds9, those too.
+    #[arg(long)]
+    pub tdm: bool,
 }
 
 /// `soig eval`.
 #[derive(clap::Args)]
 pub struct EvalArgs {
-    /// Directory of label files (`cls xc yc w h`, normalised), one per image.
+    /// Directory of label files (`cls xc yc w h`, normalised; with `--mode ultralytics-obb`
+    /// YOLO-OBB corners `cls x1 y1 x2 y2 x3 y3 x4 y4`), one per image.
     #[arg(long)]
     pub labels: PathBuf,
     /// Directory of prediction files, paired with labels by file stem.
     #[arg(long)]
     pub predictions: PathBuf,
-    /// Which convention to report: Ultralytics' `ap_per_class` or pycocotools' COCOeval.
+    /// Which convention to report: Ultralytics' `ap_per_class`, pycocotools' COCOeval, or
+    /// Ultralytics' OBB validator (oriented boxes, probabilistic IoU).
     #[arg(long, value_enum, default_value = "ultralytics")]
     pub mode: EvalMode,
     /// Images, to scale boxes to their pixel size (Ultralytics' IoU has a 1e-7 term, so
@@ -456,6 +463,7 @@ pub enum DetectorChoice {
 pub enum EvalMode {
     Ultralytics,
     Coco,
+    UltralyticsObb,
 }
 
 /// What `soig slurm` and `soig k8s` take.

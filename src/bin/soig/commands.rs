@@ -196,6 +196,7 @@ pub fn export(a: ExportArgs) -> ExitCode {
         out,
         coco,
         ds9,
+        tdm,
     } = a;
     user_errors(|| {
         let dest = out.unwrap_or_else(|| {
@@ -204,10 +205,12 @@ pub fn export(a: ExportArgs) -> ExitCode {
             name.push("-export");
             PathBuf::from(name)
         });
-        let both = !coco && !ds9;
+        // None chosen: COCO and DS9, as before there was a TDM.
+        let both = !coco && !ds9 && !tdm;
         let formats = soig::export::Formats {
             coco: coco || both,
             ds9: ds9 || both,
+            tdm,
         };
         let files = soig::export::export_output(&output, &dest, formats)?;
         println!("{} files -> {}", files.len(), dest.display());
@@ -233,6 +236,7 @@ pub fn eval(a: EvalArgs) -> ExitCode {
             mode: match mode {
                 EvalMode::Ultralytics => soig::metrics::EvalMode::Ultralytics,
                 EvalMode::Coco => soig::metrics::EvalMode::Coco,
+                EvalMode::UltralyticsObb => soig::metrics::EvalMode::UltralyticsObb,
             },
             images: images.as_deref(),
             image_size,

@@ -115,6 +115,9 @@ pub struct ObjectSpec {
     /// Mean orbital elements, for objects with no public TLE (the paper's NORAD 40649).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub elements: Option<ElementsSpec>,
+    /// Observer only: a telescope on the ground in place of an orbit (`ground::SiteSpec`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub site: Option<super::ground::SiteSpec>,
     /// Debris only: relative weight in the draw of each image's object (default 1, all equal):
     /// an object of weight 2 is shown twice as often as one of weight 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -560,6 +563,24 @@ pub struct Artifacts {
     /// resolved campaign when off, so hashes stay.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub light_curve: bool,
+    /// Streak-shaped labels beside the axis-aligned ones: each object's oriented box
+    /// (Ultralytics' YOLO-OBB) as `obb/labels/...`, the PNGs hard-linked as `obb/images/...` and
+    /// `obb/data.yaml`, so `yolo obb train data=obb/data.yaml` reads it unedited
+    /// (crates/image/src/streak_label.rs); needs the `enhance` stage. Omitted from the resolved
+    /// campaign when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub obb_labels: bool,
+    /// The streak's two ends as keypoints (Ultralytics' pose format, `kpt_shape: [2, 3]`) with
+    /// the axis-aligned box, as `keypoints/labels/...` beside hard-linked `keypoints/images/...`
+    /// and `keypoints/data.yaml`; needs the `enhance` stage. Omitted from the resolved campaign
+    /// when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub keypoint_labels: bool,
+    /// The truth's observations as a CCSDS Tracking Data Message (RA/Dec angles seen from the
+    /// observer), `export/tdm/truth.tdm` (src/product/export/tdm.rs). Omitted from the
+    /// resolved campaign when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub tdm: bool,
 }
 
 /// Training through Ultralytics (`soig train`); the paper's hyperparameters by default.
@@ -656,6 +677,31 @@ pub struct Detect {
     /// `detect::streak::StreakParams`). Left out of the resolved campaign while all are default.
     #[serde(default, skip_serializing_if = "StreakParams::is_default")]
     pub streak: StreakParams,
+    /// What the classical detector is told of the stars. Left out of the resolved campaign
+    /// while it is the default, so a campaign's hash is the same as before it existed.
+    #[serde(default, skip_serializing_if = "StarHint::is_default")]
+    pub stars: StarHint,
+}
+
+/// What the classical streak detector of the detect stage is told of the stars in an image.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum StarHint {
+    /// The campaign's knowledge, as a plate-solved frame gives it: survey images get the
+    /// catalogued stars' trails, predicted from the commanded pointing and the star catalogue
+    /// (each placed by the pointing offset measured on the image); other images get the trail
+    /// direction of the pointing.
+    #[default]
+    Catalogue,
+    /// Nothing: the detector measures the star trails on the frame itself (their direction,
+    /// length and profile), as `soig detect` does on a bare frame with no catalogue or angle.
+    Frame,
+}
+
+impl StarHint {
+    fn is_default(&self) -> bool {
+        *self == StarHint::default()
+    }
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]

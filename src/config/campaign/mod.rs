@@ -9,6 +9,7 @@
 mod compose;
 pub mod defaults;
 mod file;
+mod ground;
 mod lines;
 mod noise;
 mod resolve;
@@ -19,6 +20,7 @@ use std::path::{Path, PathBuf};
 use hifitime::Epoch;
 
 pub use file::*;
+pub use ground::SiteSpec;
 pub use noise::{Noise, PhysicalNoise};
 pub use resolve::{MAX_SURVEY_DRIFT_DEG, parse_epoch};
 pub use validate::MAX_OBJECTS_PER_FRAME;
@@ -26,6 +28,7 @@ pub use validate::MAX_OBJECTS_PER_FRAME;
 pub use crate::geometry::FrameKind;
 pub use crate::render::RenderMethod;
 pub use crate::scene::{Body, PointingMode, SnrDefinition};
+pub use soig_sim::observer::{GroundGate, Observer};
 
 use crate::hash::hash_json;
 use compose::Layers;
@@ -48,10 +51,12 @@ pub struct Campaign {
     pub resolved: CampaignFile,
     /// sha256 of the canonical JSON of `resolved` (without `output`).
     pub hash: String,
-    pub observer: Body,
+    pub observer: Observer,
     pub debris: Vec<Body>,
     /// The objects of `[population]` (empty without).
     pub population: Vec<Body>,
+    /// A ground observer's site, night and the spans where each object can be seen.
+    pub ground: Option<GroundGate>,
     pub window_start: Epoch,
     pub window_end: Epoch,
     /// Where outputs go.
@@ -203,6 +208,7 @@ impl Campaign {
             observer: r.observer,
             debris: r.debris,
             population: r.population,
+            ground: r.ground,
             window_start: r.window_start,
             window_end: r.window_end,
             output_dir,

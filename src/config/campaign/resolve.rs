@@ -7,7 +7,10 @@ use std::path::Path;
 
 use hifitime::Epoch;
 
-use super::{Background, Body, CampaignFile, ObjectSpec, PointingMode, Stars};
+use super::ground::{ground_gate, ground_of, no_debris_sites};
+use super::{
+    Background, Body, CampaignFile, GroundGate, ObjectSpec, Observer, PointingMode, Stars,
+};
 use crate::hash::sha256_file;
 use crate::sky::orbit::{self, OrbitalElements, Propagator, Tle};
 
@@ -16,10 +19,11 @@ pub use crate::scene::MAX_SURVEY_DRIFT_DEG;
 /// A resolved campaign: what its hash covers, and the bodies and window the scenes use.
 pub(super) struct Resolved {
     pub file: CampaignFile,
-    pub observer: Body,
+    pub observer: Observer,
     pub debris: Vec<Body>,
     /// The objects of `[population]` (empty without), the observer left out.
     pub population: Vec<Body>,
+    pub ground: Option<GroundGate>,
     pub window_start: Epoch,
     pub window_end: Epoch,
 }
@@ -53,8 +57,15 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
     }
 
     let mut resolved = file.clone();
-    let observer = resolve_object(&mut resolved.observer, base_dir, window_start)
-        .map_err(|(f, m)| fail(&format!("observer{f}"), m))?;
+    let ground = ground_of(&file.observer).map_err(|(f, m)| fail(&format!("observer{f}"), m))?;
+    let observer = match ground {
+        Some(g) => Observer::Ground(g),
+        None => Observer::Orbit(Box::new(
+            resolve_object(&mut resolved.observer, base_dir, window_start)
+                .map_err(|(f, m)| fail(&format!("observer{f}"), m))?,
+        )),
+    };
+    no_debris_sites(file)?;
     let mut debris = Vec::new();
     for (i, spec) in resolved.debris.iter_mut().enumerate() {
         debris.push(
@@ -62,26 +73,30 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
                 .map_err(|(f, m)| fail(&format!("debris[{i}]{f}"), m))?,
         );
     }
+    let orbit = observer.orbit();
     // The observer cannot observe itself: every draw would fail its geometry.
-    if let Some(i) = debris.iter().position(|d| d.norad == observer.norad) {
+    if let Some(i) = orbit.and_then(|o| debris.iter().position(|d| d.norad == o.norad)) {
         return Err(fail(
             &format!("debris[{i}].norad"),
             format!(
                 "NORAD {} is the observer itself: the debris must be other objects",
-                observer.norad
+                orbit.map_or(0, |o| o.norad)
             ),
         ));
     }
     // An object SGP4 cannot propagate anywhere in the window (decayed before it opens,
     // or diverged) would fail every scene draw, ending in "no acceptable scene" after
     // max_attempts draws: refuse it here, naming its field and its TLE.
-    let specs = std::iter::once(("observer".to_string(), &file.observer, &observer)).chain(
-        file.debris
-            .iter()
-            .zip(&debris)
-            .enumerate()
-            .map(|(i, (spec, body))| (format!("debris[{i}]"), spec, body)),
-    );
+    let specs = orbit
+        .map(|o| ("observer".to_string(), &file.observer, o))
+        .into_iter()
+        .chain(
+            file.debris
+                .iter()
+                .zip(&debris)
+                .enumerate()
+                .map(|(i, (spec, body))| (format!("debris[{i}]"), spec, body)),
+        );
     for (field, spec, body) in specs {
         let problem = match check_propagates(body, window_start, window_end) {
             Err(e) => Some(format!(
@@ -153,7 +168,8 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
         resolved.detect.model_sha256 = Some(sha);
     }
     let population = match resolved.population.as_mut() {
-        Some(p) => resolve_population(p, base_dir, observer.norad)
+        // A ground observer is refused with a population (`validate`): none to leave out.
+        Some(p) => resolve_population(p, base_dir, observer.orbit().map(|o| o.norad))
             .map_err(|(f, m)| fail(&format!("population.{f}"), m))?,
         None => Vec::new(),
     };
@@ -166,10 +182,10 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
             ));
         }
     }
-    if resolved.pointing.mode == PointingMode::Survey {
+    if let (Some(o), PointingMode::Survey) = (orbit, resolved.pointing.mode) {
         // The boresight turns at the observer's orbital rate: beyond a few degrees of drift
         // the star cone and the trails grow without bound, so refuse it up front.
-        let p = &observer.propagator;
+        let p = &o.propagator;
         let t1 = window_start + hifitime::Duration::from_seconds(1.0);
         if let (Ok(a), Ok(b)) = (p.position_teme_km(window_start), p.position_teme_km(t1)) {
             let drift = crate::sky::angle_deg(a, b) * resolved.exposure.max_s;
@@ -187,11 +203,14 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
         }
     }
 
+    let ground = ground_gate(&resolved, &observer, &debris, (window_start, window_end))?;
+
     Ok(Resolved {
         file: resolved,
         observer,
         debris,
         population,
+        ground,
         window_start,
         window_end,
     })
@@ -204,7 +223,7 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
 fn resolve_population(
     p: &mut super::Population,
     base_dir: &Path,
-    observer: u64,
+    observer: Option<u64>,
 ) -> Result<Vec<Body>, (String, String)> {
     let fail = |m: String| ("tle_file".to_string(), m);
     let full = base_dir.join(&p.tle_file);
@@ -228,7 +247,7 @@ fn resolve_population(
     }
     let mut first_line = std::collections::BTreeMap::new();
     let mut bodies = Vec::with_capacity(tles.len());
-    for tle in tles.iter().filter(|t| t.norad_id != observer) {
+    for tle in tles.iter().filter(|t| Some(t.norad_id) != observer) {
         if let Some(line) = first_line.insert(tle.norad_id, tle.line) {
             return Err(fail(format!(
                 "NORAD {} at line {} of {} is already at line {line}: each object once",

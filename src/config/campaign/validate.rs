@@ -124,6 +124,12 @@ fn top(c: &CampaignFile) -> Checked {
 /// object, so it has no placed objects, and a stare is a fixed direction of a catalogue scene.
 fn population(c: &CampaignFile) -> Checked {
     if c.population.is_some() {
+        // A ground site's night spans are drawn per debris object; a stare has none.
+        check(
+            c.observer.site.is_none(),
+            "population",
+            "a catalogue scene is seen from a satellite observer: drop `observer.site` or `[population]`",
+        )?;
         check(
             c.objects.is_none(),
             "population",
@@ -548,6 +554,16 @@ fn detect(c: &CampaignFile) -> Checked {
         "artifacts.coco",
         "the COCO export is of the dataset's PNGs and labels: it needs the `enhance` stage",
     )?;
+    for (on, field) in [
+        (c.artifacts.obb_labels, "artifacts.obb_labels"),
+        (c.artifacts.keypoint_labels, "artifacts.keypoint_labels"),
+    ] {
+        check(
+            !on || c.stages.contains(&Stage::Enhance),
+            field,
+            "streak-shaped labels are of the PNGs: they need the `enhance` stage",
+        )?;
+    }
     let sp = &c.split;
     for (f, x) in [
         ("split.train", sp.train),

@@ -1,12 +1,14 @@
 //! Exports of a run's output for other tools: the dataset and the detect stage's predictions as
-//! COCO JSON (`coco`: Detectron2, MMDetection, torchvision, pycocotools), and the truth and the
-//! detections as DS9 region files over the FITS images (`ds9`). Both are read back from the
+//! COCO JSON (`coco`: Detectron2, MMDetection, torchvision, pycocotools), the truth and the
+//! detections as DS9 region files over the FITS images (`ds9`), and the truth's observations
+//! as a CCSDS Tracking Data Message for orbit determination (`tdm`). Both are read back from the
 //! output's own files (labels, predictions, PNG sizes, truth sidecars), so `soig run` (the
 //! `artifacts.coco` and `artifacts.ds9_regions` switches) and `soig export` of a finished output
 //! write the same bytes.
 
 pub mod coco;
 pub mod ds9;
+pub mod tdm;
 
 use std::path::{Path, PathBuf};
 
@@ -17,6 +19,8 @@ use anyhow::Context;
 pub struct Formats {
     pub coco: bool,
     pub ds9: bool,
+    /// The truth's observations as a CCSDS TDM (`tdm`).
+    pub tdm: bool,
 }
 
 /// The folder, inside a run's output, that its own exports go to.
@@ -100,15 +104,23 @@ pub fn image_index(stem: &str, path: &Path) -> anyhow::Result<u64> {
         })
 }
 
-/// Write the chosen exports of the output `output` into `dest` (created); returns the files
-/// written, relative to `dest`.
-pub fn write(output: &Path, dest: &Path, formats: Formats) -> anyhow::Result<Vec<PathBuf>> {
+/// Write the chosen exports of the output `output`, made by the resolved `campaign`, into
+/// `dest` (created); returns the files written, relative to `dest`.
+pub fn write(
+    output: &Path,
+    campaign: &serde_json::Value,
+    dest: &Path,
+    formats: Formats,
+) -> anyhow::Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     if formats.coco {
         files.extend(coco::write(output, &dest.join("coco"))?);
     }
     if formats.ds9 {
         files.extend(ds9::write(output, &dest.join("ds9"))?);
+    }
+    if formats.tdm {
+        files.extend(tdm::write(output, campaign, &dest.join("tdm"))?);
     }
     Ok(files
         .into_iter()
@@ -149,9 +161,14 @@ pub fn export_output(output: &Path, dest: &Path, formats: Formats) -> anyhow::Re
         "coco": formats.coco,
         "ds9": formats.ds9,
     });
+    // An export without TDM records what it recorded before there was one (same hash).
+    let mut record = record;
+    if formats.tdm {
+        record["tdm"] = serde_json::Value::Bool(true);
+    }
     crate::output::write_replacing(dest, &[output], |dir| {
         crate::store::fs::create_dir_all(dir)?;
-        let files = write(output, dir, formats)?;
+        let files = write(output, &source.campaign, dir, formats)?;
         let hash = crate::hash::hash_json(&record);
         crate::manifest::Manifest::build(dir, &hash, record.clone(), &[])?.write(dir)?;
         Ok(files)

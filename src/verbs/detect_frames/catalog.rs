@@ -60,6 +60,10 @@ pub struct Predicted {
     /// Positions in the file's pixel grid (0-based, pixel centres at integers) at the time
     /// nodes while the star is near the frame, linear in between; one node under fixed pointing.
     pub nodes: Vec<[f64; 2]>,
+    /// Seconds from the exposure's start of each node: the start and end WCS time the camera's
+    /// turn, so the star-aware pass can follow a trail's wander over the exposure
+    /// (`jitter_across`), as `soig run` does with the renderer's nodes.
+    pub times_s: Vec<f64>,
     /// Expected photo-electrons while it is near the frame (with the header's `MAGZERO`).
     pub electrons: Option<f64>,
 }
@@ -200,6 +204,7 @@ impl FrameSky {
                             dec_deg: s.dec_deg,
                             mag: s.mag,
                             nodes: vec![[p.0, p.1]],
+                            times_s: vec![0.5 * self.exposure_s],
                             electrons: rate(s.mag).map(|r| r * self.exposure_s),
                         });
                     }
@@ -231,6 +236,7 @@ impl FrameSky {
                         dec_deg: s.dec_deg,
                         mag: s.mag,
                         nodes: path[a..=b].iter().map(|&(x, y)| [x, y]).collect(),
+                        times_s: (a..=b).map(|k| k as f64 * step).collect(),
                         electrons: rate(s.mag).map(|r| r * (b - a) as f64 * step),
                     });
                 }
@@ -263,16 +269,16 @@ pub fn in_region(predicted: &[Predicted], region: crate::frames::Region) -> Vec<
     predicted
         .iter()
         .filter_map(|p| {
-            let nodes: Vec<(f64, f64)> = p
+            let (nodes, times_s): (Vec<(f64, f64)>, Vec<f64>) = p
                 .nodes
                 .iter()
-                .map(|n| (n[0] - ox, n[1] - oy))
-                .filter(|&(x, y)| on(x, y))
-                .collect();
+                .zip(&p.times_s)
+                .map(|(n, &t)| ((n[0] - ox, n[1] - oy), t))
+                .filter(|&((x, y), _)| on(x, y))
+                .unzip();
             (!nodes.is_empty()).then(|| StarTrail {
                 nodes,
-                // A catalogue's trails are not followed over the exposure (jitter_across).
-                times_s: Vec::new(),
+                times_s,
                 electrons: p.electrons.unwrap_or(f64::NAN),
             })
         })

@@ -513,3 +513,63 @@ fn headline_figures() {
     let u = ultralytics(&[]);
     assert_eq!((u.map50, u.precision, u.f1_conf), (0.0, 0.0, 0.0));
 }
+
+/// Tied scores that mix hits and misses: pycocotools keeps tied detections in input order (image
+/// order, then each image's own), and so does `coco`; the figures of
+/// `tests/reference/coco_ties_reference.py` for the case and for it with image 1's two tied
+/// detections swapped (an order that agreed by chance would fail one of them). Both to 1e-12,
+/// the rounding of the same sums.
+#[test]
+fn coco_breaks_ties_as_pycocotools() {
+    let far = bx(900., 900., 20., 20.);
+    let case = |swapped: bool| {
+        let mut first = vec![(bx(10., 10., 20., 20.), 0.7, 0), (far, 0.7, 0)];
+        if swapped {
+            first.reverse();
+        }
+        vec![
+            img(&[(bx(10., 10., 20., 20.), 0)], &first),
+            img(
+                &[(bx(100., 100., 20., 20.), 0)],
+                &[(far, 0.7, 0), (bx(100., 100., 20., 20.), 0.7, 0)],
+            ),
+            img(
+                &[(bx(300., 300., 20., 20.), 0), (bx(500., 500., 20., 20.), 0)],
+                &[
+                    (bx(300., 300., 20., 12.), 0.5, 0),
+                    (far, 0.5, 0),
+                    (bx(500., 500., 20., 20.), 0.9, 0),
+                ],
+            ),
+        ]
+    };
+    let pinned = [
+        (
+            false,
+            [
+                0.7079207920792079,
+                0.8349834983498351,
+                0.6534653465346535,
+                0.825,
+            ],
+        ),
+        (
+            true,
+            [
+                0.6254125412541253,
+                0.7524752475247526,
+                0.5709570957095709,
+                0.825,
+            ],
+        ),
+    ];
+    for (swapped, want) in pinned {
+        let c = coco(&case(swapped));
+        for (got, want) in [c.ap, c.ap50, c.ap75, c.ar100].into_iter().zip(want) {
+            assert!(
+                (got - want).abs() < 1e-12,
+                "swapped {swapped}: {got} against {want}"
+            );
+        }
+    }
+}

@@ -11,6 +11,8 @@ use super::{AtThreshold, CocoMetrics, MetricsError, UltralyticsMetrics};
 pub enum EvalMode {
     Ultralytics,
     Coco,
+    /// Oriented boxes (YOLO-OBB files), as Ultralytics' OBB validator scores them.
+    UltralyticsObb,
 }
 
 /// How to score: the mode, where the images are (their sizes turn normalised boxes into pixels;
@@ -29,6 +31,7 @@ pub struct EvalOptions<'a> {
 pub enum Scores {
     Ultralytics(UltralyticsMetrics),
     Coco(CocoMetrics),
+    UltralyticsObb(UltralyticsMetrics),
 }
 
 /// What `eval_dirs` measured.
@@ -100,6 +103,9 @@ pub fn eval_dirs(
     options: EvalOptions,
 ) -> Result<Evaluation, EvalError> {
     check(&options)?;
+    if options.mode == EvalMode::UltralyticsObb {
+        return eval_obb_dirs(labels, predictions, options);
+    }
     let pairs = super::read_yolo_dirs(labels, predictions)?;
     let mut scaled = Vec::with_capacity(pairs.len());
     for (stem, e) in &pairs {
@@ -114,10 +120,34 @@ pub fn eval_dirs(
         scores: match options.mode {
             EvalMode::Ultralytics => Scores::Ultralytics(super::ultralytics(&scaled)),
             EvalMode::Coco => Scores::Coco(super::coco(&scaled)),
+            EvalMode::UltralyticsObb => unreachable!("scored by eval_obb_dirs"),
         },
         conf: options.conf,
         iou: options.iou,
         at_threshold: super::at_threshold(&scaled, options.conf, options.iou),
+    })
+}
+
+/// [`eval_dirs`] of oriented boxes: corners scaled to pixels as axis-aligned boxes are.
+fn eval_obb_dirs(
+    labels: &Path,
+    predictions: &Path,
+    options: EvalOptions,
+) -> Result<Evaluation, EvalError> {
+    let mut scaled = Vec::new();
+    for (stem, e) in super::read_obb_dirs(labels, predictions)? {
+        let (w, h) = match options.images {
+            Some(dir) => image_size_of(dir, &stem)?,
+            None => (options.image_size, options.image_size),
+        };
+        scaled.push(e.scaled(w as f64, h as f64));
+    }
+    Ok(Evaluation {
+        images: scaled.len(),
+        scores: Scores::UltralyticsObb(super::ultralytics_obb(&scaled)),
+        conf: options.conf,
+        iou: options.iou,
+        at_threshold: super::at_threshold_obb(&scaled, options.conf, options.iou),
     })
 }
 
@@ -138,6 +168,15 @@ fn image_size_of(dir: &Path, stem: &str) -> Result<(u32, u32), EvalError> {
 }
 
 impl Evaluation {
+    /// The mode's name, as `soig eval --mode` takes it.
+    fn mode_name(&self) -> &'static str {
+        match self.scores {
+            Scores::Ultralytics(_) => "ultralytics",
+            Scores::Coco(_) => "coco",
+            Scores::UltralyticsObb(_) => "ultralytics-obb",
+        }
+    }
+
     /// The figures as JSON (`soig eval --json`, Python's `soig.eval`).
     pub fn to_json(&self) -> serde_json::Value {
         let fixed = &self.at_threshold;
@@ -146,8 +185,8 @@ impl Evaluation {
             "tp": fixed.tp, "fp": fixed.fp, "fn": fixed.fn_,
         });
         match &self.scores {
-            Scores::Ultralytics(m) => serde_json::json!({
-                "mode": "ultralytics", "images": self.images, "objects": m.n_truth,
+            Scores::Ultralytics(m) | Scores::UltralyticsObb(m) => serde_json::json!({
+                "mode": self.mode_name(), "images": self.images, "objects": m.n_truth,
                 "detections": m.n_detections, "precision": m.precision, "recall": m.recall,
                 "map50": m.map50, "map50_95": m.map50_95, "f1_conf": m.f1_conf,
                 "at_threshold": fixed,
@@ -167,8 +206,9 @@ impl Evaluation {
             fixed.precision, fixed.recall, fixed.tp, fixed.fp, fixed.fn_
         );
         match &self.scores {
-            Scores::Ultralytics(m) => format!(
-                "ultralytics: {} images, {} objects, {} detections\nP {:.4}  R {:.4}  mAP50 {:.4}  mAP50-95 {:.4}  (P, R at max-F1 confidence {:.3})\n{threshold}",
+            Scores::Ultralytics(m) | Scores::UltralyticsObb(m) => format!(
+                "{}: {} images, {} objects, {} detections\nP {:.4}  R {:.4}  mAP50 {:.4}  mAP50-95 {:.4}  (P, R at max-F1 confidence {:.3})\n{threshold}",
+                self.mode_name(),
                 self.images,
                 m.n_truth,
                 m.n_detections,

@@ -2,7 +2,6 @@
 //! confidence and IoU), the figures the paper reports at conf 0.5, IoU 0.5.
 
 use super::{ImageEval, cmp_desc, det_box};
-use crate::Detection;
 use serde::{Deserialize, Serialize};
 
 /// Intersection over union of two `[x1, y1, x2, y2]` boxes (no `+1`, no epsilon); 0 when the union is
@@ -30,13 +29,20 @@ pub struct AtThreshold {
 /// Precision, recall, TP, FP, FN counting detections with `score >= conf` (the paper reports conf 0.5,
 /// IoU 0.5), matched per image by [`match_image`].
 pub fn at_threshold(images: &[ImageEval], conf: f64, iou_threshold: f64) -> AtThreshold {
-    let (mut tp, mut fp, mut fn_) = (0usize, 0usize, 0usize);
-    for im in images {
+    tally(images.iter().map(|im| {
         let m = match_image(im, conf, iou_threshold);
-        let found = m.found.iter().filter(|&&f| f).count();
+        (m.found, m.false_positives)
+    }))
+}
+
+/// The counts of per-image matches: whether each object was found, and the false positives.
+pub(super) fn tally(images: impl Iterator<Item = (Vec<bool>, usize)>) -> AtThreshold {
+    let (mut tp, mut fp, mut fn_) = (0usize, 0usize, 0usize);
+    for (found_each, false_positives) in images {
+        let found = found_each.iter().filter(|&&f| f).count();
         tp += found;
-        fp += m.false_positives;
-        fn_ += m.found.len() - found;
+        fp += false_positives;
+        fn_ += found_each.len() - found;
     }
     let ratio = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f64 / b as f64 };
     AtThreshold {
@@ -65,32 +71,51 @@ pub struct ImageMatch {
 /// object). Unmatched detections are false positives, unmatched objects misses.
 pub fn match_image(im: &ImageEval, conf: f64, iou_threshold: f64) -> ImageMatch {
     im.check();
-    let mut dets: Vec<&Detection> = im.detections.iter().filter(|d| d.score >= conf).collect();
-    dets.sort_by(|a, b| cmp_desc(a.score, b.score));
-    let mut found = vec![false; im.truth.len()];
-    let mut false_positive_boxes = Vec::new();
-    for d in dets {
-        let db = det_box(d);
+    let dets: Vec<(f64, u32)> = im.detections.iter().map(|d| (d.score, d.class)).collect();
+    let (found, false_positives) = greedy(&im.truth_class, &dets, (conf, iou_threshold), |g, j| {
+        iou(&im.truth[g], &det_box(&im.detections[j]))
+    });
+    let false_positive_boxes: Vec<[f64; 4]> = false_positives
+        .iter()
+        .map(|&j| det_box(&im.detections[j]))
+        .collect();
+    ImageMatch {
+        found,
+        false_positives: false_positive_boxes.len(),
+        false_positive_boxes,
+    }
+}
+
+/// [`match_image`]'s rule for any IoU: `dets` (score, class), `iou(g, j)` of object g and
+/// detection j. Returns whether each object was found and the false positives' indices in
+/// matching order.
+pub(super) fn greedy(
+    truth_class: &[u32],
+    dets: &[(f64, u32)],
+    (conf, iou_threshold): (f64, f64),
+    iou: impl Fn(usize, usize) -> f64,
+) -> (Vec<bool>, Vec<usize>) {
+    let mut order: Vec<usize> = (0..dets.len()).filter(|&j| dets[j].0 >= conf).collect();
+    order.sort_by(|&a, &b| cmp_desc(dets[a].0, dets[b].0));
+    let mut found = vec![false; truth_class.len()];
+    let mut false_positives = Vec::new();
+    for j in order {
         let mut best: Option<(usize, f64)> = None;
-        for (g, (tb, &tc)) in im.truth.iter().zip(&im.truth_class).enumerate() {
-            if found[g] || tc != d.class {
+        for (g, &tc) in truth_class.iter().enumerate() {
+            if found[g] || tc != dets[j].1 {
                 continue;
             }
-            let v = iou(tb, &db);
+            let v = iou(g, j);
             if v >= iou_threshold && best.is_none_or(|(_, bv)| v > bv) {
                 best = Some((g, v));
             }
         }
         match best {
             Some((g, _)) => found[g] = true,
-            None => false_positive_boxes.push(db),
+            None => false_positives.push(j),
         }
     }
-    ImageMatch {
-        found,
-        false_positives: false_positive_boxes.len(),
-        false_positive_boxes,
-    }
+    (found, false_positives)
 }
 
 #[cfg(test)]

@@ -10,6 +10,9 @@
 //! * [`at_threshold`]: precision / recall / TP / FP / FN at a fixed confidence and IoU (this module's own
 //!   definition, documented on the function).
 //! * [`read_yolo_dirs`]: YOLO-format label and prediction text files.
+//! * [`ultralytics_obb`]: the same for oriented boxes (YOLO-OBB files, [`read_obb_dirs`]), as
+//!   Ultralytics' `OBBValidator` scores them: probabilistic IoU ([`probiou`]) of the boxes'
+//!   minimum-area rectangles ([`xywhr`]).
 //!
 //! Reference figures come from `tests/reference/metrics_reference.py` (the real pycocotools and Ultralytics
 //! code); the tests pin them to 1e-6.
@@ -38,6 +41,7 @@ mod coco_eval;
 mod eval;
 mod matching;
 mod numpy;
+mod obb;
 mod ultralytics_map;
 mod yolo_files;
 
@@ -47,6 +51,7 @@ mod cases;
 pub use coco_eval::{CocoMetrics, coco};
 pub use eval::{EvalError, EvalMode, EvalOptions, Evaluation, Scores, eval_dirs};
 pub use matching::{AtThreshold, ImageMatch, at_threshold, iou, match_image};
+pub use obb::{ObbImage, at_threshold_obb, probiou, read_obb_dirs, ultralytics_obb, xywhr};
 pub use ultralytics_map::{UltralyticsMetrics, UltralyticsVersion, ultralytics, ultralytics_with};
 pub use yolo_files::{MetricsError, parse_yolo, read_yolo_dirs, read_yolo_file};
 

@@ -70,7 +70,11 @@ fn ultra_box_iou(a: &[f64; 4], b: &[f64; 4]) -> f32 {
 
 /// `match_predictions` for one image: `iou[l][j]` (objects x detections, zero across classes), detections
 /// in descending confidence. Returns `correct[j][t]`.
-fn ultra_match(iou: &[Vec<f32>], n_det: usize, version: UltralyticsVersion) -> Vec<[bool; 10]> {
+pub(super) fn ultra_match(
+    iou: &[Vec<f32>],
+    n_det: usize,
+    version: UltralyticsVersion,
+) -> Vec<[bool; 10]> {
     let mut correct = vec![[false; 10]; n_det];
     let n_truth = iou.len();
     match version {
@@ -141,11 +145,15 @@ pub fn ultralytics(images: &[ImageEval]) -> UltralyticsMetrics {
 /// No objects at all gives zeros (Ultralytics warns and reports 0); no detections gives zeros.
 /// Detection classes without any object are ignored, as in `ap_per_class`.
 pub fn ultralytics_with(images: &[ImageEval], version: UltralyticsVersion) -> UltralyticsMetrics {
-    let px = np_linspace(0.0, 1.0, 1000);
-    let n_truth: usize = images.iter().map(|im| im.truth.len()).sum();
-    let n_detections: usize = images.iter().map(|im| im.detections.len()).sum();
+    from_stats(detection_stats(images, version), version)
+}
 
-    let (tp, conf, pred_cls, target_cls) = detection_stats(images, version);
+/// The metrics of per-detection statistics, as `ap_per_class` computes them: the part shared by
+/// axis-aligned and oriented boxes (crates/detect/src/metrics/obb.rs), which differ in the IoU.
+pub(super) fn from_stats(stats: Stats, version: UltralyticsVersion) -> UltralyticsMetrics {
+    let px = np_linspace(0.0, 1.0, 1000);
+    let (tp, conf, pred_cls, target_cls) = stats;
+    let (n_truth, n_detections) = (target_cls.len(), conf.len());
 
     let zero = |px: Vec<f64>| UltralyticsMetrics {
         precision: 0.0,
@@ -276,7 +284,7 @@ pub fn ultralytics_with(images: &[ImageEval], version: UltralyticsVersion) -> Ul
 /// Per-detection statistics in validator order (image order, NMS order within an image):
 /// each detection's matches at the 10 IoU thresholds, its confidence and class, and the
 /// truth classes.
-type Stats = (Vec<[bool; 10]>, Vec<f32>, Vec<u32>, Vec<u32>);
+pub(super) type Stats = (Vec<[bool; 10]>, Vec<f32>, Vec<u32>, Vec<u32>);
 
 fn detection_stats(images: &[ImageEval], version: UltralyticsVersion) -> Stats {
     let mut tp: Vec<[bool; 10]> = Vec::new();

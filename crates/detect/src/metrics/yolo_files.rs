@@ -23,7 +23,7 @@ pub enum MetricsError {
     OrphanPrediction { path: PathBuf, expected: PathBuf },
 }
 
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> MetricsError + '_ {
+pub(super) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> MetricsError + '_ {
     move |source| MetricsError::Io {
         path: path.to_path_buf(),
         source,
@@ -54,7 +54,36 @@ pub fn parse_yolo(
     text: &str,
     with_score: bool,
 ) -> Result<Vec<(u32, [f64; 4], f64)>, MetricsError> {
-    let want = if with_score { 6 } else { 5 };
+    let (want, form) = if with_score {
+        (6, "cls xc yc w h score")
+    } else {
+        (5, "cls xc yc w h")
+    };
+    let mut out = Vec::new();
+    for (line, class, v) in parse_lines(path, text, want, form)? {
+        if v[2] < 0.0 || v[3] < 0.0 {
+            return Err(MetricsError::Parse {
+                path: path.to_path_buf(),
+                line,
+                message: "negative box width or height".to_string(),
+            });
+        }
+        let (xc, yc, w, h) = (v[0], v[1], v[2], v[3]);
+        let b = [xc - w / 2.0, yc - h / 2.0, xc + w / 2.0, yc + h / 2.0];
+        out.push((class, b, if with_score { v[4] } else { 1.0 }));
+    }
+    Ok(out)
+}
+
+/// The lines of a YOLO-format text of `want` fields each (`form` names them in errors), blank
+/// lines skipped: (line number, class, the other fields), every field a finite number and the
+/// class a non-negative integer.
+pub(super) fn parse_lines(
+    path: &Path,
+    text: &str,
+    want: usize,
+    form: &str,
+) -> Result<Vec<(usize, u32, Vec<f64>)>, MetricsError> {
     let mut out = Vec::new();
     for (n, line) in text.lines().enumerate() {
         let err = |message: String| MetricsError::Parse {
@@ -67,17 +96,12 @@ pub fn parse_yolo(
             continue;
         }
         if fields.len() != want {
-            let form = if with_score {
-                "cls xc yc w h score"
-            } else {
-                "cls xc yc w h"
-            };
             return Err(err(format!(
                 "expected {want} fields ({form}), found {}",
                 fields.len()
             )));
         }
-        let mut v = [0.0f64; 6];
+        let mut v = vec![0.0f64; want];
         for (k, f) in fields.iter().enumerate() {
             v[k] = f
                 .parse::<f64>()
@@ -92,12 +116,7 @@ pub fn parse_yolo(
                 fields[0]
             )));
         }
-        if v[3] < 0.0 || v[4] < 0.0 {
-            return Err(err("negative box width or height".to_string()));
-        }
-        let (xc, yc, w, h) = (v[1], v[2], v[3], v[4]);
-        let b = [xc - w / 2.0, yc - h / 2.0, xc + w / 2.0, yc + h / 2.0];
-        out.push((v[0] as u32, b, if with_score { v[5] } else { 1.0 }));
+        out.push((n + 1, v[0] as u32, v.split_off(1)));
     }
     Ok(out)
 }
@@ -121,6 +140,32 @@ pub fn read_yolo_dirs(
     labels: &Path,
     predictions: &Path,
 ) -> Result<Vec<(String, ImageEval)>, MetricsError> {
+    paired(labels, predictions)?
+        .into_iter()
+        .map(|(stem, (path, text), prediction)| {
+            let truth = parse_yolo(&path, &text, false)?;
+            let mut im = ImageEval {
+                truth: truth.iter().map(|t| t.1).collect(),
+                truth_class: truth.iter().map(|t| t.0).collect(),
+                detections: Vec::new(),
+            };
+            if let Some((ppath, text)) = prediction {
+                im.detections = parse_yolo(&ppath, &text, true)?
+                    .into_iter()
+                    .map(|(class, b, score)| box_det(b, score, class))
+                    .collect();
+            }
+            Ok((stem, im))
+        })
+        .collect()
+}
+
+/// A label file's stem, path and text, and its prediction file's path and text if any.
+pub(super) type Paired = (String, (PathBuf, String), Option<(PathBuf, String)>);
+
+/// The label files of `labels` with their prediction files in `predictions` (paired by stem,
+/// sorted); a prediction file with no label file is an error.
+pub(super) fn paired(labels: &Path, predictions: &Path) -> Result<Vec<Paired>, MetricsError> {
     let label_files = txt_files(labels)?;
     let pred_files = txt_files(predictions)?;
     for (stem, path) in &pred_files {
@@ -134,24 +179,17 @@ pub fn read_yolo_dirs(
             });
         }
     }
+    let read = |path: PathBuf| -> Result<(PathBuf, String), MetricsError> {
+        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        Ok((path, text))
+    };
     let mut out = Vec::with_capacity(label_files.len());
     for (stem, path) in label_files {
-        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
-        let truth = parse_yolo(&path, &text, false)?;
-        let mut im = ImageEval {
-            truth: truth.iter().map(|t| t.1).collect(),
-            truth_class: truth.iter().map(|t| t.0).collect(),
-            detections: Vec::new(),
+        let prediction = match pred_files.binary_search_by(|(s, _)| s.as_str().cmp(&stem)) {
+            Ok(i) => Some(read(pred_files[i].1.clone())?),
+            Err(_) => None,
         };
-        if let Ok(i) = pred_files.binary_search_by(|(s, _)| s.as_str().cmp(&stem)) {
-            let ppath = &pred_files[i].1;
-            let text = std::fs::read_to_string(ppath).map_err(io_err(ppath))?;
-            im.detections = parse_yolo(ppath, &text, true)?
-                .into_iter()
-                .map(|(class, b, score)| box_det(b, score, class))
-                .collect();
-        }
-        out.push((stem, im));
+        out.push((stem, read(path)?, prediction));
     }
     Ok(out)
 }

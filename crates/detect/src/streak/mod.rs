@@ -135,6 +135,7 @@ mod trail_light;
 mod trails;
 mod union;
 mod unit_noise;
+mod unlisted;
 
 pub use explain::{Dropped, Reason, Seeds};
 pub use output::Candidate;
@@ -146,6 +147,7 @@ use pass::pass;
 pub use sky::StarTrail;
 use union::union;
 use unit_noise::unit_noise_map;
+use unlisted::TrailShape;
 
 /// Detect streaks in an 8-bit image (`pixels` row-major, `width * height` values).
 /// `star_trail_angle_deg`: in survey images the known direction of star trails (from the
@@ -296,7 +298,11 @@ fn two_passes(
         along: Some(trail),
         ..p.clone()
     };
-    let second = pass(pixels, w, h, &along, bg, z, Some(trail), Some(stars)).0;
+    let mut second = pass(pixels, w, h, &along, bg, z, Some(trail), Some(stars)).0;
+    // What the catalogue does not explain but has a star trail's shape is a star it did not
+    // list, or misplaced (`unlisted`).
+    let shape = TrailShape::of(stars, trail, w, h);
+    second.retain(|c| !shape.fits(c, p.psf_sigma, w, h));
     union(first, second, trail, p)
 }
 

@@ -87,7 +87,12 @@ pub(super) fn in_field(
 fn candidates(sensor: &Sensor, inputs: &Inputs, at: &Scene) -> Vec<usize> {
     let h = at.exposure_s / 2.0;
     let mid = at.start + Duration::from_seconds(h);
-    let Ok((observer_km, observer_km_s)) = inputs.observer.propagator.state_teme(mid) else {
+    // A population is seen from a satellite (`validate` refuses a ground site with it).
+    let Some(Ok((observer_km, observer_km_s))) = inputs
+        .observer
+        .orbit()
+        .map(|o| o.propagator.state_teme(mid))
+    else {
         return Vec::new();
     };
     let (ra, dec) = at.pointing.mid_radec_deg();
@@ -162,7 +167,7 @@ fn sight_object(
     let (start, exposure_s) = (at.start, at.exposure_s);
     let mid = start + Duration::from_seconds(exposure_s / 2.0);
     let sighting = Sighting::new(
-        &inputs.observer.propagator,
+        inputs.observer.viewpoint(),
         &body.propagator,
         mid,
         spec.apparent_positions,
@@ -180,6 +185,7 @@ fn sight_object(
         pointing: &at.pointing,
         mid_tan: &at.projection(sensor),
         shadowed: false,
+        extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
     };
     // A path too fast to sample has samples in the field (`trajectory`): it crossed it.
     let trajectory = match trajectory(spec, sensor, &|t_s| track.at(t_s), &shot) {
@@ -246,7 +252,8 @@ pub(super) fn draw_stare(
     let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
     let name = format!("stare at RA {ra} deg, Dec {dec} deg");
     for attempt in 1..=spec.gate.max_attempts {
-        let d = draw_values(spec, inputs, on_frame, rng);
+        // No debris object: a ground site's spans are refused with a population (`validate`).
+        let d = draw_values(spec, inputs, (0, on_frame), rng);
         let step_s = d.exposure_s + spec.collect_gap_s;
         let at = |k: u64| d.start + Duration::from_seconds(k as f64 * step_s);
         let judged = if at(spec.collect_frames.max(1) - 1) >= spec.window_end {
@@ -329,6 +336,8 @@ fn judge_boresight(
     let mid = start + Duration::from_seconds(exposure_s / 2.0);
     let observer_km = inputs
         .observer
+        .orbit()
+        .ok_or(Rejection::PropagationFailed)?
         .propagator
         .position_gcrs_km(mid)
         .map_err(|_| Rejection::PropagationFailed)?;

@@ -26,7 +26,7 @@ use crate::sighting::Sighting;
 use soig_base::rng::{Purpose, stream};
 use soig_sky::ephemeris::sun_position_km;
 use soig_sky::stars::Star;
-use soig_sky::{Vec3, radec_deg};
+use soig_sky::{Vec3, radec_deg, radec_unit};
 
 /// The debris object of image `image`, by the spec's weights, from the image's own debris
 /// stream (so the retries of the scene draw never change which object an image shows).
@@ -58,7 +58,7 @@ pub fn draw(
         NoScene::of(inputs, image, debris_index, attempts, rejections)
     };
     for attempt in 1..=max {
-        let d = draw_values(spec, inputs, on_frame, rng);
+        let d = draw_values(spec, inputs, (debris_index, on_frame), rng);
         let first = try_draw(spec, sensor, inputs, image, debris_index, &d, Plan::First).and_then(
             |first| {
                 judge_later_frames(spec, inputs, debris_index, &d)?;
@@ -150,7 +150,7 @@ fn judge_later_frames(
         }
         let mid = start + Duration::from_seconds(d.exposure_s / 2.0);
         let sighting = Sighting::new(
-            &inputs.observer.propagator,
+            inputs.observer.viewpoint(),
             &inputs.debris[debris_index].propagator,
             mid,
             spec.apparent_positions,
@@ -182,7 +182,7 @@ enum Plan<'a> {
 pub(super) fn draw_values(
     spec: &Spec,
     inputs: &Inputs,
-    on_frame: bool,
+    (debris_index, on_frame): (usize, bool),
     rng: &mut ChaCha12Rng,
 ) -> Draws {
     let span_s = (spec.window_end - spec.window_start).to_seconds();
@@ -191,7 +191,13 @@ pub(super) fn draw_values(
     } else {
         spec.exposure_min_s
     };
-    let start = spec.window_start + Duration::from_seconds(rng.random_range(0.0..span_s));
+    // A ground site draws its start within the object's night spans (the same one draw).
+    let start = match &spec.ground {
+        None => spec.window_start + Duration::from_seconds(rng.random_range(0.0..span_s)),
+        Some(g) => g
+            .instant(debris_index, rng.random_range(0.0..1.0))
+            .unwrap_or(spec.window_start),
+    };
     let area_m2 = spec.area.draw(rng);
     let placement = (
         rng.random_range(-1.0..1.0) * spec.placement_fraction,
@@ -253,7 +259,7 @@ fn try_draw(
 
     // Visibility at mid-exposure (paper 3.2.2).
     let sighting = Sighting::new(
-        &inputs.observer.propagator,
+        inputs.observer.viewpoint(),
         &inputs.debris[debris_index].propagator,
         mid,
         spec.apparent_positions,
@@ -290,6 +296,7 @@ fn try_draw(
             pointing: &pointing,
             mid_tan: &mid_tan,
             shadowed,
+            extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
         },
     )?;
 
@@ -365,9 +372,15 @@ pub(super) fn field_stars(
     mid: Epoch,
     gated: bool,
 ) -> Result<Vec<Star>, Rejection> {
-    let field = inputs
+    let mut field = inputs
         .stars
         .stars_in_cone(ra, dec, cone, sensor.mag_limit, mid);
+    // A ground site's air dims the field by the boresight's airmass (the field's few tenths
+    // of a degree change it little).
+    if let Some(e) = spec.ground.as_ref().and_then(|g| g.extinction(mid)) {
+        let dm = e.mag(radec_unit(ra, dec));
+        field.iter_mut().for_each(|s| s.mag += dm);
+    }
     if gated && field.iter().any(|s| s.mag < spec.gate.brightest_star_mag) {
         return Err(Rejection::BrightStar);
     }

@@ -144,7 +144,7 @@ fn try_place(
     let mid_of = |s: &Scene| s.start + Duration::from_seconds(s.exposure_s / 2.0);
     let sighting_at = |mid: Epoch| {
         Sighting::new(
-            &inputs.observer.propagator,
+            inputs.observer.viewpoint(),
             &inputs.debris[debris_index].propagator,
             mid,
             spec.apparent_positions,
@@ -189,6 +189,7 @@ fn try_place(
             pointing: &at.pointing,
             mid_tan: &at.projection(sensor),
             shadowed,
+            extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
         },
     )?;
     let snr = gate_snr(

@@ -69,15 +69,20 @@ fn survey_track(
     exposure_s: f64,
     boresight: (f64, f64),
 ) -> Option<SurveyTrack> {
-    // Orbit normal and rate from the observer's velocity by a central difference.
-    let h = 0.5;
-    let r0 = sighting.observer_km(mid - Duration::from_seconds(h))?;
-    let r1 = sighting.observer_km(mid + Duration::from_seconds(h))?;
-    let r = sighting.observer_km(mid)?;
-    let v = scale(sub(r1, r0), 1.0 / (2.0 * h));
-    let n = cross(r, v);
-    let rate_deg_s = (norm(n) / dot(r, r)).to_degrees();
-    let axis = unit(n);
+    let (axis, rate_deg_s) = match sighting.stare_axis(mid) {
+        // A ground telescope held in altitude and azimuth: a GEO stare.
+        Some(stare) => stare,
+        None => {
+            // Orbit normal and rate from the observer's velocity by a central difference.
+            let h = 0.5;
+            let r0 = sighting.observer_km(mid - Duration::from_seconds(h))?;
+            let r1 = sighting.observer_km(mid + Duration::from_seconds(h))?;
+            let r = sighting.observer_km(mid)?;
+            let v = scale(sub(r1, r0), 1.0 / (2.0 * h));
+            let n = cross(r, v);
+            (unit(n), (norm(n) / dot(r, r)).to_degrees())
+        }
+    };
     // The boresight moves on a small circle about the orbit normal.
     let sin_from_axis = angle_deg(radec_unit(boresight.0, boresight.1), axis)
         .to_radians()

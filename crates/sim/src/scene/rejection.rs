@@ -25,6 +25,10 @@ pub enum Rejection {
     TrackTooFast,
     /// A later frame of the collect would start after the campaign's window.
     CollectPastWindow,
+    /// Ground observer: the Sun above the night's limit at the site.
+    Daylight,
+    /// Ground observer: the object below the site's altitude limit.
+    BelowHorizon,
 }
 
 impl Rejection {
@@ -42,6 +46,8 @@ impl Rejection {
             Rejection::TooFast => "streak too fast to sample (over 1e6 trajectory samples)",
             Rejection::TrackTooFast => "tracking drift beyond the survey drift limit",
             Rejection::CollectPastWindow => "a later frame of the collect after the window",
+            Rejection::Daylight => "sun above the night's limit at the site",
+            Rejection::BelowHorizon => "object below the site's altitude limit",
         }
     }
 }

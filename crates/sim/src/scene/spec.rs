@@ -7,6 +7,7 @@ use rand::RngExt;
 use serde::Serialize;
 
 use crate::background::{BackgroundModel, FrameChoice, RealFrame};
+use crate::observer::{GroundGate, Observer};
 use soig_base::rng::{Purpose, stream};
 use soig_sky::orbit::Propagator;
 use soig_sky::stars::{ProceduralSky, Star, StarCatalog};
@@ -22,7 +23,7 @@ pub struct Body {
 /// What a campaign reads before its first image: the bodies, the star source and the
 /// background frames.
 pub struct Inputs {
-    pub observer: Body,
+    pub observer: Observer,
     pub debris: Vec<Body>,
     /// The population of a catalogue scene (`Spec::catalogue`), empty without one, and the
     /// cheap orbit of each over the campaign's window (`catalogue::candidates` culls with it).
@@ -153,6 +154,9 @@ pub struct Spec {
     /// A catalogue scene (`[population]`): every object of `Inputs::population` in the field
     /// is shown where its orbit puts it; None: the debris objects as drawn.
     pub catalogue: Option<CatalogueScene>,
+    /// A ground observer's site, night and observable spans (`[observer] site`); None for a
+    /// satellite observer.
+    pub ground: Option<GroundGate>,
 }
 
 /// Where a catalogue scene points.

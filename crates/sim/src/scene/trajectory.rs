@@ -7,6 +7,7 @@ use soig_sky::projection::Tan;
 use soig_sky::{Vec3, angle_deg, norm, radec_deg, sub};
 
 use super::{Pointing, Rejection, Spec, TrajectorySample, Tumble};
+use crate::observer::Extinction;
 use crate::sensor::Sensor;
 use crate::sighting::Sight;
 
@@ -20,6 +21,8 @@ pub(super) struct Shot<'a> {
     pub mid_tan: &'a Tan,
     /// In the Earth's shadow (a later frame of a collect): the object sends no light.
     pub shadowed: bool,
+    /// A ground site's air, which dims the object by its airmass at each sample.
+    pub extinction: Option<Extinction>,
 }
 
 /// The trajectory of one object, cut in samples at the centres of equal time slices, sampled
@@ -38,6 +41,7 @@ pub(super) fn trajectory(
         pointing,
         mid_tan,
         shadowed,
+        extinction,
     } = *shot;
     let sample = |n: usize| -> Result<Vec<TrajectorySample>, Rejection> {
         let dt = exposure_s / n as f64;
@@ -50,6 +54,9 @@ pub(super) fn trajectory(
             let (ra_deg, dec_deg) = radec_deg(sight.direction);
             let phase = angle_deg(sub(sun, d), sub(o, d)).to_radians();
             let mut mag = debris_magnitude(area_m2, spec.albedo, phase, norm(los));
+            if let Some(e) = extinction {
+                mag += e.mag(los);
+            }
             if let Some(tb) = tumble {
                 let factor = 1.0
                     + tb.amplitude

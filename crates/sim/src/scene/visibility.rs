@@ -3,6 +3,7 @@
 
 use hifitime::Epoch;
 use soig_sky::ephemeris::moon_position_km;
+use soig_sky::night::conditions;
 use soig_sky::photometry::debris_magnitude;
 use soig_sky::{Vec3, angle_deg, norm, segment_hits_sphere, sub};
 
@@ -40,7 +41,9 @@ pub(super) fn visibility(
     }
     let phase_angle_deg = angle_deg(sub(sun, deb), sub(obs, deb));
     let range_km = norm(los);
-    let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km);
+    let extinction = spec.ground.as_ref().and_then(|g| g.extinction(mid));
+    let magnitude = debris_magnitude(area_m2, spec.albedo, phase_angle_deg.to_radians(), range_km)
+        + extinction.map_or(0.0, |e| e.mag(los));
     if gated && (magnitude.is_nan() || magnitude > sensor.mag_limit) {
         return Err(Rejection::TooFaint);
     }
@@ -52,7 +55,12 @@ pub(super) fn visibility(
         moon_angle_deg,
         magnitude,
     };
-    let hidden = !gated && segment_hits_sphere(obs, deb, EARTH_RADIUS_KM);
+    let hidden = !gated
+        && match &spec.ground {
+            // A site sits inside the equatorial sphere: it is the horizon that hides.
+            Some(g) => conditions(&g.site, mid, deb).object_alt_deg < 0.0,
+            None => segment_hits_sphere(obs, deb, EARTH_RADIUS_KM),
+        };
     Ok((geometry, shadowed || hidden))
 }
 
@@ -84,7 +92,16 @@ pub(super) fn in_sight(
 ) -> Result<Angles, Rejection> {
     let a = angles(sight, (sun, mid));
     let v = &spec.gate;
-    if a.earth_angle_deg <= v.earth_min_deg {
+    if let Some(g) = &spec.ground {
+        // A ground site: the night's conditions replace the Earth's angle and clearance.
+        let c = conditions(&g.site, mid, sight.debris_km);
+        if c.sun_alt_deg > g.night.sun_max_alt_deg {
+            return Err(Rejection::Daylight);
+        }
+        if c.object_alt_deg < g.night.object_min_alt_deg {
+            return Err(Rejection::BelowHorizon);
+        }
+    } else if a.earth_angle_deg <= v.earth_min_deg {
         return Err(Rejection::EarthAngle);
     }
     if a.sun_angle_deg <= v.sun_min_deg {
@@ -93,11 +110,13 @@ pub(super) fn in_sight(
     if a.moon_angle_deg <= v.moon_min_deg {
         return Err(Rejection::MoonAngle);
     }
-    if segment_hits_sphere(
-        sight.observer_km,
-        sight.debris_km,
-        EARTH_RADIUS_KM + v.earth_clearance_km,
-    ) {
+    if spec.ground.is_none()
+        && segment_hits_sphere(
+            sight.observer_km,
+            sight.debris_km,
+            EARTH_RADIUS_KM + v.earth_clearance_km,
+        )
+    {
         return Err(Rejection::ThroughEarth);
     }
     Ok(a)

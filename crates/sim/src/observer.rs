@@ -1,0 +1,141 @@
+//! Who takes the images: a satellite (the paper's observer) or a telescope on the ground
+//! (issue #46), and the one thing the sighting asks of either, its state over an exposure.
+
+use hifitime::{Duration, Epoch};
+use soig_sky::Vec3;
+use soig_sky::night::NightRule;
+use soig_sky::orbit::Propagator;
+use soig_sky::site::{STANDARD_PRESSURE_HPA, STANDARD_TEMPERATURE_C, Site, refraction_deg};
+use soig_sky::{dot, unit};
+
+use crate::atmosphere::{airmass, extinction_mag};
+
+use crate::scene::Body;
+
+/// A body whose TEME position (km) and velocity (km/s) are known at any instant.
+pub trait Viewpoint {
+    /// None where it cannot be propagated.
+    fn teme_state(&self, t: Epoch) -> Option<(Vec3, Vec3)>;
+
+    /// For a telescope held fixed in altitude and azimuth: the GCRS axis and rate (deg/s) its
+    /// boresight turns about (`Site::stare_axis`); None for a satellite, whose survey
+    /// attitude follows its orbit.
+    fn stare_axis(&self, _t: Epoch) -> Option<(Vec3, f64)> {
+        None
+    }
+}
+
+impl Viewpoint for Propagator {
+    fn teme_state(&self, t: Epoch) -> Option<(Vec3, Vec3)> {
+        self.state_teme(t).ok()
+    }
+}
+
+impl Viewpoint for Site {
+    fn teme_state(&self, t: Epoch) -> Option<(Vec3, Vec3)> {
+        Some(Site::teme_state(self, t))
+    }
+
+    fn stare_axis(&self, t: Epoch) -> Option<(Vec3, f64)> {
+        Some(Site::stare_axis(self, t))
+    }
+}
+
+/// A telescope at a ground site.
+#[derive(Clone, Debug)]
+pub struct Ground {
+    pub name: String,
+    pub site: Site,
+}
+
+/// What a ground campaign asks of its scenes: the site, the conditions of its night and, for
+/// each debris object in the order of `Inputs::debris`, the spans of the campaign's window
+/// where they hold (`night::search`, at resolve time); the scene draws its start times there.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GroundGate {
+    pub site: Site,
+    pub night: NightRule,
+    pub spans: Vec<Vec<(Epoch, Epoch)>>,
+    /// The band's extinction, magnitudes per airmass (0: none).
+    pub extinction_mag_per_airmass: f64,
+}
+
+/// The air's dimming of a source over one exposure: the site's zenith at mid-exposure (it
+/// turns 2 arcmin in 8 s, nothing to an airmass) and the extinction coefficient.
+#[derive(Clone, Copy, Debug)]
+pub struct Extinction {
+    pub up: Vec3,
+    pub k_mag_per_airmass: f64,
+}
+
+impl Extinction {
+    /// Magnitudes taken from a source in GCRS direction `dir`: k X, X the Kasten-Young airmass of
+    /// its refracted altitude.
+    pub fn mag(&self, dir: Vec3) -> f64 {
+        let alt = dot(unit(dir), self.up).clamp(-1.0, 1.0).asin().to_degrees();
+        let seen = alt + refraction_deg(alt, STANDARD_PRESSURE_HPA, STANDARD_TEMPERATURE_C);
+        extinction_mag(self.k_mag_per_airmass, airmass(seen))
+    }
+}
+
+impl GroundGate {
+    /// The extinction over an exposure whose middle is `mid`; None when there is none.
+    pub fn extinction(&self, mid: Epoch) -> Option<Extinction> {
+        (self.extinction_mag_per_airmass > 0.0).then(|| Extinction {
+            up: self.site.up(mid),
+            k_mag_per_airmass: self.extinction_mag_per_airmass,
+        })
+    }
+
+    /// The instant `u` in [0, 1) of the way through the object's spans, laid end to end.
+    pub fn instant(&self, debris_index: usize, u: f64) -> Option<Epoch> {
+        let spans = self.spans.get(debris_index)?;
+        let total: f64 = spans.iter().map(|(a, b)| (*b - *a).to_seconds()).sum();
+        let mut left = u * total;
+        for (a, b) in spans {
+            let len = (*b - *a).to_seconds();
+            if left <= len {
+                return Some(*a + Duration::from_seconds(left));
+            }
+            left -= len;
+        }
+        spans.last().map(|(_, b)| *b)
+    }
+}
+
+/// The observer of a campaign.
+#[derive(Clone, Debug)]
+pub enum Observer {
+    Orbit(Box<Body>),
+    Ground(Ground),
+}
+
+impl Observer {
+    pub fn name(&self) -> &str {
+        match self {
+            Observer::Orbit(b) => &b.name,
+            Observer::Ground(g) => &g.name,
+        }
+    }
+
+    pub fn viewpoint(&self) -> &dyn Viewpoint {
+        match self {
+            Observer::Orbit(b) => &b.propagator,
+            Observer::Ground(g) => &g.site,
+        }
+    }
+
+    pub fn orbit(&self) -> Option<&Body> {
+        match self {
+            Observer::Orbit(b) => Some(b.as_ref()),
+            Observer::Ground(_) => None,
+        }
+    }
+
+    pub fn ground(&self) -> Option<&Ground> {
+        match self {
+            Observer::Ground(g) => Some(g),
+            Observer::Orbit(_) => None,
+        }
+    }
+}

@@ -1,0 +1,214 @@
+//! The truth's observations as a CCSDS Tracking Data Message (CCSDS 503.0-B-2, KVN), for orbit
+//! determination tools: `export/tdm/truth.tdm`, one segment per image, the debris' (RA, Dec)
+//! seen from the observing satellite at the exposure's start, middle and end (`ANGLE_TYPE =
+//! RADEC`, `ANGLE_1` right ascension, `ANGLE_2` declination, degrees), from the truth sidecars'
+//! `ephemeris`. The angles are topocentric to the observer, on GCRS axes (ICRS to
+//! milliarcseconds): geometric, or light-time corrected and aberrated (apparent) when the
+//! campaign sets `render.apparent_positions`; the header says which. The visual magnitude at
+//! mid-exposure is `MAG` (a TDM 2.0 data keyword); the SNR a comment.
+//!
+//! Images with several placed objects (`[objects]`) carry no per-object ephemeris in their
+//! truth (each is turned rigidly into the field, its RA/Dec not its orbit's): they are left
+//! out, and the header counts them.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+
+use crate::store::fs;
+
+/// The file the export writes, inside its folder.
+pub const FILE: &str = "truth.tdm";
+
+/// One image's observation from its truth sidecar.
+struct Observation {
+    image: String,
+    object: String,
+    norad: u64,
+    start: hifitime::Epoch,
+    exposure_s: f64,
+    radec: [[f64; 2]; 3],
+    magnitude: f64,
+    snr: f64,
+}
+
+/// The observation of truth sidecar `path`; None for an image of placed objects (no
+/// ephemeris per object) or without an ephemeris.
+fn observation(path: &Path) -> anyhow::Result<Option<Observation>> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let t: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let e = &t["ephemeris"];
+    if t.get("objects").is_some() || e.is_null() {
+        return Ok(None);
+    }
+    let bad = |field: &str| {
+        anyhow::anyhow!(
+            "{}: field `{field}` missing or not a number",
+            path.display()
+        )
+    };
+    let num = |v: &serde_json::Value, field: &str| v.as_f64().ok_or_else(|| bad(field));
+    let pair = |key: &str| -> anyhow::Result<[f64; 2]> {
+        Ok([num(&e[key][0], key)?, num(&e[key][1], key)?])
+    };
+    let start_utc = t["start_utc"].as_str().ok_or_else(|| bad("start_utc"))?;
+    let start = parse_utc(start_utc).ok_or_else(|| {
+        anyhow::anyhow!(
+            "{}: start_utc {start_utc:?} is not YYYY-MM-DDThh:mm:ss.ffffff",
+            path.display()
+        )
+    })?;
+    Ok(Some(Observation {
+        image: path
+            .file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned(),
+        object: t["object"]
+            .as_str()
+            .ok_or_else(|| bad("object"))?
+            .to_string(),
+        norad: t["norad"].as_u64().ok_or_else(|| bad("norad"))?,
+        start,
+        exposure_s: num(&t["exposure_s"], "exposure_s")?,
+        radec: [
+            pair("debris_radec_start_deg")?,
+            pair("debris_radec_mid_deg")?,
+            pair("debris_radec_end_deg")?,
+        ],
+        magnitude: num(&t["magnitude"], "magnitude")?,
+        snr: num(&t["snr"], "snr")?,
+    }))
+}
+
+/// The epoch of `iso_utc`'s `YYYY-MM-DDThh:mm:ss.ffffff` (UTC).
+fn parse_utc(s: &str) -> Option<hifitime::Epoch> {
+    let (date, time) = s.split_once('T')?;
+    let d: Vec<i64> = date
+        .split('-')
+        .map(|v| v.parse().ok())
+        .collect::<Option<_>>()?;
+    let (hms, frac) = time.split_once('.').unwrap_or((time, "0"));
+    let t: Vec<u8> = hms
+        .split(':')
+        .map(|v| v.parse().ok())
+        .collect::<Option<_>>()?;
+    let ns = format!("{frac:0<9}").get(..9)?.parse::<u32>().ok()?;
+    if d.len() != 3 || t.len() != 3 {
+        return None;
+    }
+    let (y, mo, day) = (
+        i32::try_from(d[0]).ok()?,
+        u8::try_from(d[1]).ok()?,
+        u8::try_from(d[2]).ok()?,
+    );
+    hifitime::Epoch::maybe_from_gregorian_utc(y, mo, day, t[0], t[1], t[2], ns).ok()
+}
+
+/// A TDM value: KVN allows no line break, and `=` would end the keyword.
+fn kvn_text(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect()
+}
+
+/// The TDM of `observations`, the observer named `observer`, apparent or geometric places.
+fn tdm(observer: &str, apparent: bool, observations: &[Observation], skipped: usize) -> String {
+    let places = if apparent {
+        "astrometric as a plate solution measures them (render.apparent_positions: the debris at\n\
+         COMMENT its light-time position, aberrated by the observer's motion, in the stars' catalogue\n\
+         COMMENT frame; crates/sky/src/apparent.rs)"
+    } else {
+        "geometric (no light time, no aberration)"
+    };
+    let mut s = format!(
+        "CCSDS_TDM_VERS = 2.0\n\
+         COMMENT soig truth: the debris' RA/Dec seen from the observing satellite (topocentric to it),\n\
+         COMMENT on GCRS axes (ICRS to milliarcseconds), {places}; at the\n\
+         COMMENT exposure's start, middle and end of each image. Angles in degrees.\n\
+         COMMENT {skipped} image(s) of placed objects left out (no per-object ephemeris in their truth)\n\
+         CREATION_DATE = {}\n\
+         ORIGINATOR = soig\n",
+        // The output's contents, not the clock: the same run exports the same bytes.
+        observations
+            .first()
+            .map_or("2000-01-01T00:00:00.000000".to_string(), |o| {
+                crate::render::iso_utc(o.start)
+            }),
+    );
+    for o in observations {
+        let at = |k: usize| {
+            crate::render::iso_utc(
+                o.start + hifitime::Duration::from_seconds(o.exposure_s * k as f64 / 2.0),
+            )
+        };
+        s += &format!(
+            "\nMETA_START\n\
+             COMMENT image {}: SNR {:.3}\n\
+             TIME_SYSTEM = UTC\n\
+             START_TIME = {}\n\
+             STOP_TIME = {}\n\
+             PARTICIPANT_1 = {}\n\
+             PARTICIPANT_2 = {} (NORAD {})\n\
+             MODE = SEQUENTIAL\n\
+             PATH = 2,1\n\
+             ANGLE_TYPE = RADEC\n\
+             REFERENCE_FRAME = ICRF\n\
+             META_STOP\n\
+             DATA_START\n",
+            o.image,
+            o.snr,
+            at(0),
+            at(2),
+            kvn_text(observer),
+            kvn_text(&o.object),
+            o.norad,
+        );
+        for (k, [ra, dec]) in o.radec.iter().enumerate() {
+            s += &format!(
+                "ANGLE_1 = {} {ra:.10}\nANGLE_2 = {} {dec:.10}\n",
+                at(k),
+                at(k)
+            );
+            if k == 1 {
+                s += &format!("MAG = {} {:.6}\n", at(k), o.magnitude);
+            }
+        }
+        s += "DATA_STOP\n";
+    }
+    s
+}
+
+/// Write the truth's TDM of the output `output`, made by the resolved `campaign`, into `dest`;
+/// returns the file written.
+pub fn write(
+    output: &Path,
+    campaign: &serde_json::Value,
+    dest: &Path,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let observer = campaign["observer"]["name"]
+        .as_str()
+        .map(String::from)
+        .or_else(|| {
+            campaign["observer"]["norad"]
+                .as_u64()
+                .map(|n| format!("NORAD {n}"))
+        })
+        .unwrap_or_else(|| "observer".to_string());
+    let apparent = campaign["render"]["apparent_positions"].as_bool() == Some(true);
+    let truth = output.join("truth");
+    let mut observations = Vec::new();
+    let mut skipped = 0;
+    for stem in super::stems(&truth, "json")? {
+        match observation(&truth.join(format!("{stem}.json")))? {
+            Some(o) => observations.push(o),
+            None => skipped += 1,
+        }
+    }
+    fs::create_dir_all(dest)?;
+    let path = dest.join(FILE);
+    fs::create(&path, tdm(&observer, apparent, &observations, skipped))?;
+    Ok(vec![path])
+}
