@@ -5,6 +5,9 @@
 //! the reference puts in the field is shown or listed as unseen with a reason. Bad population
 //! settings are refused naming the field.
 
+// A test writes its fixtures (campaign text, a damaged TLE) with std::fs.
+#![allow(clippy::disallowed_methods)]
+
 mod common;
 
 use std::collections::{BTreeMap, BTreeSet};
