@@ -24,7 +24,7 @@ const NEAREST: usize = 3;
 /// A half-level end this close to the frame's edge (pixels, along the line) may be where the edge
 /// cuts a trail: the detector's ends of trails that leave the frame lay up to 37 px inside it (a
 /// trail's last pixels, under the background mesh's edge cells, fall below half its level). At
-/// 40, a catalogue missing 10% of its stars gave 7 false boxes in 40 images, at 48 none; the
+/// 40, a catalogue missing 10% of its stars gave 7 false boxes in 40 images, at 48 two; the
 /// price: debris ending 42 px inside the frame along a trail's direction and shorter than a
 /// trail is taken for a cut trail (`tests_sky`).
 const EDGE_PX: f64 = 48.0;
