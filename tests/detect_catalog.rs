@@ -259,6 +259,24 @@ fn bad_catalogue_inputs_fail_naming_the_file() {
     );
 }
 
+/// A frame's boxes at confidence 0.5 or more: those on the debris streak `t0`-`t1` (both ends
+/// within 5 px of it) and the others.
+fn debris_and_other(frame: &serde_json::Value, t0: [f64; 2], t1: [f64; 2]) -> (usize, usize) {
+    let (mut debris, mut other) = (0, 0);
+    for d in frame["detections"].as_array().unwrap() {
+        if d["confidence"].as_f64().unwrap() < 0.5 {
+            continue;
+        }
+        let e = [0, 1].map(|k| [0, 1].map(|i| d["ends"][k][i].as_f64().unwrap()));
+        if to_segment(e[0], t0, t1) < 5.0 && to_segment(e[1], t0, t1) < 5.0 {
+            debris += 1;
+        } else {
+            other += 1;
+        }
+    }
+    (debris, other)
+}
+
 /// Distance from `q` to the segment `a`-`b`.
 fn to_segment(q: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -315,18 +333,7 @@ fn star_aware_detection_on_soig_fits_keeps_the_debris_and_drops_the_trails() {
             )
             .unwrap();
             let frame = &found["frames"][0];
-            let (mut debris, mut other) = (0, 0);
-            for d in frame["detections"].as_array().unwrap() {
-                if d["confidence"].as_f64().unwrap() < 0.5 {
-                    continue;
-                }
-                let e = [0, 1].map(|k| [0, 1].map(|i| d["ends"][k][i].as_f64().unwrap()));
-                if to_segment(e[0], t0, t1) < 5.0 && to_segment(e[1], t0, t1) < 5.0 {
-                    debris += 1;
-                } else {
-                    other += 1;
-                }
-            }
+            let (debris, other) = debris_and_other(frame, t0, t1);
             if !with {
                 // Told nothing of the stars, the detector measures their trails on the frame
                 // (issue #44) instead of boxing them: their direction to half a degree (the
@@ -467,18 +474,7 @@ fn an_incomplete_or_misplaced_catalogue_adds_no_false_box() {
                 &std::fs::read_to_string(out.join("detections.json")).unwrap(),
             )
             .unwrap();
-            let (mut debris, mut other) = (0, 0);
-            for d in found["frames"][0]["detections"].as_array().unwrap() {
-                if d["confidence"].as_f64().unwrap() < 0.5 {
-                    continue;
-                }
-                let e = [0, 1].map(|k| [0, 1].map(|i| d["ends"][k][i].as_f64().unwrap()));
-                if to_segment(e[0], t0, t1) < 5.0 && to_segment(e[1], t0, t1) < 5.0 {
-                    debris += 1;
-                } else {
-                    other += 1;
-                }
-            }
+            let (debris, other) = debris_and_other(&found["frames"][0], t0, t1);
             assert_eq!((debris, other), (1, 0), "{name} image {index}: {found}");
         }
     }
