@@ -294,24 +294,10 @@ impl NativeCampaign {
             "noisy",
             exposure.adu.clone().into_pyarray(py).reshape([h, w])?,
         )?;
-        let clean: Vec<i32> = exposure
-            .electrons
-            .iter()
-            .map(|&v| v.min(i32::MAX as u32) as i32)
-            .collect();
+        let clean = soig::product::records::clean_counts(exposure);
         out.set_item("clean", clean.into_pyarray(py).reshape([h, w])?)?;
         // The truth sidecar as `soig run` writes it: one object, or the frame and its objects.
-        let truth = match (&exposure.objects, &products.scene.placed) {
-            (Some(objects), Some(_)) => to_python(
-                py,
-                &soig::render::FrameTruth::of_scene(
-                    &exposure.truth,
-                    objects.iter().map(|o| &o.truth),
-                    &products.scene,
-                ),
-            )?,
-            _ => to_python(py, &exposure.truth)?,
-        };
+        let truth = to_python(py, &soig::product::records::truth(&products))?;
         out.set_item("truth", truth)?;
         out.set_item("header", header)?;
         match &products.product {
@@ -324,22 +310,14 @@ impl NativeCampaign {
                         .into_pyarray(py)
                         .reshape([g.height, g.width])?,
                 )?;
-                // The label file's text: one line per labelled object, none for an empty frame.
-                let lines: String = f
-                    .labels
-                    .iter()
-                    .map(|b| b.yolo_line(f.frame.width, f.frame.height))
-                    .collect();
-                out.set_item("label", lines)?;
-                let edges = |b: &soig::geometry::BoxPx| {
-                    (b.x_min + 0.5, b.y_min + 0.5, b.x_max + 0.5, b.y_max + 0.5)
-                };
+                out.set_item("label", soig::product::records::label_text(f))?;
                 // The first box (the one object of a campaign without `[objects]`), and all.
-                out.set_item("label_box", f.labels.first().map(edges))?;
-                out.set_item(
-                    "label_boxes",
-                    f.labels.iter().map(edges).collect::<Vec<_>>(),
-                )?;
+                let edges: Vec<(f64, f64, f64, f64)> = soig::product::records::label_edges(f)
+                    .into_iter()
+                    .map(|[a, b, c, d]| (a, b, c, d))
+                    .collect();
+                out.set_item("label_box", edges.first())?;
+                out.set_item("label_boxes", edges)?;
             }
             None => {
                 out.set_item("png", py.None())?;

@@ -12,7 +12,7 @@ use crate::dataset::Subset;
 use crate::enhance;
 use crate::fits::{self, Card, Cards, Pixels};
 use crate::render::iso_utc;
-use crate::render::{Exposure, FrameTruth, Truth};
+use crate::render::{Exposure, Truth};
 use crate::scene::{Pointing, Scene};
 use crate::sensor::Sensor;
 use crate::simulate::ImageProducts;
@@ -84,11 +84,7 @@ pub fn write_image(
         )?;
     }
     if artifacts.noise_free_fits {
-        let e: Vec<i32> = exposure
-            .electrons
-            .iter()
-            .map(|&v| v.min(i32::MAX as u32) as i32)
-            .collect();
+        let e = crate::product::records::clean_counts(exposure);
         write_fits(
             format!("{stem}_clean.fits"),
             Pixels::I32(&e),
@@ -112,14 +108,7 @@ pub fn write_image(
         store::fs::create(&path, crate::light_curve::csv(&products.scene.shown())?)?;
     }
     let truth_path = dir.join("truth").join(format!("{stem}.json"));
-    let truth = match (&exposure.objects, &products.scene.placed) {
-        (Some(objects), Some(_)) => serde_json::to_string_pretty(&FrameTruth::of_scene(
-            &exposure.truth,
-            objects.iter().map(|o| &o.truth),
-            &products.scene,
-        ))?,
-        _ => serde_json::to_string_pretty(&exposure.truth)?,
-    };
+    let truth = serde_json::to_string_pretty(&crate::product::records::truth(products))?;
     store::fs::create(&truth_path, truth + "\n")?;
 
     files.push(format!("truth/{stem}.json"));
@@ -128,11 +117,7 @@ pub fn write_image(
     };
     let started = Instant::now();
     let frame = &product.frame;
-    let label_line: String = product
-        .labels
-        .iter()
-        .map(|b| b.yolo_line(frame.width, frame.height))
-        .collect();
+    let label_line = crate::product::records::label_text(product);
     let (png_rel, label_rel) = dataset_paths(index, subset);
     let png_path = dir.join(&png_rel);
     store::fs::create(&png_path, enhance::png_bytes(&product.png))?;
@@ -141,12 +126,7 @@ pub fn write_image(
         dir, index, subset, products, artifacts, &png_rel, &mut files,
     )?;
     files.extend([png_rel, label_rel]);
-    // Pixel-edge coordinates: pixel i spans [i, i + 1).
-    let edges = product
-        .labels
-        .iter()
-        .map(|b| [b.x_min + 0.5, b.y_min + 0.5, b.x_max + 0.5, b.y_max + 0.5])
-        .collect();
+    let edges = crate::product::records::label_edges(product);
     Ok(WrittenImage {
         files,
         png: Some(WrittenPng {

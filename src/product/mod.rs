@@ -1,4 +1,4 @@
-//! The product: an image's files (`artifacts`), the dataset's split and layout, collects, the
+//! The product: an image's files (`artifacts`, from the `records` Python returns too), the dataset's split and layout, collects, the
 //! exports (COCO, DS9), the star trails a detector is told of, light curves, a shard's share
 //! of the images, and the streak-shaped label sets. Every file goes through the store.
 
@@ -7,6 +7,7 @@ pub mod collect;
 pub mod dataset;
 pub mod export;
 pub mod light_curve;
+pub mod records;
 pub mod shard;
 pub(crate) mod site_cards;
 pub mod star_trails;
