@@ -1,6 +1,6 @@
 //! Re-run the streak detector of `soig run`'s detect stage on a finished survey run's test
 //! images, one thread, without rendering again: the star-trail prediction and
-//! `detect_streaks_among_stars`, timed per image. Writes YOLO-format predictions (for
+//! the streak detector told of them (`StreakDetector`, as the run), timed per image. Writes YOLO-format predictions (for
 //! `soig eval`) and prints recall at confidence 0.5 and IoU 0.5 by angle to the star trails
 //! (0-2, 2-7, 7-90 degrees), the false positives at that confidence, and the median time.
 //! `SKY_EVAL_ONLY=000035,000053` runs only the images whose stems end so (to look at a few).
@@ -18,7 +18,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use soig::campaign::Campaign;
-use soig::detect::streak::detect_streaks_among_stars;
+use soig::detect::detector::Frame;
+use soig::detect::{Stars, StreakDetector};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -38,7 +39,9 @@ fn main() -> anyhow::Result<()> {
     let campaign = Campaign::load_with_overrides(Path::new(campaign), &sets)?;
     let x = soig::experiment::of(&campaign);
     let inputs = soig::experiment::inputs(&campaign)?;
-    let params = campaign.resolved.detect.streak.clone();
+    let detector = StreakDetector {
+        params: campaign.resolved.detect.streak.clone(),
+    };
     let run = PathBuf::from(run);
     let out = PathBuf::from(out);
     std::fs::create_dir_all(&out)?;
@@ -84,11 +87,17 @@ fn main() -> anyhow::Result<()> {
             )?;
         }
         // SKY_EVAL_PLAIN=1: the angle-only detector, for comparison.
-        let cands = if std::env::var_os("SKY_EVAL_PLAIN").is_some() {
-            soig::detect::streak::detect_streaks(&pixels, w, h, &params, trail_png)
+        let told = if std::env::var_os("SKY_EVAL_PLAIN").is_some() {
+            Stars::told(trail_png, None)
         } else {
-            detect_streaks_among_stars(&pixels, w, h, &params, trail_png, Some(&stars))
+            Stars::told(trail_png, Some(&stars))
         };
+        let frame = Frame {
+            pixels: &pixels,
+            width: w,
+            height: h,
+        };
+        let (cands, _) = detector.detect_measuring(frame, told);
         ms.push(t.elapsed().as_secs_f64() * 1e3);
         eprintln!("TIME {stem} {:.0}", ms[ms.len() - 1]);
         let mut text = String::new();

@@ -14,18 +14,18 @@ use crate::simulate::{ImageProducts, FinalImage};
 #[serde(untagged)]
 pub enum TruthRecord<'a> {
     One(&'a Truth),
-    Frame(FrameTruth<'a>),
+    Frame(Box<FrameTruth<'a>>),
 }
 
 /// The truth sidecar of an image.
 pub fn truth(products: &ImageProducts) -> TruthRecord<'_> {
     let exposure = &products.exposure;
     match (&exposure.objects, &products.scene.placed) {
-        (Some(objects), Some(_)) => TruthRecord::Frame(FrameTruth::of_scene(
+        (Some(objects), Some(_)) => TruthRecord::Frame(Box::new(FrameTruth::of_scene(
             &exposure.truth,
             objects.iter().map(|o| &o.truth),
             &products.scene,
-        )),
+        ))),
         _ => TruthRecord::One(&exposure.truth),
     }
 }

@@ -14,9 +14,9 @@ use rayon::prelude::*;
 use crate::artifacts::WrittenPng;
 use crate::campaign::{Campaign, PointingMode, StarHint};
 use crate::dataset::Subset;
-use crate::detect::Detection;
-use crate::detect::streak::{detect_streaks_among_stars, detect_streaks_on_frame};
+use crate::detect::detector::Frame;
 use crate::detect::yolo::{YoloDetector, YoloParams};
+use crate::detect::{Detection, Detector, Stars, StreakDetector};
 use crate::experiment;
 use crate::geometry::FrameKind;
 use crate::progress::Progress;
@@ -104,6 +104,15 @@ struct TestFrame {
 }
 
 impl TestFrame {
+    /// The frame a detector reads: this image's grey `pixels`.
+    fn frame<'a>(&self, pixels: &'a [u8]) -> Frame<'a> {
+        Frame {
+            pixels,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
     fn of(w: &Written) -> TestFrame {
         let png = w.png.as_ref().expect("only images with a PNG are chosen");
         TestFrame {
@@ -171,6 +180,18 @@ fn load(img: &TestFrame) -> anyhow::Result<Vec<u8>> {
         .into_raw())
 }
 
+/// A detector's boxes on one frame (YOLO may fail: a model or image it cannot use).
+fn detect_once(
+    detector: &mut impl Detector,
+    frame: Frame<'_>,
+    stars: Stars<'_>,
+) -> anyhow::Result<Vec<Detection>> {
+    let found = detector
+        .detect(frame, stars)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", detector.name()))?;
+    Ok(found.iter().map(|f| *f.detection()).collect())
+}
+
 /// One detector over the images in parallel, with a progress bar: `detect` gives an image's
 /// detections and the seconds the detector spent on it.
 fn run_detector(
@@ -201,7 +222,7 @@ fn run_detector(
 /// misses trails bent by the pointing jitter (up to 8 px at the ends of 300 px trails, which it
 /// then reported as debris in the track quickstart; with the direction alone, none).
 /// With `[detect] stars = "frame"`, no image gets either: the detector measures the star trails
-/// on the image itself (`detect_streaks_on_frame`), as on a user's bare frame.
+/// on the image itself (`Stars::Unknown`), as on a user's bare frame.
 fn streak_run(
     campaign: &Campaign,
     images: &[TestFrame],
@@ -216,11 +237,14 @@ fn streak_run(
         }
         PointingMode::Survey | PointingMode::Fixed | PointingMode::Track => None,
     };
+    let detector = StreakDetector {
+        params: params.clone(),
+    };
     let (detections, seconds) = run_detector("streak", images, progress, |i, img| {
         let pixels = load(img)?;
         // The prediction is part of the detector's time.
         let t = Instant::now();
-        let stars = match &sky {
+        let trails = match &sky {
             Some((x, inputs)) => Some(crate::star_trails::of_image(
                 x,
                 inputs,
@@ -231,22 +255,13 @@ fn streak_run(
             )?),
             None => None,
         };
-        let found = if told {
-            detect_streaks_among_stars(
-                &pixels,
-                img.width,
-                img.height,
-                params,
-                chosen[i].trail_angle_deg,
-                stars.as_deref(),
-            )
+        let stars = if told {
+            Stars::told(chosen[i].trail_angle_deg, trails.as_deref())
         } else {
-            detect_streaks_on_frame(&pixels, img.width, img.height, params, None, None).0
+            Stars::Unknown
         };
-        Ok((
-            found.into_iter().map(|c| c.detection).collect(),
-            t.elapsed().as_secs_f64(),
-        ))
+        let found = detect_once(&mut detector.clone(), img.frame(&pixels), stars)?;
+        Ok((found, t.elapsed().as_secs_f64()))
     })?;
     Ok(DetectorRun {
         name: "streak".into(),
@@ -289,7 +304,7 @@ fn yolo_run(
             .pop()
             .expect("one session per rayon thread");
         let t = Instant::now();
-        let found = yolo.detect(&pixels, img.width, img.height);
+        let found = detect_once(&mut yolo, img.frame(&pixels), Stars::Unknown);
         let seconds = t.elapsed().as_secs_f64();
         sessions
             .lock()

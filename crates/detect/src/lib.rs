@@ -19,6 +19,9 @@ pub struct Detection {
     pub class: u32,
 }
 
+pub mod detector;
 pub mod metrics;
 pub mod streak;
 pub mod yolo;
+
+pub use detector::{Detector, Found, Stars, StreakDetector};

@@ -19,11 +19,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 
 use crate::campaign::{Campaign, Detect};
-use crate::detect::Detection;
-use crate::detect::streak::{
-    Dropped, OwnTrails, StreakParams, detect_streaks_among_stars, detect_streaks_explained,
-    detect_streaks_on_frame,
-};
+use crate::detect::detector::Frame as DetectorFrame;
+use crate::detect::streak::{Dropped, OwnTrails, StreakParams, detect_streaks_explained};
+use crate::detect::{Detection, Detector, Stars, StreakDetector};
 use crate::detect::yolo::{YoloDetector, YoloParams};
 use crate::enhance::{self, Gray8};
 use crate::frames::{Frame, RegionPixels};
@@ -400,33 +398,37 @@ fn detect_frame(
     let mut own_trails = None;
     let (ox, oy) = (frame.region.x0 as f64, frame.region.y0 as f64);
     let shift = |d: &Detection| [d.x1 + ox, d.y1 + oy, d.x2 + ox, d.y2 + oy];
+    let image = DetectorFrame {
+        pixels: &enhanced.pixels,
+        width: rw,
+        height: rh,
+    };
     if opts.which != Which::Yolo {
         let params = StreakParams {
             psf_sigma_px,
             ..opts.streak.clone()
         };
-        let (cands, why) = match (&sky, opts.star_trail_angle_deg) {
-            (Some((trails, angle, _)), _) => (
-                detect_streaks_among_stars(&enhanced.pixels, rw, rh, &params, *angle, Some(trails)),
-                Vec::new(),
-            ),
-            (None, Some(angle)) => {
-                detect_streaks_explained(&enhanced.pixels, rw, rh, &params, Some(angle))
-            }
-            (None, None) => {
-                let (found, own) =
-                    detect_streaks_on_frame(&enhanced.pixels, rw, rh, &params, None, None);
-                // --explain explains the first pass, along the measured direction if any.
-                let why = if opts.explain {
-                    let angle = own.as_ref().and_then(|o| o.model()).map(|m| m.angle_deg);
-                    detect_streaks_explained(&enhanced.pixels, rw, rh, &params, angle).1
-                } else {
-                    Vec::new()
-                };
-                own_trails = own;
-                (found, why)
-            }
+        let explain = |angle: Option<f64>| {
+            detect_streaks_explained(&enhanced.pixels, rw, rh, &params, angle).1
         };
+        let stars = match (&sky, opts.star_trail_angle_deg) {
+            (Some((trails, angle, _)), _) => Stars::told(*angle, Some(trails)),
+            (None, angle) => angle.map_or(Stars::Unknown, Stars::Along),
+        };
+        let (cands, own) = StreakDetector {
+            params: params.clone(),
+        }
+        .detect_measuring(image, stars);
+        // --explain explains the first pass: along the given direction, or the measured one
+        // (none with a catalogue: its pass drops what the predicted trails explain).
+        let why = match stars {
+            _ if !opts.explain => Vec::new(),
+            Stars::Catalogue { .. } => Vec::new(),
+            Stars::Along(a) => explain(Some(a)),
+            Stars::Points => explain(None),
+            Stars::Unknown => explain(own.as_ref().and_then(|o| o.model()).map(|m| m.angle_deg)),
+        };
+        own_trails = own;
         if opts.explain {
             dropped = why;
             for d in &mut dropped {
@@ -446,14 +448,13 @@ fn detect_frame(
         }
     }
     if let Some(y) = yolo {
-        for d in y
-            .detect(&enhanced.pixels, rw, rh)
-            .with_context(|| format!("YOLO on {}", frame.path.display()))?
-        {
+        let boxes = Detector::detect(y, image, Stars::Unknown)
+            .map_err(|e| anyhow::anyhow!("YOLO on {}: {e}", frame.path.display()))?;
+        for d in boxes.iter().map(|f| f.detection()) {
             found.push(Found {
                 detector: "yolo",
                 confidence: d.score,
-                pixel_box: shift(&d),
+                pixel_box: shift(d),
                 ends: None,
                 centre_radec: None,
                 ends_radec: None,
