@@ -28,6 +28,11 @@ pub struct CampaignFile {
     pub observer: ObjectSpec,
     /// The debris set; each image shows one of them, drawn uniformly (or by their `weight`).
     pub debris: Vec<ObjectSpec>,
+    /// Let `debris` name one object (one NORAD number, whatever its TLE) more than once. Off by
+    /// default: a repeated entry is most often a slip, and it silently doubles the object's
+    /// weight and lets a frame of `[objects]` show it twice. Omitted when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub allow_duplicates: bool,
     /// `[objects]`: how many debris objects each image shows (issue #34). Not set: exactly one,
     /// the one the pointing is drawn around (the paper's scenes, their bytes unchanged).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -73,6 +73,9 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
                 .map_err(|(f, m)| fail(&format!("debris[{i}]{f}"), m))?,
         );
     }
+    if !file.allow_duplicates {
+        duplicates(&debris)?;
+    }
     let orbit = observer.orbit();
     // The observer cannot observe itself: every draw would fail its geometry.
     if let Some(i) = orbit.and_then(|o| debris.iter().position(|d| d.norad == o.norad)) {
@@ -214,6 +217,24 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
         window_start,
         window_end,
     })
+}
+
+/// A placed object named twice (one NORAD number in two `debris` entries, by the same TLE or
+/// not) is refused at its second entry, unless `allow_duplicates` asks for it.
+fn duplicates(debris: &[Body]) -> Result<(), (String, String)> {
+    let mut first = std::collections::BTreeMap::new();
+    for (i, body) in debris.iter().enumerate() {
+        if let Some(j) = first.insert(body.norad, i) {
+            return Err((
+                format!("debris[{i}].norad"),
+                format!(
+                    "NORAD {} is already debris[{j}]: each object once (set `allow_duplicates = true` to weight it twice on purpose)",
+                    body.norad
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The bodies of a `[population]`, its sha256 recorded (the hash pins the population, which
