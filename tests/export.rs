@@ -184,7 +184,11 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
         let t = read[&pair[0]].as_array().unwrap();
         assert_eq!(t.len(), 2, "{s}: {t:?}");
         assert_eq!(t[0]["kind"], "LinePixelRegion");
-        let text = format!("{} (NORAD {})", truth["object"].as_str().unwrap(), truth["norad"]);
+        let text = format!(
+            "{} (NORAD {})",
+            truth["object"].as_str().unwrap(),
+            truth["norad"]
+        );
         assert_eq!(t[0]["text"], text.as_str());
         let p = |k: &str, i: usize| truth[k][i].as_f64().unwrap();
         let line = [

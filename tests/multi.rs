@@ -124,7 +124,11 @@ fn several_objects_or_none_per_frame_agree_everywhere() {
             let lines: Vec<&str> = reg.lines().filter(|l| l.starts_with("line(")).collect();
             assert_eq!(lines.len(), listed.len(), "{stem}: {reg}");
             for (line, o) in lines.iter().zip(listed) {
-                let text = format!("# text={{{} (NORAD {})}}", o["object"].as_str().unwrap(), o["norad"]);
+                let text = format!(
+                    "# text={{{} (NORAD {})}}",
+                    o["object"].as_str().unwrap(),
+                    o["norad"]
+                );
                 assert!(line.ends_with(&text), "{stem}: {line}");
             }
             // The light curve: each object's rows in turn, as many as its trajectory samples

@@ -139,7 +139,12 @@ pub fn area_m2(lc_m: f64) -> f64 {
 }
 
 /// A piecewise-linear parameter of Eq. 5-7: `low` up to `lo`, `high` from `hi`, a line between.
-fn ramp(lambda: f64, (lo, low): (f64, f64), (hi, high): (f64, f64), line: impl Fn(f64) -> f64) -> f64 {
+fn ramp(
+    lambda: f64,
+    (lo, low): (f64, f64),
+    (hi, high): (f64, f64),
+    line: impl Fn(f64) -> f64,
+) -> f64 {
     if lambda <= lo {
         low
     } else if lambda >= hi {
@@ -154,7 +159,9 @@ pub type Mixture = Vec<(f64, f64, f64)>;
 
 /// Below 8 cm (Eq. 5): one normal.
 fn small_law(lambda: f64) -> (f64, f64) {
-    let mu = ramp(lambda, (-1.75, -0.3), (-1.25, -1.0), |l| -0.3 - 1.4 * (l + 1.75));
+    let mu = ramp(lambda, (-1.75, -0.3), (-1.25, -1.0), |l| {
+        -0.3 - 1.4 * (l + 1.75)
+    });
     let sigma = if lambda <= -3.5 {
         0.2
     } else {

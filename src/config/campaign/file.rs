@@ -245,6 +245,10 @@ pub struct Population {
     /// pins the population); a given one must match.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tle_sha256: Option<String>,
+    /// `[population.breakup]`: a breakup cloud added to the population, its fragments drawn
+    /// by the NASA Standard Breakup Model (`Breakup`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub breakup: Option<super::Breakup>,
 }
 
 impl CampaignFile {
@@ -750,7 +754,9 @@ impl Default for Stars {
 }
 
 /// `tle`: exactly two lines (read as a fixed-size array, a third line would be dropped unseen).
-fn two_tle_lines<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[String; 2]>, D::Error> {
+pub(super) fn two_tle_lines<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Option<[String; 2]>, D::Error> {
     let lines: Option<Vec<String>> = Option::deserialize(d)?;
     lines
         .map(|l| {

@@ -6,6 +6,7 @@
 //! All paths inside a campaign are relative to the directory of the campaign file that is
 //! loaded, also those a base file supplies (`extends` itself is relative to the file writing it).
 
+mod breakup;
 mod compose;
 pub mod defaults;
 mod file;
@@ -19,6 +20,7 @@ use std::path::{Path, PathBuf};
 
 use hifitime::Epoch;
 
+pub use breakup::{Breakup, BreakupKind, MAX_FRAGMENTS, ParentType};
 pub use file::*;
 pub use ground::SiteSpec;
 pub use noise::{Noise, PhysicalNoise};
@@ -438,7 +440,10 @@ mod tests {
         // minimal's 7 lines, then `[[debris]]`, `name`, `norad` on line 10.
         assert_eq!(e.line, Some(10), "{e}");
         let msg = e.to_string();
-        assert!(msg.starts_with("/nowhere/c.toml:10: field `debris[1].norad`"), "{msg}");
+        assert!(
+            msg.starts_with("/nowhere/c.toml:10: field `debris[1].norad`"),
+            "{msg}"
+        );
         assert!(msg.contains("NORAD 40649 is already debris[0]"), "{msg}");
         let asked = format!("allow_duplicates = true\n{}", minimal(&twice));
         let c = load(&asked).unwrap();

@@ -172,7 +172,7 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
     }
     let population = match resolved.population.as_mut() {
         // A ground observer is refused with a population (`validate`): none to leave out.
-        Some(p) => resolve_population(p, base_dir, observer.orbit().map(|o| o.norad))
+        Some(p) => resolve_population(p, base_dir, observer.orbit().map(|o| o.norad), window_start)
             .map_err(|(f, m)| fail(&format!("population.{f}"), m))?,
         None => Vec::new(),
     };
@@ -245,6 +245,7 @@ fn resolve_population(
     p: &mut super::Population,
     base_dir: &Path,
     observer: Option<u64>,
+    window_start: Epoch,
 ) -> Result<Vec<Body>, (String, String)> {
     let fail = |m: String| ("tle_file".to_string(), m);
     let full = base_dir.join(&p.tle_file);
@@ -291,7 +292,24 @@ fn resolve_population(
                 .unwrap_or_else(|| format!("NORAD {}", tle.norad_id)),
             norad: tle.norad_id,
             propagator,
+            generated: None,
         });
+    }
+    if let Some(b) = &p.breakup {
+        let field = |(f, m): (String, String)| (format!("breakup.{f}"), m);
+        if b.parent.is_some() && b.parent == observer {
+            return Err(field((
+                "parent".into(),
+                "the observer itself cannot break up in its own images".into(),
+            )));
+        }
+        let taken = bodies.iter().map(|b| b.norad).collect();
+        let file = full.display().to_string();
+        let (cloud, destroyed) =
+            super::breakup::fragments(b, (&tles, &file), &taken, window_start).map_err(field)?;
+        // After an explosion or a catastrophic collision the parent is its fragments.
+        bodies.retain(|b| Some(b.norad) != destroyed);
+        bodies.extend(cloud);
     }
     Ok(bodies)
 }
@@ -398,6 +416,7 @@ fn resolve_object(
             name,
             norad: tle.norad_id,
             propagator,
+            generated: None,
         });
     }
     let el = spec.elements.as_mut().expect("counted above");
@@ -433,6 +452,7 @@ fn resolve_object(
         name,
         norad,
         propagator,
+        generated: None,
     })
 }
 
