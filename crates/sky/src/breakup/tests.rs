@@ -118,6 +118,8 @@ fn speeds_are_log_normal_about_the_line_and_isotropic() {
 /// A law's weights sum to one; below 8 cm it is the small-fragment normal alone, above 11 cm
 /// the two large-fragment normals, and halfway through the bridge half of each.
 #[test]
+// The paper's slope 0.318 is no approximation of 1/pi.
+#[allow(clippy::approx_constant)]
 fn the_bridge_passes_from_one_law_to_the_other() {
     for kind in [ParentKind::Spacecraft, ParentKind::RocketBody] {
         for lc in [0.01, 0.08, 0.095, 0.11, 0.5] {
