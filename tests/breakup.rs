@@ -182,6 +182,26 @@ fn the_breakup_campaign_runs_and_its_fragments_leave_from_the_parent() {
     );
 }
 
+/// The resolved population: the belt's 400 objects less the exploded parent, then its
+/// round(N(>0.2 m)) = round(78.2) = 78 fragments (all on closed orbits above the Earth: none
+/// left out), each with the model's area of its size, ids in order.
+#[test]
+fn the_cloud_holds_n_above_lc_fragments() {
+    let c = soig::campaign::Campaign::load(&repo("campaigns/breakup.toml")).unwrap();
+    let (catalogued, cloud): (Vec<_>, Vec<_>) =
+        c.population.iter().partition(|b| b.generated.is_none());
+    assert_eq!(catalogued.len(), 399);
+    assert!(catalogued.iter().all(|b| b.norad != 90227));
+    assert_eq!(cloud.len() as u64, Event::Explosion { scaling: 1.0 }.fragments(0.2));
+    assert_eq!(cloud.len(), 78);
+    for (k, b) in cloud.iter().enumerate() {
+        assert_eq!(b.norad, 9_022_700_001 + k as u64);
+        // Sizes from 0.2 m: areas from 0.556945 x 0.2^2.0047077 = 0.0221096 m^2.
+        let area = b.generated.unwrap().area_m2;
+        assert!(area >= 0.0221096, "{}: {area}", b.norad);
+    }
+}
+
 fn refused_with(set: &str, expect: &str) {
     let tmp = tempfile::tempdir().unwrap();
     let c = repo("campaigns/breakup.toml");
