@@ -90,3 +90,44 @@ pub fn of_labels(truth: &Path, labels: &Path, lines: usize) -> anyhow::Result<Ve
     }
     Ok(labelled)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A frame's sidecar: the labelled objects in order, a one-object sidecar as `debris`, a
+    /// generated object's text by its id; a label file with more lines than labelled objects
+    /// is refused naming both files.
+    #[test]
+    fn label_lines_are_the_labelled_objects_in_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let frame = dir.path().join("frame.json");
+        let one = dir.path().join("one.json");
+        let boxed = r#"{"x_min": 0, "y_min": 0, "x_max": 1, "y_max": 1}"#;
+        std::fs::write(
+            &frame,
+            format!(
+                r#"{{"objects": [
+                {{"object": "A", "norad": 5, "source": "population", "label_box_final_px": null}},
+                {{"object": "B fragment 2", "norad": 500002, "source": "generated", "label_box_final_px": {boxed}}},
+                {{"object": "C", "norad": 7, "source": "population", "label_box_final_px": {boxed}}}]}}"#
+            ),
+        )
+        .unwrap();
+        std::fs::write(
+            &one,
+            format!(r#"{{"object": "D", "norad": 9, "label_box_final_px": {boxed}}}"#),
+        )
+        .unwrap();
+        let labels = dir.path().join("img.txt");
+        let ids = of_labels(&frame, &labels, 2).unwrap();
+        assert_eq!(ids.iter().map(|i| i.id).collect::<Vec<_>>(), [500002, 7]);
+        assert_eq!(ids[0].text(), "B fragment 2 (id 500002)");
+        assert_eq!(ids[1].text(), "C (NORAD 7)");
+        let d = of_labels(&one, &labels, 1).unwrap();
+        assert_eq!(d[0].source, "debris");
+        let e = of_labels(&frame, &labels, 3).unwrap_err().to_string();
+        assert!(e.contains("img.txt has 3 label line(s)"), "{e}");
+        assert!(e.contains("frame.json has 2 labelled object(s)"), "{e}");
+    }
+}
