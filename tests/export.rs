@@ -123,6 +123,10 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
             assert_eq!(mine.len(), labels.lines().count(), "{stem}");
             let truth = json(&out.join(format!("truth/{stem}.json")));
             let got = assert_coco_bbox_is_label_box(mine[0], &truth["label_box_final_px"], &stem);
+            // The annotation names its object (#45): the campaign's debris, its NORAD number.
+            assert_eq!(mine[0]["object_id"], truth["norad"], "{stem}");
+            assert_eq!(mine[0]["object"], truth["object"], "{stem}");
+            assert_eq!(mine[0]["source"], "debris", "{stem}");
             // serde_json's default float parser may miss the written value by an ulp.
             let area = mine[0]["area"].as_f64().unwrap();
             assert!(
@@ -180,7 +184,12 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
         let t = read[&pair[0]].as_array().unwrap();
         assert_eq!(t.len(), 2, "{s}: {t:?}");
         assert_eq!(t[0]["kind"], "LinePixelRegion");
-        assert_eq!(t[0]["text"], truth["object"]);
+        let text = format!(
+            "{} (NORAD {})",
+            truth["object"].as_str().unwrap(),
+            truth["norad"]
+        );
+        assert_eq!(t[0]["text"], text.as_str());
         let p = |k: &str, i: usize| truth[k][i].as_f64().unwrap();
         let line = [
             p("streak_start_px", 0),

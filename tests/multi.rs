@@ -112,12 +112,25 @@ fn several_objects_or_none_per_frame_agree_everywhere() {
             }
             for (o, a) in labelled.iter().zip(&mine) {
                 assert_coco_bbox_is_label_box(a, &o["label_box_final_px"], &stem);
+                // Each annotation names its object: id and source as in the truth (#45).
+                assert_eq!(a["object_id"], o["norad"], "{stem}");
+                assert_eq!(a["source"], "placed", "{stem}");
+                assert_eq!(a["object"], o["object"], "{stem}");
             }
-            // One streak line per object in the DS9 truth regions, in the truth's order.
+            // One streak line per object in the DS9 truth regions, in the truth's order, each
+            // labelled with its name and NORAD number.
             let reg =
                 std::fs::read_to_string(export.join(format!("ds9/truth/{stem}.reg"))).unwrap();
             let lines: Vec<&str> = reg.lines().filter(|l| l.starts_with("line(")).collect();
             assert_eq!(lines.len(), listed.len(), "{stem}: {reg}");
+            for (line, o) in lines.iter().zip(listed) {
+                let text = format!(
+                    "# text={{{} (NORAD {})}}",
+                    o["object"].as_str().unwrap(),
+                    o["norad"]
+                );
+                assert!(line.ends_with(&text), "{stem}: {line}");
+            }
             // The light curve: each object's rows in turn, as many as its trajectory samples
             // (at least render.trajectory_samples, 2000).
             let rows: Vec<csv::StringRecord> =

@@ -158,6 +158,10 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "371096f25008c5f6e2440eea2d542da8ce7fea59d213e36ae3192797d07cbdf8",
     ),
     (
+        "campaigns/breakup.toml",
+        "b1e6dfec07a7489dc8ef3500f53046142fd739fae341d864fae6aea050740956",
+    ),
+    (
         "campaigns/geo-stare.toml",
         "d4cb0b92ffd2d978c902cba8062653009b7656ff3698747fc482883694e93cad",
     ),

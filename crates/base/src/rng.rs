@@ -36,6 +36,8 @@ pub enum Purpose {
     /// A catalogue object's own draws (size, tumble: `scene::catalogue`), keyed by its NORAD
     /// number in place of the image, so an object keeps them in every image.
     CatalogueObject = 17,
+    /// A breakup fragment's size, area-to-mass and ejection velocity (keyed by its index).
+    BreakupFragment = 18,
 }
 
 /// A purpose of draws per photon or per pixel; each has an independent [`PixelRng`] stream

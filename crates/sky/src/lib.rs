@@ -8,6 +8,7 @@
 #![cfg_attr(test, allow(clippy::disallowed_methods))]
 
 pub mod apparent;
+pub mod breakup;
 pub mod debris_sizes;
 pub mod ephemeris;
 pub mod frames;

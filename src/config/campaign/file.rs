@@ -28,6 +28,11 @@ pub struct CampaignFile {
     pub observer: ObjectSpec,
     /// The debris set; each image shows one of them, drawn uniformly (or by their `weight`).
     pub debris: Vec<ObjectSpec>,
+    /// Let `debris` name one object (one NORAD number, whatever its TLE) more than once. Off by
+    /// default: a repeated entry is most often a slip, and it silently doubles the object's
+    /// weight and lets a frame of `[objects]` show it twice. Omitted when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub allow_duplicates: bool,
     /// `[objects]`: how many debris objects each image shows (issue #34). Not set: exactly one,
     /// the one the pointing is drawn around (the paper's scenes, their bytes unchanged).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -240,6 +245,10 @@ pub struct Population {
     /// pins the population); a given one must match.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tle_sha256: Option<String>,
+    /// `[population.breakup]`: a breakup cloud added to the population, its fragments drawn
+    /// by the NASA Standard Breakup Model (`Breakup`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub breakup: Option<super::Breakup>,
 }
 
 impl CampaignFile {
@@ -745,7 +754,9 @@ impl Default for Stars {
 }
 
 /// `tle`: exactly two lines (read as a fixed-size array, a third line would be dropped unseen).
-fn two_tle_lines<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[String; 2]>, D::Error> {
+pub(super) fn two_tle_lines<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Option<[String; 2]>, D::Error> {
     let lines: Option<Vec<String>> = Option::deserialize(d)?;
     lines
         .map(|l| {

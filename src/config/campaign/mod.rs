@@ -6,6 +6,7 @@
 //! All paths inside a campaign are relative to the directory of the campaign file that is
 //! loaded, also those a base file supplies (`extends` itself is relative to the file writing it).
 
+mod breakup;
 mod compose;
 pub mod defaults;
 mod file;
@@ -19,6 +20,7 @@ use std::path::{Path, PathBuf};
 
 use hifitime::Epoch;
 
+pub use breakup::{Breakup, BreakupKind, MAX_FRAGMENTS, ParentType};
 pub use file::*;
 pub use ground::SiteSpec;
 pub use noise::{Noise, PhysicalNoise};
@@ -426,6 +428,30 @@ mod tests {
 
         let e = load(&minimal("[stages]\n")).unwrap_err();
         assert!(e.line.is_some(), "{e}");
+    }
+
+    /// One object named twice in `debris` is refused at the second entry's line, unless the
+    /// campaign asks for it; the opt-in stays out of the hash when off.
+    #[test]
+    fn placed_duplicates_are_refused_unless_asked_for() {
+        let twice = format!("[[debris]]\nname = \"again\"\nnorad = 40649\n{ELEMENTS}\n");
+        let e = load(&minimal(&twice)).unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("debris[1].norad"), "{e}");
+        // minimal's 7 lines, then `[[debris]]`, `name`, `norad` on line 10.
+        assert_eq!(e.line, Some(10), "{e}");
+        let msg = e.to_string();
+        assert!(
+            msg.starts_with("/nowhere/c.toml:10: field `debris[1].norad`"),
+            "{msg}"
+        );
+        assert!(msg.contains("NORAD 40649 is already debris[0]"), "{msg}");
+        let asked = format!("allow_duplicates = true\n{}", minimal(&twice));
+        let c = load(&asked).unwrap();
+        assert_eq!(c.debris.len(), 2);
+        assert!(c.resolved.allow_duplicates);
+        let off = load(&minimal("")).unwrap();
+        let json = serde_json::to_value(&off.resolved).unwrap();
+        assert!(json.get("allow_duplicates").is_none());
     }
 
     #[test]

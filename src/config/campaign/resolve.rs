@@ -73,6 +73,9 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
                 .map_err(|(f, m)| fail(&format!("debris[{i}]{f}"), m))?,
         );
     }
+    if !file.allow_duplicates {
+        duplicates(&debris)?;
+    }
     let orbit = observer.orbit();
     // The observer cannot observe itself: every draw would fail its geometry.
     if let Some(i) = orbit.and_then(|o| debris.iter().position(|d| d.norad == o.norad)) {
@@ -169,7 +172,7 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
     }
     let population = match resolved.population.as_mut() {
         // A ground observer is refused with a population (`validate`): none to leave out.
-        Some(p) => resolve_population(p, base_dir, observer.orbit().map(|o| o.norad))
+        Some(p) => resolve_population(p, base_dir, observer.orbit().map(|o| o.norad), window_start)
             .map_err(|(f, m)| fail(&format!("population.{f}"), m))?,
         None => Vec::new(),
     };
@@ -216,6 +219,24 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
     })
 }
 
+/// A placed object named twice (one NORAD number in two `debris` entries, by the same TLE or
+/// not) is refused at its second entry, unless `allow_duplicates` asks for it.
+fn duplicates(debris: &[Body]) -> Result<(), (String, String)> {
+    let mut first = std::collections::BTreeMap::new();
+    for (i, body) in debris.iter().enumerate() {
+        if let Some(j) = first.insert(body.norad, i) {
+            return Err((
+                format!("debris[{i}].norad"),
+                format!(
+                    "NORAD {} is already debris[{j}]: each object once (set `allow_duplicates = true` to weight it twice on purpose)",
+                    body.norad
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The bodies of a `[population]`, its sha256 recorded (the hash pins the population, which
 /// may be a whole catalogue: its lines are not copied into the campaign). The observer is left
 /// out (it cannot see itself); a NORAD number twice, or an orbit SGP4 refuses, is an error
@@ -224,6 +245,7 @@ fn resolve_population(
     p: &mut super::Population,
     base_dir: &Path,
     observer: Option<u64>,
+    window_start: Epoch,
 ) -> Result<Vec<Body>, (String, String)> {
     let fail = |m: String| ("tle_file".to_string(), m);
     let full = base_dir.join(&p.tle_file);
@@ -270,7 +292,24 @@ fn resolve_population(
                 .unwrap_or_else(|| format!("NORAD {}", tle.norad_id)),
             norad: tle.norad_id,
             propagator,
+            generated: None,
         });
+    }
+    if let Some(b) = &p.breakup {
+        let field = |(f, m): (String, String)| (format!("breakup.{f}"), m);
+        if b.parent.is_some() && b.parent == observer {
+            return Err(field((
+                "parent".into(),
+                "the observer itself cannot break up in its own images".into(),
+            )));
+        }
+        let taken = bodies.iter().map(|b| b.norad).collect();
+        let file = full.display().to_string();
+        let (cloud, destroyed) =
+            super::breakup::fragments(b, (&tles, &file), &taken, window_start).map_err(field)?;
+        // After an explosion or a catastrophic collision the parent is its fragments.
+        bodies.retain(|b| Some(b.norad) != destroyed);
+        bodies.extend(cloud);
     }
     Ok(bodies)
 }
@@ -377,6 +416,7 @@ fn resolve_object(
             name,
             norad: tle.norad_id,
             propagator,
+            generated: None,
         });
     }
     let el = spec.elements.as_mut().expect("counted above");
@@ -412,6 +452,7 @@ fn resolve_object(
         name,
         norad,
         propagator,
+        generated: None,
     })
 }
 

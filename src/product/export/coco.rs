@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 
-use super::{Split, detected_split, detectors, image_index, splits, stems};
+use super::{Split, detected_split, detectors, identity, image_index, splits, stems};
 use crate::metrics::read_yolo_file;
 
 /// The classes of a soig dataset (`data.yaml`'s `names`).
@@ -53,6 +53,15 @@ pub struct Annotation {
     pub bbox: [f64; 4],
     pub area: f64,
     pub iscrowd: u8,
+    /// The object, its id (NORAD number, or a generated object's id) and its source
+    /// (`identity::Identity`), from the image's truth sidecar: extra keys, which pycocotools
+    /// keeps and ignores. Absent when the output has no sidecar for the image.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub object: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub object_id: Option<u64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
 }
 
 #[derive(Serialize, Deserialize, Debug, PartialEq)]
@@ -126,7 +135,17 @@ fn dataset(output: &Path, split: &Split) -> anyhow::Result<Dataset> {
     let mut annotations = Vec::new();
     for im in &images {
         let path = output.join(&split.labels).join(format!("{}.txt", im.stem));
-        for (class, b, _) in read_yolo_file(&path, false)? {
+        let boxes = read_yolo_file(&path, false)?;
+        let truth = output.join("truth").join(format!("{}.json", im.stem));
+        let identities = if truth.is_file() {
+            identity::of_labels(&truth, &path, boxes.len())?
+                .into_iter()
+                .map(Some)
+                .collect()
+        } else {
+            vec![None; boxes.len()]
+        };
+        for ((class, b, _), who) in boxes.into_iter().zip(identities) {
             let bbox = pixel_xywh(b, im.image.width, im.image.height);
             annotations.push(Annotation {
                 id: annotations.len() as u64 + 1,
@@ -135,6 +154,9 @@ fn dataset(output: &Path, split: &Split) -> anyhow::Result<Dataset> {
                 bbox,
                 area: bbox[2] * bbox[3],
                 iscrowd: 0,
+                object_id: who.as_ref().map(|w| w.id),
+                source: who.as_ref().map(|w| w.source.clone()),
+                object: who.map(|w| w.object),
             });
         }
     }

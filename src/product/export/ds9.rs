@@ -1,7 +1,8 @@
 //! DS9 region files (ds9.si.edu/doc/ref/region.html, version 4.1) over each image's FITS, in
 //! DS9's `image` coordinates: 1-based pixel centres, y along the FITS rows (soig's 0-based pixel
 //! coordinates plus one). `truth/<image>.reg` holds the debris' streak as rendered (a line from
-//! its first to its last trajectory sample, jitter included, labelled with the object) and its
+//! its first to its last trajectory sample, jitter included, labelled with the object and its id,
+//! `NAME (NORAD n)`, or `NAME (id n)` for a generated object) and its
 //! label box in the original image; `<detector>/<image>.reg` holds that detector's boxes on each
 //! detected image (none, one or many), mapped back from the PNG's frame (padded or rotated) to
 //! the FITS pixels through the frame the truth records: a polygon of the box's four corners,
@@ -13,7 +14,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use serde::Deserialize;
 
-use super::{detected_split, detectors, splits, stems};
+use super::{detected_split, detectors, identity, splits, stems};
 use crate::geometry::{BoxPx, Frame};
 use crate::metrics::read_yolo_file;
 
@@ -28,6 +29,9 @@ struct Truth {
 #[derive(Deserialize)]
 struct Object {
     object: String,
+    norad: u64,
+    #[serde(default)]
+    source: Option<String>,
     streak_start_px: [f64; 2],
     streak_end_px: [f64; 2],
     label_box_px: Option<BoxPx>,
@@ -53,6 +57,18 @@ fn read_truth(path: &Path) -> anyhow::Result<Truth> {
         objects,
         frame: image.frame,
     })
+}
+
+impl Object {
+    /// Its text: name and id, as the COCO annotations carry them (`identity::Identity`).
+    fn label(&self) -> String {
+        identity::Identity {
+            object: self.object.clone(),
+            id: self.norad,
+            source: self.source.clone().unwrap_or_default(),
+        }
+        .text()
+    }
 }
 
 /// The file's first lines: format, what it shows, its colour, the coordinate system.
@@ -81,7 +97,7 @@ fn truth_regions(stem: &str, t: &Truth) -> String {
             y0 + 1.0,
             x1 + 1.0,
             y1 + 1.0,
-            text(&o.object)
+            text(&o.label())
         );
         if let Some(b) = &o.label_box_px {
             let _ = writeln!(
@@ -211,6 +227,8 @@ mod tests {
         let t = Truth {
             objects: vec![Object {
                 object: "DEB {A}".into(),
+                norad: 40989,
+                source: None,
                 streak_start_px: [0.0, 1.0],
                 streak_end_px: [9.0, 4.0],
                 label_box_px: Some(BoxPx {
@@ -224,7 +242,7 @@ mod tests {
         };
         let r = truth_regions("img_000000", &t);
         assert!(
-            r.contains("line(1.000,2.000,10.000,5.000) # text={DEB (A)}\n"),
+            r.contains("line(1.000,2.000,10.000,5.000) # text={DEB (A) (NORAD 40989)}\n"),
             "{r}"
         );
         assert!(r.contains("box(5.500,3.500,10.000,4.000,0)\n"), "{r}");

@@ -8,6 +8,7 @@
 
 pub mod coco;
 pub mod ds9;
+pub mod identity;
 pub mod tdm;
 
 use std::path::{Path, PathBuf};

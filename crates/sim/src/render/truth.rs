@@ -130,7 +130,9 @@ pub struct ObjectTruth<'a> {
     pub debris_index: usize,
     /// `placed` (`[objects]`: turned into the field, not where its orbit puts it), or in a
     /// catalogue scene `debris` (the object the pointing was drawn around, index in the
-    /// campaign's debris) or `population` (index in `[population]`'s file, observer left out).
+    /// campaign's debris), `population` (index in `[population]`'s file, observer left out)
+    /// or `generated` (a breakup fragment, index among the population's bodies, which follow
+    /// the file's; `norad` is its generated id).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub source: Option<&'static str>,
     /// In a multi-frame collect: the object's id, the same in every frame of the collect
@@ -178,12 +180,14 @@ impl<'a> FrameTruth<'a> {
         scene: &'a crate::scene::Scene,
     ) -> Self {
         let placed = scene.placed.as_deref().unwrap_or_default();
-        let source = |k: usize| {
+        let source = |k: usize, s: &crate::scene::Scene| {
             Some(match (&scene.unseen, k, scene.norad) {
                 // `[objects]`: turned into the field, not where its orbit puts it.
                 (None, _, _) => "placed",
                 // NORAD 0: a stare, which points at no object.
                 (Some(_), 0, n) if n != 0 => "debris",
+                // A breakup fragment of the population: its id is no NORAD number.
+                (Some(_), _, _) if s.generated => "generated",
                 (Some(_), _, _) => "population",
             })
         };
@@ -192,7 +196,7 @@ impl<'a> FrameTruth<'a> {
             objects
                 .zip(placed)
                 .enumerate()
-                .map(|(k, (t, s))| (t, s.debris_index, source(k))),
+                .map(|(k, (t, s))| (t, s.debris_index, source(k, s))),
         );
         truth.unseen = scene.unseen.as_deref();
         truth

@@ -94,6 +94,9 @@ pub struct Scene {
     /// checks rejected, with the reason; None in any other scene.
     #[serde(skip)]
     pub unseen: Option<Vec<super::Unseen>>,
+    /// A generated object of a catalogue scene's population (a breakup fragment).
+    #[serde(skip)]
+    pub generated: bool,
 }
 
 /// A frame's place in its collect, recorded in the truth: the object keeps its `track_id`
@@ -272,6 +275,7 @@ impl Scene {
             collect: None,
             placed: None,
             unseen: None,
+            generated: false,
         }
     }
 

@@ -173,7 +173,11 @@ fn sight_object(
         spec.apparent_positions,
     );
     let rng = &mut stream(seed, body.norad, Purpose::CatalogueObject);
-    let area_m2 = spec.area.draw(rng);
+    // A generated object has its own size; a catalogued one draws it (the stream's first draw).
+    let area_m2 = match body.generated {
+        Some(g) => g.area_m2,
+        None => spec.area.draw(rng),
+    };
     let tumble = draw_tumble(spec, rng);
     let sun = sun_position_km(mid);
     let track = sighting.track(start, exposure_s)?;
@@ -220,12 +224,9 @@ fn sight_object(
     };
     // Across a collect's frames an object keeps its NORAD number as its track id.
     let collect = CollectFrame::of(spec, at.image_index, body.norad);
-    Some(Ok(Scene::assemble(exposure, object).accept(
-        1,
-        BTreeMap::new(),
-        collect,
-        None,
-    )))
+    let mut scene = Scene::assemble(exposure, object).accept(1, BTreeMap::new(), collect, None);
+    scene.generated = body.generated.is_some();
+    Some(Ok(scene))
 }
 
 /// Far enough along the boresight to stand for it in the line-of-sight checks: a ray from a

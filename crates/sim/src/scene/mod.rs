@@ -34,8 +34,8 @@ pub use place::object_track_id;
 pub use rejection::{NoScene, Rejection};
 pub use soig_sky::pointing::{Pointing, SurveyTrack, TargetTrack};
 pub use spec::{
-    Body, CatalogueScene, Gate, Inputs, ObjectCount, PointingMode, SnrDefinition, Spec, StarField,
-    TumbleRange, julian_year,
+    Body, CatalogueScene, Gate, Generated, Inputs, ObjectCount, PointingMode, SnrDefinition, Spec,
+    StarField, TumbleRange, julian_year,
 };
 pub use trajectory::{
     MAX_SAMPLE_SPACING_PSF_SIGMAS, MAX_TRAJECTORY_SAMPLES, max_sample_spacing_px,

@@ -16,8 +16,19 @@ use soig_sky::stars::{ProceduralSky, Star, StarCatalog};
 #[derive(Clone, Debug)]
 pub struct Body {
     pub name: String,
+    /// Its NORAD number, or a generated object's id.
     pub norad: u64,
     pub propagator: Propagator,
+    /// A generated object's (a breakup fragment's) own size; None: a catalogued object, its
+    /// size drawn by the photometry.
+    pub generated: Option<Generated>,
+}
+
+/// What a generated object brings of its own.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Generated {
+    /// Its average cross-section, m^2: it stands for the drawn area in its brightness.
+    pub area_m2: f64,
 }
 
 /// What a campaign reads before its first image: the bodies, the star source and the

@@ -13,6 +13,7 @@
 //! resonant deep space, 343 days after its epoch; 40649: 1.2e-8 km).
 
 mod coarse;
+mod fit;
 mod propagate;
 mod tle;
 
@@ -20,6 +21,7 @@ use hifitime::Epoch;
 use sgp4::chrono::{Datelike, Timelike};
 
 pub use coarse::{CoarseOrbit, seconds as coarse_seconds};
+pub use fit::{FIT_POSITION_KM, FIT_VELOCITY_KM_S};
 pub use propagate::{OrbitError, OrbitalElements, Propagator, Regime};
 pub use tle::{Tle, TleError, parse_tles};
 // The frame rotation and its matrix helpers were first defined here; their paths still work.

@@ -94,6 +94,8 @@ pub struct Propagator {
     resonance: Option<Arc<Resonance>>,
     /// The Brouwer mean elements at the epoch (`super::coarse` propagates them cheaply).
     pub(super) mean: sgp4::Orbit,
+    /// SGP4's drag term B*, 1/Earth radii.
+    drag_term: f64,
 }
 
 /// The resonance integrator states a resonant deep-space orbit has reached, by 720-min step.
@@ -227,7 +229,10 @@ impl Propagator {
         Self::from_sgp4_elements(&elements, el.epoch)
     }
 
-    fn from_sgp4_elements(elements: &sgp4::Elements, epoch: Epoch) -> Result<Self, OrbitError> {
+    pub(super) fn from_sgp4_elements(
+        elements: &sgp4::Elements,
+        epoch: Epoch,
+    ) -> Result<Self, OrbitError> {
         let norad_id = elements.norad_id;
         let init = |source| OrbitError::Sgp4Init { norad_id, source };
         let constants =
@@ -273,6 +278,7 @@ impl Propagator {
             norad_id,
             resonance,
             mean: orbit,
+            drag_term: elements.drag_term,
         })
     }
 
@@ -283,6 +289,11 @@ impl Propagator {
     /// Epoch of the elements (UTC).
     pub fn epoch(&self) -> Epoch {
         self.epoch
+    }
+
+    /// SGP4's drag term B* of the elements, 1/Earth radii.
+    pub fn mean_drag_term(&self) -> f64 {
+        self.drag_term
     }
 
     pub fn norad_id(&self) -> u64 {
