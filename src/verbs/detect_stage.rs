@@ -17,6 +17,7 @@ use crate::dataset::Subset;
 use crate::detect::Detection;
 use crate::detect::streak::{detect_streaks_among_stars, detect_streaks_on_frame};
 use crate::detect::yolo::{YoloDetector, YoloParams};
+use crate::observations::Line;
 use crate::experiment;
 use crate::geometry::FrameKind;
 use crate::progress::Progress;
@@ -74,7 +75,23 @@ pub(crate) fn detect_and_report(
         c.detect.conf,
         &conversion,
         progress,
-    )
+    )?;
+    if c.artifacts.astrometry {
+        let observer = serde_json::to_value(&c.observer)?;
+        let observer = observer["name"]
+            .as_str()
+            .map(String::from)
+            .or_else(|| observer["norad"].as_u64().map(|n| format!("NORAD {n}")))
+            .unwrap_or_else(|| "observer".to_string());
+        let setup = report::astrometry::Setup {
+            psf_sigma_px: c.detect.streak.psf_sigma_px,
+            observer: &observer,
+            conf: c.detect.conf,
+            apparent: c.render.apparent_positions,
+        };
+        report::astrometry::write(dir, &images, &runs, &setup)?;
+    }
+    Ok(())
 }
 
 /// Each detector of the campaign over the chosen images: what a detector sees of an image is
@@ -173,14 +190,14 @@ fn load(img: &TestFrame) -> anyhow::Result<Vec<u8>> {
 
 /// One detector over the images in parallel, with a progress bar: `detect` gives an image's
 /// detections and the seconds the detector spent on it.
-fn run_detector(
+fn run_detector<T: Send>(
     name: &str,
     images: &[TestFrame],
     progress: &dyn Progress,
-    detect: impl Fn(usize, &TestFrame) -> anyhow::Result<(Vec<Detection>, f64)> + Sync,
-) -> anyhow::Result<(Vec<Vec<Detection>>, Vec<f64>)> {
+    detect: impl Fn(usize, &TestFrame) -> anyhow::Result<(T, f64)> + Sync,
+) -> anyhow::Result<(Vec<T>, Vec<f64>)> {
     progress.start(name, images.len() as u64);
-    let results: Vec<(Vec<Detection>, f64)> = images
+    let results: Vec<(T, f64)> = images
         .par_iter()
         .enumerate()
         .map(|(i, img)| {
@@ -243,11 +260,21 @@ fn streak_run(
         } else {
             detect_streaks_on_frame(&pixels, img.width, img.height, params, None, None).0
         };
+        let seconds = t.elapsed().as_secs_f64();
+        let lines = found
+            .iter()
+            .map(|c| Line {
+                ends: c.ends,
+                snr: Some(c.snr),
+            })
+            .collect();
         Ok((
-            found.into_iter().map(|c| c.detection).collect(),
-            t.elapsed().as_secs_f64(),
+            (found.into_iter().map(|c| c.detection).collect(), lines),
+            seconds,
         ))
     })?;
+    let (detections, lines): (Vec<Vec<Detection>>, Vec<Vec<Line>>) =
+        detections.into_iter().unzip();
     Ok(DetectorRun {
         name: "streak".into(),
         description: if told {
@@ -258,6 +285,7 @@ fn streak_run(
         model_sha256: None,
         detections,
         seconds,
+        lines: Some(lines),
     })
 }
 
@@ -313,6 +341,7 @@ fn yolo_run(
         },
         detections,
         seconds,
+        lines: None,
     })
 }
 

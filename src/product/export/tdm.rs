@@ -84,7 +84,7 @@ fn observation(path: &Path) -> anyhow::Result<Option<Observation>> {
 }
 
 /// The epoch of `iso_utc`'s `YYYY-MM-DDThh:mm:ss.ffffff` (UTC).
-fn parse_utc(s: &str) -> Option<hifitime::Epoch> {
+pub(crate) fn parse_utc(s: &str) -> Option<hifitime::Epoch> {
     let (date, time) = s.split_once('T')?;
     let d: Vec<i64> = date
         .split('-')
@@ -175,6 +175,79 @@ fn tdm(observer: &str, apparent: bool, observations: &[Observation], skipped: us
             if k == 1 {
                 s += &format!("MAG = {} {:.6}\n", at(k), o.magnitude);
             }
+        }
+        s += "DATA_STOP\n";
+    }
+    s
+}
+
+/// The detectors' observations (src/product/observations.rs) as a TDM: one segment per
+/// detection, its two ends' (RA, Dec) at the exposure's start and end in the rule's order (the
+/// end of smaller PNG x first: which is first is not known), the model's one-sigma uncertainty
+/// a comment (TDM has no per-angle sigma keyword). An end the image's edge cuts is left out; a
+/// detection with both cut has no segment.
+pub fn detections(
+    observations: &[&crate::observations::Observation],
+    observer: &str,
+    apparent: bool,
+) -> String {
+    let places = if apparent { "apparent (render.apparent_positions)" } else { "geometric" };
+    let mut s = format!(
+        "CCSDS_TDM_VERS = 2.0\n\
+         COMMENT soig detections: each detection's two streak ends through the image's FITS WCS,\n\
+         COMMENT the first (by PNG x, then y) at the exposure's start, the second at its end: which\n\
+         COMMENT end came first is not known. Angles in degrees, on the WCS's ICRS axes ({places}).\n\
+         CREATION_DATE = {}\n\
+         ORIGINATOR = soig\n",
+        observations
+            .first()
+            .map_or("2000-01-01T00:00:00.000000".to_string(), |o| {
+                crate::render::iso_utc(o.times[0])
+            }),
+    );
+    for o in observations.iter().filter(|o| !(o.cut[0] && o.cut[1])) {
+        let [t0, t1] = o.times.map(crate::render::iso_utc);
+        let sigma = match o.uncertainty {
+            Some(u) => format!(
+                "one-sigma {:.4}\" along, {:.4}\" across the streak",
+                u.along_arcsec, u.across_arcsec
+            ),
+            None => "no uncertainty (the detector gives no SNR)".to_string(),
+        };
+        s += &format!(
+            "\nMETA_START\n\
+             COMMENT {} {} detection {}: score {:.4}, {sigma}\n\
+             TIME_SYSTEM = UTC\n\
+             START_TIME = {t0}\n\
+             STOP_TIME = {t1}\n\
+             PARTICIPANT_1 = {}\n\
+             PARTICIPANT_2 = {} {} detection {}\n\
+             MODE = SEQUENTIAL\n\
+             PATH = 2,1\n\
+             ANGLE_TYPE = RADEC\n\
+             REFERENCE_FRAME = ICRF\n\
+             META_STOP\n\
+             DATA_START\n",
+            o.detector,
+            o.image,
+            o.detection,
+            o.score,
+            kvn_text(observer),
+            kvn_text(&o.detector),
+            o.image,
+            o.detection,
+        );
+        // An end the image's edge cuts is no observation (observations.rs).
+        for ((t, [ra, dec]), _) in [&t0, &t1]
+            .into_iter()
+            .zip(o.radec[0])
+            .zip(o.cut)
+            .filter(|(_, cut)| !cut)
+        {
+            s += &format!(
+                "ANGLE_1 = {t} {:.10}\nANGLE_2 = {t} {dec:.10}\n",
+                ra.rem_euclid(360.0)
+            );
         }
         s += "DATA_STOP\n";
     }
