@@ -500,8 +500,13 @@ mod tests {
         let swapped = [rule[1], rule[0]];
         assert_eq!(best_pairing(&swapped, &track, [false, false]).unwrap().0, 0);
         // One end cut by the edge: the other alone decides; both cut: no pairing.
-        let one = [[[10.0, 5.0], [11.0, 6.0]], [[11.0, 6.0], [10.0, 5.0]]];
+        // radec[p] of physical ends e0, e1: pairing 0 takes e0 at the start, 1 at the end.
+        let pairs = |e0: [f64; 2], e1: [f64; 2]| [[e0, e1], [e1, e0]];
+        let one = pairs([10.0, 5.0], [11.0, 6.0]);
         assert_eq!(best_pairing(&one, &track, [false, true]).unwrap().0, 0);
+        let one = pairs([10.01, 5.02], [11.0, 6.0]);
+        assert_eq!(best_pairing(&one, &track, [false, true]).unwrap().0, 1);
+        let one = pairs([11.0, 6.0], [10.0, 5.0]);
         assert_eq!(best_pairing(&one, &track, [true, false]).unwrap().0, 1);
         assert!(best_pairing(&one, &track, [true, true]).is_none());
     }
