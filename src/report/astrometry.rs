@@ -31,7 +31,7 @@ use crate::observations::{FrameSky, Observation, end_at, observe};
 use crate::store::fs;
 
 /// The SNR bins' lower edges (matched-filter SNR of the truth).
-const SNR_EDGES: [f64; 4] = [0.0, 10.0, 30.0, 100.0];
+const SNR_EDGES: [f64; 6] = [0.0, 10.0, 30.0, 100.0, 300.0, 1000.0];
 
 /// What the astrometry needs of the campaign.
 pub struct Setup<'a> {
@@ -174,6 +174,9 @@ pub struct Residual {
     /// matched one.
     pub correlated_norad: u64,
     pub correlated: bool,
+    /// The model's one-sigma separation of an end, arcsec (along and across in quadrature);
+    /// None where the detector gives no SNR.
+    pub sigma_arcsec: Option<f64>,
 }
 
 /// The residuals of observation `o` against `objects` of its frame, matched by its box to the
@@ -214,6 +217,7 @@ pub fn residual(o: &Observation, truth: &[[f64; 4]], objects: &[TruthObject]) ->
         ends: [end(0), end(1)],
         correlated_norad: nearest,
         correlated: nearest == object.norad,
+        sigma_arcsec: o.uncertainty.map(|u| u.along_arcsec.hypot(u.across_arcsec)),
     })
 }
 
@@ -281,6 +285,7 @@ pub fn measure(
                 ends: [0, 1].map(|k| Some(offset_arcsec(track[k], radec[k]))),
                 correlated_norad: o.norad,
                 correlated: true,
+                sigma_arcsec: None,
             });
         }
         for (r, run) in runs.iter().enumerate() {
@@ -334,9 +339,9 @@ fn snr_bin(s: f64) -> String {
 /// The report's markdown.
 pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
     let mut detectors: Vec<String> = vec!["truth".into()];
-    for r in &a.residuals {
-        if !detectors.contains(&r.detector) {
-            detectors.push(r.detector.clone());
+    for name in a.unmatched.iter().map(|u| &u.0) {
+        if !detectors.contains(name) {
+            detectors.push(name.clone());
         }
     }
     let mut s = String::from(
@@ -345,7 +350,9 @@ pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
          at the exposure's start and end, against the truth ephemeris of the object its box \
          matches (IoU >= 0.5). Both pairings of the ends with the two instants are tried; the \
          better is kept. `truth`: the truth's own streak ends through the same WCS (the \
-         chain's floor). Separation per end, arcsec; SNR bins by the object's matched-filter SNR.\n\n",
+         chain's floor). Separation per end, arcsec; SNR bins by the object's matched-filter SNR. \
+         The last column holds the model's uncertainty (src/product/observations.rs) to the \
+         measurement: its median lies between 0.67 and 0.83 where the model holds.\n\n",
     );
     let _ = writeln!(
         s,
@@ -367,10 +374,14 @@ pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
                 .flat_map(|r| r.ends.iter().flatten().map(|e| e.0))
                 .collect();
             let (n, med, p68, p95) = stats(seps);
+            if n == 0 {
+                let _ = writeln!(s, "| {det} | {bin} | 0 | - | - | - |");
+                continue;
+            }
             let _ = writeln!(s, "| {det} | {bin} | {n} | {med:.3} | {p68:.3} | {p95:.3} |");
         }
     }
-    s += "\n| detector | matched | ends cut by the edge | rule's end order kept | correlated to the right object | unmatched or both ends cut |\n|---|---|---|---|---|---|\n";
+    s += "\n| detector | matched | ends cut by the edge | rule's end order kept | correlated to the right object | unmatched (no labelled object with an ephemeris) or both ends cut | median separation / model sigma |\n|---|---|---|---|---|---|---|\n";
     for det in detectors.iter().filter(|d| *d != "truth") {
         let rows: Vec<&Residual> = a.residuals.iter().filter(|r| &r.detector == det).collect();
         let n = rows.len();
@@ -381,10 +392,22 @@ pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
             .iter()
             .map(|r| r.ends.iter().filter(|e| e.is_none()).count())
             .sum();
-        let share = |k: usize| if n > 0 { k as f64 / n as f64 } else { f64::NAN };
+        let share = |k: usize| {
+            if n > 0 { format!("{:.3}", k as f64 / n as f64) } else { "-".into() }
+        };
+        // The uncertainty model against the measurement: where it holds, the separation over
+        // its RMS (sigma along and across in quadrature) has a median between 0.67 (one axis
+        // dominates: |N(0, 1)|) and 0.83 (isotropic: sqrt(ln 2)).
+        let mut z: Vec<f64> = rows
+            .iter()
+            .filter_map(|r| r.sigma_arcsec.map(|s| (r, s)))
+            .flat_map(|(r, sigma)| r.ends.iter().flatten().map(move |e| e.0 / sigma))
+            .collect();
+        z.sort_by(f64::total_cmp);
+        let z = if z.is_empty() { "-".to_string() } else { format!("{:.2}", quantile(&z, 0.5)) };
         let _ = writeln!(
             s,
-            "| {det} | {n} | {cut} | {kept} ({:.3}) | {right} ({:.3}) | {unmatched} |",
+            "| {det} | {n} | {cut} | {kept} ({}) | {right} ({}) | {unmatched} | {z} |",
             share(kept),
             share(right)
         );
