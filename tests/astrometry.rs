@@ -48,7 +48,13 @@ fn pixel_to_sky_agrees_with_astropy() {
     );
     let fixed = tmp.path().join("fixed");
     ok(run_quickstart(
-        &["--set", "images=2", "--set", "stages=[\"render\", \"enhance\"]", "--quiet"],
+        &[
+            "--set",
+            "images=2",
+            "--set",
+            "stages=[\"render\", \"enhance\"]",
+            "--quiet",
+        ],
         &fixed,
     ));
     let mut checked = 0;
@@ -56,10 +62,11 @@ fn pixel_to_sky_agrees_with_astropy() {
         let fits = out.join("fits/img_000000.fits");
         let sky = FrameSky::read(&fits).unwrap();
         assert_eq!(sky.start_end.is_some(), moving, "{}", fits.display());
-        let points: Vec<([f64; 2], bool)> = [[0.0, 0.0], [100.25, 900.5], [512.0, 512.0], [1000.75, 30.0]]
-            .into_iter()
-            .flat_map(|p| [(p, false), (p, true)])
-            .collect();
+        let points: Vec<([f64; 2], bool)> =
+            [[0.0, 0.0], [100.25, 900.5], [512.0, 512.0], [1000.75, 30.0]]
+                .into_iter()
+                .flat_map(|p| [(p, false), (p, true)])
+                .collect();
         let input: String = points
             .iter()
             .map(|(p, e)| format!("{} {} {}\n", p[0], p[1], u8::from(*e)))
@@ -71,7 +78,12 @@ fn pixel_to_sky_agrees_with_astropy() {
             .stdout(std::process::Stdio::piped())
             .spawn()
             .unwrap();
-        child.stdin.take().unwrap().write_all(input.as_bytes()).unwrap();
+        child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(input.as_bytes())
+            .unwrap();
         let o = child.wait_with_output().unwrap();
         assert!(o.status.success());
         let text = String::from_utf8(o.stdout).unwrap();
@@ -79,12 +91,18 @@ fn pixel_to_sky_agrees_with_astropy() {
             let v: Vec<f64> = line.split(' ').map(|x| x.parse().unwrap()).collect();
             let got = sky.radec(*p, *at_end);
             let sep = offset_arcsec([v[0], v[1]], got).0;
-            assert!(sep < 1e-3, "{p:?} at_end {at_end}: soig {got:?}, astropy {v:?}: {sep}\"");
+            assert!(
+                sep < 1e-3,
+                "{p:?} at_end {at_end}: soig {got:?}, astropy {v:?}: {sep}\""
+            );
             checked += 1;
         }
         if moving {
             // The start and end WCS differ: the same pixel is elsewhere on the sky then.
-            let (a, b) = (sky.radec([512.0, 512.0], false), sky.radec([512.0, 512.0], true));
+            let (a, b) = (
+                sky.radec([512.0, 512.0], false),
+                sky.radec([512.0, 512.0], true),
+            );
             assert!(offset_arcsec(a, b).0 > 60.0);
         }
     }
@@ -111,7 +129,13 @@ fn residuals_of_known_detections() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("run");
     ok(run_quickstart(
-        &["--set", "images=4", "--set", "stages=[\"render\", \"enhance\"]", "--quiet"],
+        &[
+            "--set",
+            "images=4",
+            "--set",
+            "stages=[\"render\", \"enhance\"]",
+            "--quiet",
+        ],
         &out,
     ));
     let mut swapped = 0;
@@ -135,7 +159,11 @@ fn residuals_of_known_detections() {
             ends_px: [[0.0; 2]; 2],
         };
         let scale = sky.png_scale_arcsec();
-        for (shift, ends) in [(0.0, [start, end]), (0.0, [end, start]), (4.0, [start, end])] {
+        for (shift, ends) in [
+            (0.0, [start, end]),
+            (0.0, [end, start]),
+            (4.0, [start, end]),
+        ] {
             let moved = ends.map(|[x, y]| [x + shift, y]);
             let d = Detection {
                 x1: moved[0][0].min(moved[1][0]) - 2.0,
@@ -153,7 +181,10 @@ fn residuals_of_known_detections() {
             let truth_box = [[d.x1, d.y1, d.x2, d.y2]];
             // Ends beyond the image are cut by its edge: only the ends inside are compared.
             let Some(r) = residual(&o, &truth_box, std::slice::from_ref(&object)) else {
-                assert!(o.cut[0] && o.cut[1], "{stem}: no residual though an end is inside");
+                assert!(
+                    o.cut[0] && o.cut[1],
+                    "{stem}: no residual though an end is inside"
+                );
                 continue;
             };
             let rule_first_is_start = start[0] <= end[0];
@@ -176,7 +207,10 @@ fn residuals_of_known_detections() {
             assert!(r.correlated);
         }
     }
-    assert!(swapped > 0, "some truth streak runs towards smaller x (the swap is exercised)");
+    assert!(
+        swapped > 0,
+        "some truth streak runs towards smaller x (the swap is exercised)"
+    );
 }
 
 /// The campaign field needs the detect stage: refused with its name.
@@ -195,5 +229,8 @@ fn astrometry_needs_the_detect_stage() {
     );
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("artifacts.astrometry") && err.contains("detect"), "{err}");
+    assert!(
+        err.contains("artifacts.astrometry") && err.contains("detect"),
+        "{err}"
+    );
 }

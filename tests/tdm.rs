@@ -208,9 +208,9 @@ fn truth_tdm_follows_the_standard_and_the_truth() {
 /// ADES field names (ADES description, version 2017, the optical observation's fields) that
 /// soig's PSV may use: a misspelt column fails here.
 const ADES_FIELDS: [&str; 24] = [
-    "permID", "provID", "artSat", "trkSub", "obsID", "trkID", "mode", "stn", "sys", "ctr",
-    "pos1", "pos2", "pos3", "obsTime", "ra", "dec", "rmsRA", "rmsDec", "rmsCorr", "astCat",
-    "mag", "rmsMag", "band", "remarks",
+    "permID", "provID", "artSat", "trkSub", "obsID", "trkID", "mode", "stn", "sys", "ctr", "pos1",
+    "pos2", "pos3", "obsTime", "ra", "dec", "rmsRA", "rmsDec", "rmsCorr", "astCat", "mag",
+    "rmsMag", "band", "remarks",
 ];
 
 /// The detections' observations (`artifacts.astrometry`): each detector's TDM follows the
@@ -245,7 +245,10 @@ fn detections_tdm_and_ades_psv() {
             assert!(m["PARTICIPANT_2"].starts_with(det));
             assert!(!s.data.is_empty() && s.data.len() % 2 == 0);
             for pair in s.data.chunks(2) {
-                assert_eq!((pair[0].0.as_str(), pair[1].0.as_str()), ("ANGLE_1", "ANGLE_2"));
+                assert_eq!(
+                    (pair[0].0.as_str(), pair[1].0.as_str()),
+                    ("ANGLE_1", "ANGLE_2")
+                );
                 assert_eq!(pair[0].1, pair[1].1);
                 assert!(pair[0].1 == m["START_TIME"] || pair[0].1 == m["STOP_TIME"]);
                 angles.push((pair[0].1.clone(), pair[0].2, pair[1].2));
@@ -264,17 +267,29 @@ fn detections_tdm_and_ades_psv() {
             assert!(ADES_FIELDS.contains(c), "{c} is no ADES field");
         }
         let col = |name: &str| columns.iter().position(|c| *c == name).unwrap();
-        let rows: Vec<Vec<&str>> = lines.map(|l| l.split('|').map(str::trim).collect()).collect();
-        assert_eq!(rows.len(), angles.len(), "{det}: one PSV record per TDM angle pair");
+        let rows: Vec<Vec<&str>> = lines
+            .map(|l| l.split('|').map(str::trim).collect())
+            .collect();
+        assert_eq!(
+            rows.len(),
+            angles.len(),
+            "{det}: one PSV record per TDM angle pair"
+        );
         for (row, (epoch, ra, dec)) in rows.iter().zip(&angles) {
             assert_eq!(row.len(), columns.len());
             let t = row[col("obsTime")];
             assert!(t.ends_with('Z') && is_epoch(&t[..t.len() - 1]), "{t}");
             assert_eq!(&t[..t.len() - 1], epoch);
-            let (r, d): (f64, f64) = (row[col("ra")].parse().unwrap(), row[col("dec")].parse().unwrap());
+            let (r, d): (f64, f64) = (
+                row[col("ra")].parse().unwrap(),
+                row[col("dec")].parse().unwrap(),
+            );
             assert!((0.0..360.0).contains(&r) && (-90.0..=90.0).contains(&d));
             // PSV: 9 decimals of a degree; TDM: 10.
-            assert!((r - ra).abs() < 6e-10 && (d - dec).abs() < 6e-10, "{r} {d} vs {ra} {dec}");
+            assert!(
+                (r - ra).abs() < 6e-10 && (d - dec).abs() < 6e-10,
+                "{r} {d} vs {ra} {dec}"
+            );
             assert_eq!((row[col("mode")], row[col("stn")]), ("CCD", "XXX"));
             assert_eq!(row[col("sys")], "ICRF_KM");
             // The streak detector gives an SNR, so an uncertainty; YOLO none.

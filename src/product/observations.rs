@@ -71,8 +71,8 @@ impl FrameSky {
     /// Read the header of soig FITS `path`.
     pub fn read(path: &Path) -> anyhow::Result<FrameSky> {
         let file = path.display();
-        let name = crate::fits::CfitsioName::to_read(path)
-            .with_context(|| format!("opening {file}"))?;
+        let name =
+            crate::fits::CfitsioName::to_read(path).with_context(|| format!("opening {file}"))?;
         let mut f = fitsio::FitsFile::open(&name.name)
             .with_context(|| format!("{file}: not a FITS file"))?;
         let hdu = f
@@ -99,8 +99,8 @@ impl FrameSky {
             TanWcs::from_header(|k| card(&format!("{k}{letter}")))
                 .map_err(|e| anyhow::anyhow!("{file}: WCS{letter}: {e}"))
         };
-        let mid = wcs("")?
-            .ok_or_else(|| anyhow::anyhow!("{file}: no celestial WCS (CTYPE1/CTYPE2)"))?;
+        let mid =
+            wcs("")?.ok_or_else(|| anyhow::anyhow!("{file}: no celestial WCS (CTYPE1/CTYPE2)"))?;
         let start_end = match (wcs("S")?, wcs("E")?) {
             (Some(s), Some(e)) => Some((s, e)),
             (None, None) => None,
@@ -110,11 +110,15 @@ impl FrameSky {
             card(k)
                 .and_then(|v| v.parse::<f64>().ok())
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| anyhow::anyhow!("{file}: header keyword {k} missing or not a number"))
+                .ok_or_else(|| {
+                    anyhow::anyhow!("{file}: header keyword {k} missing or not a number")
+                })
         };
         let date = card("DATE-OBS").unwrap_or_default();
         let start = crate::export::tdm::parse_utc(&date).ok_or_else(|| {
-            anyhow::anyhow!("{file}: header keyword DATE-OBS = {date:?} is not YYYY-MM-DDThh:mm:ss.ffffff")
+            anyhow::anyhow!(
+                "{file}: header keyword DATE-OBS = {date:?} is not YYYY-MM-DDThh:mm:ss.ffffff"
+            )
         })?;
         let exposure_s = number("EXPTIME")?;
         let a = [
@@ -130,8 +134,16 @@ impl FrameSky {
             [-a[1][0] / det, a[0][0] / det],
         ];
         let png_to_image = [
-            [inv[0][0], inv[0][1], -(inv[0][0] * a[0][2] + inv[0][1] * a[1][2])],
-            [inv[1][0], inv[1][1], -(inv[1][0] * a[0][2] + inv[1][1] * a[1][2])],
+            [
+                inv[0][0],
+                inv[0][1],
+                -(inv[0][0] * a[0][2] + inv[0][1] * a[1][2]),
+            ],
+            [
+                inv[1][0],
+                inv[1][1],
+                -(inv[1][0] * a[0][2] + inv[1][1] * a[1][2]),
+            ],
         ];
         let vector = |what: &str| -> Option<[f64; 3]> {
             let v = ["X", "Y", "Z"].map(|a| number(&format!("{what}-{a}")).ok());
@@ -316,7 +328,10 @@ pub fn observe(
         cut,
         radec,
         times: [sky.time(false), sky.time(true)],
-        observer_km: sky.observer_at(false).zip(sky.observer_at(true)).map(|(a, b)| [a, b]),
+        observer_km: sky
+            .observer_at(false)
+            .zip(sky.observer_at(true))
+            .map(|(a, b)| [a, b]),
         snr: line.snr,
         uncertainty,
         from_box,
@@ -342,7 +357,11 @@ pub fn uncertainty(
     dra *= dec.cos();
     let ddec = ends[1][1] - ends[0][1];
     let n = dra.hypot(ddec);
-    let (ue, un) = if n > 0.0 { (dra / n, ddec / n) } else { (1.0, 0.0) };
+    let (ue, un) = if n > 0.0 {
+        (dra / n, ddec / n)
+    } else {
+        (1.0, 0.0)
+    };
     let (a2, c2) = (along * along, across * across);
     let var_ra = a2 * ue * ue + c2 * un * un;
     let var_dec = a2 * un * un + c2 * ue * ue;
@@ -363,7 +382,12 @@ pub fn uncertainty(
 /// where the light shows no level above the border.
 pub fn line_in_box(pixels: &[u8], w: usize, h: usize, d: &Detection) -> [[f64; 2]; 2] {
     let clamp = |v: f64, n: usize| v.clamp(0.0, n as f64);
-    let (x1, y1, x2, y2) = (clamp(d.x1, w), clamp(d.y1, h), clamp(d.x2, w), clamp(d.y2, h));
+    let (x1, y1, x2, y2) = (
+        clamp(d.x1, w),
+        clamp(d.y1, h),
+        clamp(d.x2, w),
+        clamp(d.y2, h),
+    );
     let (i0, i1) = (x1.floor() as usize, (x2.ceil() as usize).min(w));
     let (j0, j1) = (y1.floor() as usize, (y2.ceil() as usize).min(h));
     if i1 <= i0 || j1 <= j0 {
@@ -391,7 +415,11 @@ pub fn line_in_box(pixels: &[u8], w: usize, h: usize, d: &Detection) -> [[f64; 2
             sxy += v * x * y;
         }
     }
-    let cov = if s > 0.0 { sxy / s - (sx / s) * (sy / s) } else { 0.0 };
+    let cov = if s > 0.0 {
+        sxy / s - (sx / s) * (sy / s)
+    } else {
+        0.0
+    };
     let (a, b) = if cov >= 0.0 {
         ([x1, y1], [x2, y2])
     } else {
@@ -432,7 +460,11 @@ fn half_level_ends(
                 .iter()
                 .filter_map(|o| at(x - uy * o, y + ux * o))
                 .collect();
-            if v.is_empty() { bg } else { v.iter().sum::<f64>() / v.len() as f64 }
+            if v.is_empty() {
+                bg
+            } else {
+                v.iter().sum::<f64>() / v.len() as f64
+            }
         })
         .collect();
     // A running mean over 5 samples (2 px along): 8-bit noise would cross the level early.
@@ -453,11 +485,23 @@ fn half_level_ends(
     // Interpolated crossings between the samples around them.
     let cross = |k0: usize, k1: usize| {
         let (v0, v1) = (profile[k0], profile[k1]);
-        let f = if v1 != v0 { (half - v0) / (v1 - v0) } else { 0.0 };
+        let f = if v1 != v0 {
+            (half - v0) / (v1 - v0)
+        } else {
+            0.0
+        };
         (k0 as f64 + f.clamp(0.0, 1.0) * (k1 as f64 - k0 as f64)) * step
     };
-    let t0 = if first == 0 { 0.0 } else { cross(first - 1, first) };
-    let t1 = if last + 1 >= n { len } else { cross(last, last + 1) };
+    let t0 = if first == 0 {
+        0.0
+    } else {
+        cross(first - 1, first)
+    };
+    let t1 = if last + 1 >= n {
+        len
+    } else {
+        cross(last, last + 1)
+    };
     let point = |t: f64| [a[0] + ux * t, a[1] + uy * t];
     Some([point(t0), point(t1)])
 }
@@ -545,6 +589,9 @@ mod tests {
         let u = uncertainty(20.0, 100.0, 1.5, 2.0, [[10.0, 0.0], [10.1, 0.1]]);
         let mean = ((along * along + across * across) / 2.0).sqrt();
         assert!((u.ra_arcsec - mean).abs() < 1e-9 && (u.dec_arcsec - mean).abs() < 1e-9);
-        assert!(u.corr > 0.5, "along the NE diagonal RA and Dec errors go together");
+        assert!(
+            u.corr > 0.5,
+            "along the NE diagonal RA and Dec errors go together"
+        );
     }
 }

@@ -86,9 +86,10 @@ pub fn truth_objects(path: &Path) -> anyhow::Result<Vec<TruthObject>> {
         #[serde(default)]
         objects: Option<Vec<SidecarObject>>,
     }
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("reading {}", path.display()))?;
-    let bad = |e: serde_json::Error| anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display());
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let bad =
+        |e: serde_json::Error| anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display());
     let frame: Frame = serde_json::from_str(&text).map_err(bad)?;
     let objects = match frame.objects {
         Some(o) => o,
@@ -129,10 +130,15 @@ pub fn offset_arcsec(a: [f64; 2], b: [f64; 2]) -> (f64, f64, f64) {
         b[0].to_radians(),
         b[1].to_radians(),
     );
-    let h = ((d2 - d1) / 2.0).sin().powi(2) + d1.cos() * d2.cos() * ((ra2 - ra1) / 2.0).sin().powi(2);
+    let h =
+        ((d2 - d1) / 2.0).sin().powi(2) + d1.cos() * d2.cos() * ((ra2 - ra1) / 2.0).sin().powi(2);
     let sep = 2.0 * h.sqrt().min(1.0).asin();
     let dra = ((b[0] - a[0] + 540.0).rem_euclid(360.0) - 180.0) * ((d1 + d2) / 2.0).cos();
-    (sep.to_degrees() * 3600.0, dra * 3600.0, (b[1] - a[1]) * 3600.0)
+    (
+        sep.to_degrees() * 3600.0,
+        dra * 3600.0,
+        (b[1] - a[1]) * 3600.0,
+    )
 }
 
 /// The RMS separation of ends `radec[p]` from `track` for each pairing p over the ends not
@@ -324,7 +330,12 @@ pub fn measure(
 /// The table's statistics of separations `v` (unsorted): n, median, p68, p95.
 fn stats(mut v: Vec<f64>) -> (usize, f64, f64, f64) {
     v.sort_by(f64::total_cmp);
-    (v.len(), quantile(&v, 0.5), quantile(&v, 0.68), quantile(&v, 0.95))
+    (
+        v.len(),
+        quantile(&v, 0.5),
+        quantile(&v, 0.68),
+        quantile(&v, 0.95),
+    )
 }
 
 /// The bin label of SNR `s`.
@@ -357,7 +368,11 @@ pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
     let _ = writeln!(
         s,
         "Places: {}; confidence threshold {}.\n",
-        if setup.apparent { "apparent (render.apparent_positions)" } else { "geometric" },
+        if setup.apparent {
+            "apparent (render.apparent_positions)"
+        } else {
+            "geometric"
+        },
         setup.conf
     );
     s += "| detector | SNR | ends | median \" | p68 \" | p95 \" |\n|---|---|---|---|---|---|\n";
@@ -378,7 +393,10 @@ pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
                 let _ = writeln!(s, "| {det} | {bin} | 0 | - | - | - |");
                 continue;
             }
-            let _ = writeln!(s, "| {det} | {bin} | {n} | {med:.3} | {p68:.3} | {p95:.3} |");
+            let _ = writeln!(
+                s,
+                "| {det} | {bin} | {n} | {med:.3} | {p68:.3} | {p95:.3} |"
+            );
         }
     }
     s += "\n| detector | matched | ends cut by the edge | rule's end order kept | correlated to the right object | unmatched (no labelled object with an ephemeris) or both ends cut | median separation / model sigma |\n|---|---|---|---|---|---|---|\n";
@@ -393,7 +411,11 @@ pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
             .map(|r| r.ends.iter().filter(|e| e.is_none()).count())
             .sum();
         let share = |k: usize| {
-            if n > 0 { format!("{:.3}", k as f64 / n as f64) } else { "-".into() }
+            if n > 0 {
+                format!("{:.3}", k as f64 / n as f64)
+            } else {
+                "-".into()
+            }
         };
         // The uncertainty model against the measurement: where it holds, the separation over
         // its RMS (sigma along and across in quadrature) has a median between 0.67 (one axis
@@ -404,7 +426,11 @@ pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
             .flat_map(|(r, sigma)| r.ends.iter().flatten().map(move |e| e.0 / sigma))
             .collect();
         z.sort_by(f64::total_cmp);
-        let z = if z.is_empty() { "-".to_string() } else { format!("{:.2}", quantile(&z, 0.5)) };
+        let z = if z.is_empty() {
+            "-".to_string()
+        } else {
+            format!("{:.2}", quantile(&z, 0.5))
+        };
         let _ = writeln!(
             s,
             "| {det} | {n} | {cut} | {kept} ({}) | {right} ({}) | {unmatched} | {z} |",
@@ -482,8 +508,11 @@ pub fn write(
     let odir = rdir.join("observations");
     fs::create_dir_all(&odir)?;
     for run in runs {
-        let obs: Vec<&Observation> =
-            a.observations.iter().filter(|o| o.detector == run.name).collect();
+        let obs: Vec<&Observation> = a
+            .observations
+            .iter()
+            .filter(|o| o.detector == run.name)
+            .collect();
         fs::create(
             &odir.join(format!("{}.psv", run.name)),
             crate::export::ades::psv(&obs, setup.observer),
@@ -504,7 +533,10 @@ mod tests {
     #[test]
     fn offsets() {
         let (s, e, n) = offset_arcsec([10.0, 60.0], [10.0 + 2.0 / 3600.0, 60.0]);
-        assert!((s - 1.0).abs() < 1e-6, "2 s of RA at Dec 60 is 1 arcsec: {s}");
+        assert!(
+            (s - 1.0).abs() < 1e-6,
+            "2 s of RA at Dec 60 is 1 arcsec: {s}"
+        );
         assert!((e - 1.0).abs() < 1e-6 && n.abs() < 1e-9);
         let (s, _, n) = offset_arcsec([359.9999, -10.0], [359.9999, -10.0 + 3.0 / 3600.0]);
         assert!((s - 3.0).abs() < 1e-6 && (n - 3.0).abs() < 1e-6);

@@ -17,9 +17,9 @@ use crate::dataset::Subset;
 use crate::detect::Detection;
 use crate::detect::streak::{detect_streaks_among_stars, detect_streaks_on_frame};
 use crate::detect::yolo::{YoloDetector, YoloParams};
-use crate::observations::Line;
 use crate::experiment;
 use crate::geometry::FrameKind;
+use crate::observations::Line;
 use crate::progress::Progress;
 use crate::report::{self, DetectorRun, ObjectFacts, TestImage};
 
@@ -273,8 +273,7 @@ fn streak_run(
             seconds,
         ))
     })?;
-    let (detections, lines): (Vec<Vec<Detection>>, Vec<Vec<Line>>) =
-        detections.into_iter().unzip();
+    let (detections, lines): (Vec<Vec<Detection>>, Vec<Vec<Line>>) = detections.into_iter().unzip();
     Ok(DetectorRun {
         name: "streak".into(),
         description: if told {

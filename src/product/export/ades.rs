@@ -21,8 +21,8 @@ use crate::observations::Observation;
 
 /// The PSV's column names, in order (ADES field names).
 pub const COLUMNS: [&str; 15] = [
-    "trkSub", "mode", "stn", "sys", "ctr", "pos1", "pos2", "pos3", "obsTime", "ra", "dec",
-    "rmsRA", "rmsDec", "rmsCorr", "astCat",
+    "trkSub", "mode", "stn", "sys", "ctr", "pos1", "pos2", "pos3", "obsTime", "ra", "dec", "rmsRA",
+    "rmsDec", "rmsCorr", "astCat",
 ];
 
 /// The column after [`COLUMNS`]: free text.
@@ -46,13 +46,19 @@ pub fn psv(observations: &[&Observation], observer: &str) -> String {
     s += &format!("! name {}\n", psv_text(observer));
     s += "# submitter\n! name soig\n# measurers\n! name soig\n# telescope\n! design simulated\n! detector CCD\n";
     s += "# comment\n! line soig simulated images: each detection's two ends, the first (by image x, then y)\n";
-    s += "! line at the exposure's start, the second at its end; which end is first is not known.\n";
+    s +=
+        "! line at the exposure's start, the second at its end; which end is first is not known.\n";
     let mut header: Vec<&str> = COLUMNS.to_vec();
     header.push(REMARKS);
     s += &header.join("|");
     s.push('\n');
     for (n, o) in observations.iter().enumerate() {
-        let letter = o.detector.chars().next().unwrap_or('d').to_ascii_lowercase();
+        let letter = o
+            .detector
+            .chars()
+            .next()
+            .unwrap_or('d')
+            .to_ascii_lowercase();
         let trk = format!("{letter}{:07}", n % 10_000_000);
         for k in (0..2).filter(|&k| !o.cut[k]) {
             let [ra, dec] = o.radec[0][k];
@@ -62,7 +68,11 @@ pub fn psv(observations: &[&Observation], observer: &str) -> String {
                     "399".to_string(),
                     p[k].map(|v| format!("{v:.4}")),
                 ),
-                None => (String::new(), String::new(), [String::new(), String::new(), String::new()]),
+                None => (
+                    String::new(),
+                    String::new(),
+                    [String::new(), String::new(), String::new()],
+                ),
             };
             let (rms_ra, rms_dec, corr) = match o.uncertainty {
                 Some(u) => (

@@ -191,7 +191,11 @@ pub fn detections(
     observer: &str,
     apparent: bool,
 ) -> String {
-    let places = if apparent { "apparent (render.apparent_positions)" } else { "geometric" };
+    let places = if apparent {
+        "apparent (render.apparent_positions)"
+    } else {
+        "geometric"
+    };
     let mut s = format!(
         "CCSDS_TDM_VERS = 2.0\n\
          COMMENT soig detections: each detection's two streak ends through the image's FITS WCS,\n\
