@@ -156,6 +156,7 @@ fn residuals_of_known_detections() {
                 place("streak_end_wcs_radec_deg"),
             ]),
             snr: 50.0,
+            magnitude: 12.0,
             ends_px: [[0.0; 2]; 2],
         };
         let scale = sky.png_scale_arcsec();

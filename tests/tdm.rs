@@ -229,7 +229,7 @@ fn detections_tdm_and_ades_psv() {
         &out,
     ));
     ok(soig(&["verify", out.to_str().unwrap()]));
-    let mut records = 0;
+    let (mut records, mut mags) = (0, 0);
     for det in ["streak", "yolo"] {
         let dir = out.join("report/observations");
         let (header, segments) =
@@ -294,10 +294,19 @@ fn detections_tdm_and_ades_psv() {
             assert_eq!(row[col("sys")], "ICRF_KM");
             // The streak detector gives an SNR, so an uncertainty; YOLO none.
             assert_eq!(row[col("rmsRA")].is_empty(), det == "yolo");
+            // A magnitude comes with its band; a plausible one (the quickstart's are 10-14).
+            let mag = row[col("mag")];
+            assert_eq!(row[col("band")], if mag.is_empty() { "" } else { "V" });
+            if !mag.is_empty() {
+                let m: f64 = mag.parse().unwrap();
+                assert!((5.0..20.0).contains(&m), "{m}");
+                mags += 1;
+            }
         }
         records += rows.len();
     }
     assert!(records > 0, "the quickstart's detections give observations");
+    assert!(mags > 0, "and magnitudes where both ends are inside");
     let md = std::fs::read_to_string(out.join("report/astrometry.md")).unwrap();
     assert!(md.contains("| streak | all |") && md.contains("| yolo | all |"));
 }

@@ -27,7 +27,7 @@ use anyhow::Context;
 use serde::Deserialize;
 
 use super::{DetectorRun, TestImage};
-use crate::observations::{FrameSky, Observation, end_at, observe};
+use crate::observations::{FrameSky, Observation, end_at, observe, streak_magnitude};
 use crate::store::fs;
 
 /// The SNR bins' lower edges (matched-filter SNR of the truth).
@@ -55,6 +55,8 @@ pub struct TruthObject {
     /// (RA, Dec) at the exposure's start and end; None for a placed object.
     pub ephemeris: Option<[[f64; 2]; 2]>,
     pub snr: f64,
+    /// Its magnitude at mid-exposure (the truth's `magnitude`).
+    pub magnitude: f64,
     /// Its streak's ends in the original image, pixel centres.
     pub ends_px: [[f64; 2]; 2],
 }
@@ -64,6 +66,7 @@ struct SidecarObject {
     object: String,
     norad: u64,
     snr_matched_filter: f64,
+    magnitude: f64,
     streak_start_px: [f64; 2],
     streak_end_px: [f64; 2],
     #[serde(default)]
@@ -115,6 +118,7 @@ pub fn truth_objects(path: &Path) -> anyhow::Result<Vec<TruthObject>> {
                     .ephemeris
                     .map(|e| [e.debris_radec_start_deg, e.debris_radec_end_deg]),
                 snr: o.snr_matched_filter,
+                magnitude: o.magnitude,
                 ends_px: [o.streak_start_px, o.streak_end_px],
             }
         })
@@ -183,6 +187,8 @@ pub struct Residual {
     /// The model's one-sigma separation of an end, arcsec (along and across in quadrature);
     /// None where the detector gives no SNR.
     pub sigma_arcsec: Option<f64>,
+    /// The detection's magnitude less the object's at mid-exposure; None without one.
+    pub magnitude_delta: Option<f64>,
 }
 
 /// The residuals of observation `o` against `objects` of its frame, matched by its box to the
@@ -224,6 +230,7 @@ pub fn residual(o: &Observation, truth: &[[f64; 4]], objects: &[TruthObject]) ->
         correlated_norad: nearest,
         correlated: nearest == object.norad,
         sigma_arcsec: o.uncertainty.map(|u| u.along_arcsec.hypot(u.across_arcsec)),
+        magnitude_delta: o.magnitude.map(|m| m - object.magnitude),
     })
 }
 
@@ -269,6 +276,9 @@ pub fn measure(
             .iter()
             .filter(|o| o.label.is_some() && o.ephemeris.is_none())
             .count();
+        let fits = dir.join("fits").join(format!("{}.fits", img.stem));
+        let (adu, _, fits_width) = crate::fits::read_f32(&fits)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", fits.display()))?;
         let pixels = image::open(&img.png)
             .with_context(|| format!("reading {}", img.png.display()))?
             .to_luma8()
@@ -292,6 +302,7 @@ pub fn measure(
                 correlated_norad: o.norad,
                 correlated: true,
                 sigma_arcsec: None,
+                magnitude_delta: None,
             });
         }
         for (r, run) in runs.iter().enumerate() {
@@ -300,7 +311,7 @@ pub fn measure(
                     continue;
                 }
                 let line = run.lines.as_ref().map(|l| l[i][k]);
-                let o = observe(
+                let mut o = observe(
                     &img.stem,
                     &run.name,
                     k,
@@ -311,6 +322,11 @@ pub fn measure(
                     &sky,
                     setup.psf_sigma_px,
                 );
+                if !o.cut[0] && !o.cut[1] {
+                    let ends = o.ends_px.map(|p| sky.image_pixel(p));
+                    let sigma = setup.psf_sigma_px * sky.image_px_per_png_px();
+                    o.magnitude = streak_magnitude(&adu, fits_width, ends, sigma, &sky);
+                }
                 match residual(&o, &img.truth, &objects) {
                     Some(res) => out.residuals.push(res),
                     None => unmatched[r] += 1,
@@ -399,7 +415,7 @@ pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
             );
         }
     }
-    s += "\n| detector | matched | ends cut by the edge | rule's end order kept | correlated to the right object | unmatched (no labelled object with an ephemeris) or both ends cut | median separation / model sigma |\n|---|---|---|---|---|---|---|\n";
+    s += "\n| detector | matched | ends cut by the edge | rule's end order kept | correlated to the right object | unmatched (no labelled object with an ephemeris) or both ends cut | median separation / model sigma | magnitude - truth's: n, median, p68 of abs |\n|---|---|---|---|---|---|---|---|\n";
     for det in detectors.iter().filter(|d| *d != "truth") {
         let rows: Vec<&Residual> = a.residuals.iter().filter(|r| &r.detector == det).collect();
         let n = rows.len();
@@ -431,9 +447,23 @@ pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
         } else {
             format!("{:.2}", quantile(&z, 0.5))
         };
+        let mut dm: Vec<f64> = rows.iter().filter_map(|r| r.magnitude_delta).collect();
+        dm.sort_by(f64::total_cmp);
+        let mut abs: Vec<f64> = dm.iter().map(|d| d.abs()).collect();
+        abs.sort_by(f64::total_cmp);
+        let mag = if dm.is_empty() {
+            "0".to_string()
+        } else {
+            format!(
+                "{}, {:+.3}, {:.3}",
+                dm.len(),
+                quantile(&dm, 0.5),
+                quantile(&abs, 0.68)
+            )
+        };
         let _ = writeln!(
             s,
-            "| {det} | {n} | {cut} | {kept} ({}) | {right} ({}) | {unmatched} | {z} |",
+            "| {det} | {n} | {cut} | {kept} ({}) | {right} ({}) | {unmatched} | {z} | {mag} |",
             share(kept),
             share(right)
         );
@@ -574,6 +604,7 @@ mod tests {
         assert!((quantile(&v, 0.68) - 3.72).abs() < 1e-12);
         assert!((quantile(&v, 0.95) - 8.8).abs() < 1e-12);
         assert_eq!(snr_bin(5.0), "0-10");
-        assert_eq!(snr_bin(150.0), ">=100");
+        assert_eq!(snr_bin(150.0), "100-300");
+        assert_eq!(snr_bin(5000.0), ">=1000");
     }
 }

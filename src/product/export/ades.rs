@@ -14,15 +14,17 @@
 //!   observation and is left out (a detection with both cut has no record).
 //! - `astCat`: `UNK`: the places come from the simulation's own WCS, not from a fit to a star
 //!   catalogue.
-//! - `mag`, `band`: absent (the detectors measure no calibrated flux); `rmsRA`, `rmsDec`,
-//!   `rmsCorr` absent where the detector gives no SNR (YOLO).
+//! - `mag`, `band`: the aperture photometry of the streak on the FITS
+//!   (`observations::streak_magnitude`, through `MAGZERO`), in soig's visual band (`V`, as the
+//!   truth's `magnitude`); absent where an end is cut. `rmsRA`, `rmsDec`, `rmsCorr` absent where
+//!   the detector gives no SNR (YOLO).
 
 use crate::observations::Observation;
 
 /// The PSV's column names, in order (ADES field names).
-pub const COLUMNS: [&str; 15] = [
+pub const COLUMNS: [&str; 17] = [
     "trkSub", "mode", "stn", "sys", "ctr", "pos1", "pos2", "pos3", "obsTime", "ra", "dec", "rmsRA",
-    "rmsDec", "rmsCorr", "astCat",
+    "rmsDec", "rmsCorr", "astCat", "mag", "band",
 ];
 
 /// The column after [`COLUMNS`]: free text.
@@ -98,6 +100,8 @@ pub fn psv(observations: &[&Observation], observer: &str) -> String {
                 rms_dec,
                 corr,
                 "UNK".into(),
+                o.magnitude.map_or(String::new(), |m| format!("{m:.2}")),
+                (if o.magnitude.is_some() { "V" } else { "" }).to_string(),
                 psv_text(&format!(
                     "{} {} detection {} end {}",
                     o.detector,
