@@ -277,8 +277,8 @@ pub fn measure(
             .filter(|o| o.label.is_some() && o.ephemeris.is_none())
             .count();
         let fits = dir.join("fits").join(format!("{}.fits", img.stem));
-        let (adu, _, fits_width) = crate::fits::read_f32(&fits)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", fits.display()))?;
+        let (adu, _, fits_width) =
+            crate::fits::read_f32(&fits).map_err(|e| anyhow::anyhow!("{}: {e}", fits.display()))?;
         let pixels = image::open(&img.png)
             .with_context(|| format!("reading {}", img.png.display()))?
             .to_luma8()
