@@ -310,3 +310,47 @@ fn detections_tdm_and_ades_psv() {
     let md = std::fs::read_to_string(out.join("report/astrometry.md")).unwrap();
     assert!(md.contains("| streak | all |") && md.contains("| yolo | all |"));
 }
+
+/// A catalogue scene's truth TDM (`[population]`, the GEO stare): one segment per object with
+/// an ephemeris, in the sidecars' order, each with that object's angles.
+#[test]
+fn catalogue_scene_tdm_has_every_object() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let campaign = common::repo("campaigns/geo-stare.toml");
+    ok(soig(&[
+        "run",
+        campaign.to_str().unwrap(),
+        "--set",
+        "images=2",
+        "--set",
+        "stages=[\"render\"]",
+        "--set",
+        "artifacts.coco=false",
+        "--set",
+        "artifacts.ds9_regions=false",
+        "--set",
+        "artifacts.tdm=true",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let (_, segments) = parse(&std::fs::read_to_string(out.join("export/tdm/truth.tdm")).unwrap());
+    let mut want = Vec::new();
+    for i in 0..2 {
+        let t = json(&out.join(format!("truth/img_{i:06}.json")));
+        for o in t["objects"].as_array().unwrap() {
+            if !o["ephemeris"].is_null() {
+                want.push(o.clone());
+            }
+        }
+    }
+    assert!(want.len() > 2, "the stare holds several objects");
+    assert_eq!(segments.len(), want.len());
+    for (s, o) in segments.iter().zip(&want) {
+        assert!(s.meta["PARTICIPANT_2"].ends_with(&format!("(NORAD {})", o["norad"])));
+        let start = &o["ephemeris"]["debris_radec_start_deg"];
+        assert!((s.data[0].2 - start[0].as_f64().unwrap()).abs() <= 5.1e-11);
+        assert!((s.data[1].2 - start[1].as_f64().unwrap()).abs() <= 5.1e-11);
+    }
+}

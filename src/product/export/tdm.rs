@@ -1,5 +1,6 @@
 //! The truth's observations as a CCSDS Tracking Data Message (CCSDS 503.0-B-2, KVN), for orbit
-//! determination tools: `export/tdm/truth.tdm`, one segment per image, the debris' (RA, Dec)
+//! determination tools: `export/tdm/truth.tdm`, one segment per image (per object of a
+//! catalogue scene's image), the debris' (RA, Dec)
 //! seen from the observing satellite at the exposure's start, middle and end (`ANGLE_TYPE =
 //! RADEC`, `ANGLE_1` right ascension, `ANGLE_2` declination, degrees), from the truth sidecars'
 //! `ephemeris`. The angles are topocentric to the observer, on GCRS axes (ICRS to
@@ -7,9 +8,10 @@
 //! campaign sets `render.apparent_positions`; the header says which. The visual magnitude at
 //! mid-exposure is `MAG` (a TDM 2.0 data keyword); the SNR a comment.
 //!
+//! A catalogue scene's image (`[population]`) gives one segment per object with an ephemeris.
 //! Images with several placed objects (`[objects]`) carry no per-object ephemeris in their
 //! truth (each is turned rigidly into the field, its RA/Dec not its orbit's): they are left
-//! out, and the header counts them.
+//! out, and the header counts them (as it counts an image none of whose objects has one).
 
 use std::path::{Path, PathBuf};
 
@@ -32,15 +34,34 @@ struct Observation {
     snr: f64,
 }
 
-/// The observation of truth sidecar `path`; None for an image of placed objects (no
-/// ephemeris per object) or without an ephemeris.
-fn observation(path: &Path) -> anyhow::Result<Option<Observation>> {
+/// The observations of truth sidecar `path`: its one object's, or each of its `objects` with
+/// an ephemeris (a catalogue scene's); empty for an image of placed objects.
+fn observations_of(path: &Path) -> anyhow::Result<Vec<Observation>> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let t: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-    let e = &t["ephemeris"];
-    if t.get("objects").is_some() || e.is_null() {
+    match t.get("objects").and_then(|o| o.as_array()) {
+        None => Ok(observation_of(path, &t, &t)?.into_iter().collect()),
+        Some(objects) => {
+            let mut out = Vec::new();
+            for o in objects {
+                out.extend(observation_of(path, &t, o)?);
+            }
+            Ok(out)
+        }
+    }
+}
+
+/// The observation of object `o` (the sidecar itself for a one-object image) of sidecar `t`
+/// read from `path`; None without an ephemeris.
+fn observation_of(
+    path: &Path,
+    t: &serde_json::Value,
+    o: &serde_json::Value,
+) -> anyhow::Result<Option<Observation>> {
+    let e = &o["ephemeris"];
+    if e.is_null() {
         return Ok(None);
     }
     let bad = |field: &str| {
@@ -66,11 +87,11 @@ fn observation(path: &Path) -> anyhow::Result<Option<Observation>> {
             .unwrap_or_default()
             .to_string_lossy()
             .into_owned(),
-        object: t["object"]
+        object: o["object"]
             .as_str()
             .ok_or_else(|| bad("object"))?
             .to_string(),
-        norad: t["norad"].as_u64().ok_or_else(|| bad("norad"))?,
+        norad: o["norad"].as_u64().ok_or_else(|| bad("norad"))?,
         start,
         exposure_s: num(&t["exposure_s"], "exposure_s")?,
         radec: [
@@ -78,8 +99,8 @@ fn observation(path: &Path) -> anyhow::Result<Option<Observation>> {
             pair("debris_radec_mid_deg")?,
             pair("debris_radec_end_deg")?,
         ],
-        magnitude: num(&t["magnitude"], "magnitude")?,
-        snr: num(&t["snr"], "snr")?,
+        magnitude: num(&o["magnitude"], "magnitude")?,
+        snr: num(&o["snr"], "snr")?,
     }))
 }
 
@@ -279,10 +300,11 @@ pub fn write(
     let mut observations = Vec::new();
     let mut skipped = 0;
     for stem in super::stems(&truth, "json")? {
-        match observation(&truth.join(format!("{stem}.json")))? {
-            Some(o) => observations.push(o),
-            None => skipped += 1,
+        let found = observations_of(&truth.join(format!("{stem}.json")))?;
+        if found.is_empty() {
+            skipped += 1;
         }
+        observations.extend(found);
     }
     fs::create_dir_all(dest)?;
     let path = dest.join(FILE);
