@@ -81,7 +81,9 @@ pub mod verbs;
 // `soig::pipeline`, ...
 pub use config::{campaign, experiment, work};
 pub(crate) use product::artifacts;
-pub use product::{collect, dataset, export, light_curve, shard, star_trails, streak_labels};
+pub use product::{
+    collect, dataset, export, light_curve, observations, shard, star_trails, streak_labels,
+};
 pub use verbs::{
     compare, convert, detect_frames, launch, merge, pipeline, study, summary, sweep, tables,
 };

@@ -10,6 +10,7 @@
 //! volatile (present, not hashed), so the digest stays reproducible. The figures are drawn in
 //! `figures`.
 
+pub mod astrometry;
 pub mod efficiency;
 mod figures;
 pub use efficiency::{Efficiency, HalfRecall, ObjectFacts};
@@ -49,6 +50,9 @@ pub struct DetectorRun {
     /// Per test image, in the order of the test images.
     pub detections: Vec<Vec<Detection>>,
     pub seconds: Vec<f64>,
+    /// Each detection's streak (ends, SNR) where the detector gives it (the streak detector),
+    /// in the order of `detections`; None for a box-only detector (`observations`).
+    pub lines: Option<Vec<Vec<crate::observations::Line>>>,
 }
 
 #[derive(Serialize, Deserialize)]

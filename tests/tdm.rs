@@ -15,7 +15,7 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use common::{json, ok, run_quickstart, soig};
+use common::{json, ok, ort_available, run_quickstart, soig};
 
 /// Header keywords of a TDM (503.0-B-2, 3.2).
 const HEADER: [&str; 5] = [
@@ -203,4 +203,154 @@ fn truth_tdm_follows_the_standard_and_the_truth() {
         std::fs::read(out.join("export/tdm/truth.tdm")).unwrap()
     );
     assert!(!dest.join("coco").exists() && !dest.join("ds9").exists());
+}
+
+/// ADES field names (ADES description, version 2017, the optical observation's fields) that
+/// soig's PSV may use: a misspelt column fails here.
+const ADES_FIELDS: [&str; 24] = [
+    "permID", "provID", "artSat", "trkSub", "obsID", "trkID", "mode", "stn", "sys", "ctr", "pos1",
+    "pos2", "pos3", "obsTime", "ra", "dec", "rmsRA", "rmsDec", "rmsCorr", "astCat", "mag",
+    "rmsMag", "band", "remarks",
+];
+
+/// The detections' observations (`artifacts.astrometry`): each detector's TDM follows the
+/// standard's keywords (the same parser as the truth's), its PSV is ADES (`# version=2017`,
+/// `#` and `!` header lines, then a row of ADES field names and pipe-separated records), and
+/// both carry the same angles, one per uncut streak end, in the same order.
+#[test]
+fn detections_tdm_and_ades_psv() {
+    if !ort_available() {
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    ok(run_quickstart(
+        &["--set", "artifacts.astrometry=true", "--quiet"],
+        &out,
+    ));
+    ok(soig(&["verify", out.to_str().unwrap()]));
+    let (mut records, mut mags) = (0, 0);
+    for det in ["streak", "yolo"] {
+        let dir = out.join("report/observations");
+        let (header, segments) =
+            parse(&std::fs::read_to_string(dir.join(format!("{det}.tdm"))).unwrap());
+        assert_eq!(header["CCSDS_TDM_VERS"], "2.0");
+        let mut angles = Vec::new();
+        for s in &segments {
+            let m = &s.meta;
+            assert_eq!(m["TIME_SYSTEM"], "UTC");
+            assert_eq!(m["ANGLE_TYPE"], "RADEC");
+            assert_eq!(m["REFERENCE_FRAME"], "ICRF");
+            assert_eq!(m["PARTICIPANT_1"], "SENTINEL 3A");
+            assert!(m["PARTICIPANT_2"].starts_with(det));
+            assert!(!s.data.is_empty() && s.data.len() % 2 == 0);
+            for pair in s.data.chunks(2) {
+                assert_eq!(
+                    (pair[0].0.as_str(), pair[1].0.as_str()),
+                    ("ANGLE_1", "ANGLE_2")
+                );
+                assert_eq!(pair[0].1, pair[1].1);
+                assert!(pair[0].1 == m["START_TIME"] || pair[0].1 == m["STOP_TIME"]);
+                angles.push((pair[0].1.clone(), pair[0].2, pair[1].2));
+            }
+        }
+        let text = std::fs::read_to_string(dir.join(format!("{det}.psv"))).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some("# version=2017"));
+        let columns: Vec<&str> = lines
+            .find(|l| !l.starts_with('#') && !l.starts_with('!'))
+            .unwrap()
+            .split('|')
+            .map(str::trim)
+            .collect();
+        for c in &columns {
+            assert!(ADES_FIELDS.contains(c), "{c} is no ADES field");
+        }
+        let col = |name: &str| columns.iter().position(|c| *c == name).unwrap();
+        let rows: Vec<Vec<&str>> = lines
+            .map(|l| l.split('|').map(str::trim).collect())
+            .collect();
+        assert_eq!(
+            rows.len(),
+            angles.len(),
+            "{det}: one PSV record per TDM angle pair"
+        );
+        for (row, (epoch, ra, dec)) in rows.iter().zip(&angles) {
+            assert_eq!(row.len(), columns.len());
+            let t = row[col("obsTime")];
+            assert!(t.ends_with('Z') && is_epoch(&t[..t.len() - 1]), "{t}");
+            assert_eq!(&t[..t.len() - 1], epoch);
+            let (r, d): (f64, f64) = (
+                row[col("ra")].parse().unwrap(),
+                row[col("dec")].parse().unwrap(),
+            );
+            assert!((0.0..360.0).contains(&r) && (-90.0..=90.0).contains(&d));
+            // PSV: 9 decimals of a degree; TDM: 10.
+            assert!(
+                (r - ra).abs() < 6e-10 && (d - dec).abs() < 6e-10,
+                "{r} {d} vs {ra} {dec}"
+            );
+            assert_eq!((row[col("mode")], row[col("stn")]), ("CCD", "XXX"));
+            assert_eq!(row[col("sys")], "ICRF_KM");
+            // The streak detector gives an SNR, so an uncertainty; YOLO none.
+            assert_eq!(row[col("rmsRA")].is_empty(), det == "yolo");
+            // A magnitude comes with its band; a plausible one (the quickstart's are 10-14).
+            let mag = row[col("mag")];
+            assert_eq!(row[col("band")], if mag.is_empty() { "" } else { "V" });
+            if !mag.is_empty() {
+                let m: f64 = mag.parse().unwrap();
+                assert!((5.0..20.0).contains(&m), "{m}");
+                mags += 1;
+            }
+        }
+        records += rows.len();
+    }
+    assert!(records > 0, "the quickstart's detections give observations");
+    assert!(mags > 0, "and magnitudes where both ends are inside");
+    let md = std::fs::read_to_string(out.join("report/astrometry.md")).unwrap();
+    assert!(md.contains("| streak | all |") && md.contains("| yolo | all |"));
+}
+
+/// A catalogue scene's truth TDM (`[population]`, the GEO stare): one segment per object with
+/// an ephemeris, in the sidecars' order, each with that object's angles.
+#[test]
+fn catalogue_scene_tdm_has_every_object() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let campaign = common::repo("campaigns/geo-stare.toml");
+    ok(soig(&[
+        "run",
+        campaign.to_str().unwrap(),
+        "--set",
+        "images=2",
+        "--set",
+        "stages=[\"render\"]",
+        "--set",
+        "artifacts.coco=false",
+        "--set",
+        "artifacts.ds9_regions=false",
+        "--set",
+        "artifacts.tdm=true",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let (_, segments) = parse(&std::fs::read_to_string(out.join("export/tdm/truth.tdm")).unwrap());
+    let mut want = Vec::new();
+    for i in 0..2 {
+        let t = json(&out.join(format!("truth/img_{i:06}.json")));
+        for o in t["objects"].as_array().unwrap() {
+            if !o["ephemeris"].is_null() {
+                want.push(o.clone());
+            }
+        }
+    }
+    assert!(want.len() > 2, "the stare holds several objects");
+    assert_eq!(segments.len(), want.len());
+    for (s, o) in segments.iter().zip(&want) {
+        assert!(s.meta["PARTICIPANT_2"].ends_with(&format!("(NORAD {})", o["norad"])));
+        let start = &o["ephemeris"]["debris_radec_start_deg"];
+        assert!((s.data[0].2 - start[0].as_f64().unwrap()).abs() <= 5.1e-11);
+        assert!((s.data[1].2 - start[1].as_f64().unwrap()).abs() <= 5.1e-11);
+    }
 }

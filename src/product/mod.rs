@@ -7,6 +7,7 @@ pub mod collect;
 pub mod dataset;
 pub mod export;
 pub mod light_curve;
+pub mod observations;
 pub mod records;
 pub mod shard;
 pub(crate) mod site_cards;

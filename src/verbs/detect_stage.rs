@@ -16,9 +16,10 @@ use crate::campaign::{Campaign, PointingMode, StarHint};
 use crate::dataset::Subset;
 use crate::detect::detector::Frame;
 use crate::detect::yolo::{YoloDetector, YoloParams};
-use crate::detect::{Detection, Detector, Stars, StreakDetector};
+use crate::detect::{Detection, Detector, Found, Stars, StreakDetector};
 use crate::experiment;
 use crate::geometry::FrameKind;
+use crate::observations::Line;
 use crate::progress::Progress;
 use crate::report::{self, DetectorRun, ObjectFacts, TestImage};
 
@@ -74,7 +75,23 @@ pub(crate) fn detect_and_report(
         c.detect.conf,
         &conversion,
         progress,
-    )
+    )?;
+    if c.artifacts.astrometry {
+        let observer = serde_json::to_value(&c.observer)?;
+        let observer = observer["name"]
+            .as_str()
+            .map(String::from)
+            .or_else(|| observer["norad"].as_u64().map(|n| format!("NORAD {n}")))
+            .unwrap_or_else(|| "observer".to_string());
+        let setup = report::astrometry::Setup {
+            psf_sigma_px: c.detect.streak.psf_sigma_px,
+            observer: &observer,
+            conf: c.detect.conf,
+            apparent: c.render.apparent_positions,
+        };
+        report::astrometry::write(dir, &images, &runs, &setup)?;
+    }
+    Ok(())
 }
 
 /// Each detector of the campaign over the chosen images: what a detector sees of an image is
@@ -180,28 +197,27 @@ fn load(img: &TestFrame) -> anyhow::Result<Vec<u8>> {
         .into_raw())
 }
 
-/// A detector's boxes on one frame (YOLO may fail: a model or image it cannot use).
+/// What a detector finds on one frame (YOLO may fail: a model or image it cannot use).
 fn detect_once(
     detector: &mut impl Detector,
     frame: Frame<'_>,
     stars: Stars<'_>,
-) -> anyhow::Result<Vec<Detection>> {
-    let found = detector
+) -> anyhow::Result<Vec<Found>> {
+    detector
         .detect(frame, stars)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", detector.name()))?;
-    Ok(found.iter().map(|f| *f.detection()).collect())
+        .map_err(|e| anyhow::anyhow!("{}: {e}", detector.name()))
 }
 
 /// One detector over the images in parallel, with a progress bar: `detect` gives an image's
 /// detections and the seconds the detector spent on it.
-fn run_detector(
+fn run_detector<T: Send>(
     name: &str,
     images: &[TestFrame],
     progress: &dyn Progress,
-    detect: impl Fn(usize, &TestFrame) -> anyhow::Result<(Vec<Detection>, f64)> + Sync,
-) -> anyhow::Result<(Vec<Vec<Detection>>, Vec<f64>)> {
+    detect: impl Fn(usize, &TestFrame) -> anyhow::Result<(T, f64)> + Sync,
+) -> anyhow::Result<(Vec<T>, Vec<f64>)> {
     progress.start(name, images.len() as u64);
-    let results: Vec<(Vec<Detection>, f64)> = images
+    let results: Vec<(T, f64)> = images
         .par_iter()
         .enumerate()
         .map(|(i, img)| {
@@ -261,8 +277,24 @@ fn streak_run(
             Stars::Unknown
         };
         let found = detect_once(&mut detector.clone(), img.frame(&pixels), stars)?;
-        Ok((found, t.elapsed().as_secs_f64()))
+        let seconds = t.elapsed().as_secs_f64();
+        // The streak detector's ends and SNR, for the observations (`artifacts.astrometry`).
+        let lines = found
+            .iter()
+            .filter_map(|f| match f {
+                Found::Streak(c) => Some(Line {
+                    ends: c.ends,
+                    snr: Some(c.snr),
+                }),
+                Found::Box(_) => None,
+            })
+            .collect();
+        Ok((
+            (found.iter().map(|f| *f.detection()).collect(), lines),
+            seconds,
+        ))
     })?;
+    let (detections, lines): (Vec<Vec<Detection>>, Vec<Vec<Line>>) = detections.into_iter().unzip();
     Ok(DetectorRun {
         name: "streak".into(),
         description: if told {
@@ -273,6 +305,7 @@ fn streak_run(
         model_sha256: None,
         detections,
         seconds,
+        lines: Some(lines),
     })
 }
 
@@ -310,7 +343,8 @@ fn yolo_run(
             .lock()
             .expect("no session holder panicked")
             .push(yolo);
-        Ok((found?, seconds))
+        let boxes: Vec<Detection> = found?.iter().map(|f| *f.detection()).collect();
+        Ok((boxes, seconds))
     })?;
     Ok(DetectorRun {
         name: "yolo".into(),
@@ -328,6 +362,7 @@ fn yolo_run(
         },
         detections,
         seconds,
+        lines: None,
     })
 }
 

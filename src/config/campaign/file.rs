@@ -590,6 +590,14 @@ pub struct Artifacts {
     /// resolved campaign when off, so hashes stay.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub tdm: bool,
+    /// Observations for orbit work from the detectors' streak ends and their astrometric
+    /// report: `report/astrometry.md` and `.csv` (each detection's ends against the truth
+    /// ephemeris, in arcsec, by detector and SNR; the share correlated to the right object),
+    /// `report/observations/<detector>.psv` (IAU ADES PSV) and `.tdm` (CCSDS TDM angles)
+    /// (src/product/observations.rs, src/report/astrometry.rs); needs the `detect` stage and
+    /// the FITS. Omitted from the resolved campaign when off, so hashes stay.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub astrometry: bool,
 }
 
 /// Training through Ultralytics (`soig train`); the paper's hyperparameters by default.

@@ -554,6 +554,11 @@ fn detect(c: &CampaignFile) -> Checked {
         "artifacts.coco",
         "the COCO export is of the dataset's PNGs and labels: it needs the `enhance` stage",
     )?;
+    check(
+        !c.artifacts.astrometry || (c.stages.contains(&Stage::Detect) && c.artifacts.fits),
+        "artifacts.astrometry",
+        "the astrometry is of the detect stage's detections through each image's FITS WCS: it needs the `detect` stage and `artifacts.fits`",
+    )?;
     for (on, field) in [
         (c.artifacts.obb_labels, "artifacts.obb_labels"),
         (c.artifacts.keypoint_labels, "artifacts.keypoint_labels"),

@@ -6,6 +6,7 @@
 //! `artifacts.coco` and `artifacts.ds9_regions` switches) and `soig export` of a finished output
 //! write the same bytes.
 
+pub mod ades;
 pub mod coco;
 pub mod ds9;
 pub mod identity;

@@ -1,5 +1,6 @@
 //! The truth's observations as a CCSDS Tracking Data Message (CCSDS 503.0-B-2, KVN), for orbit
-//! determination tools: `export/tdm/truth.tdm`, one segment per image, the debris' (RA, Dec)
+//! determination tools: `export/tdm/truth.tdm`, one segment per image (per object of a
+//! catalogue scene's image), the debris' (RA, Dec)
 //! seen from the observing satellite at the exposure's start, middle and end (`ANGLE_TYPE =
 //! RADEC`, `ANGLE_1` right ascension, `ANGLE_2` declination, degrees), from the truth sidecars'
 //! `ephemeris`. The angles are topocentric to the observer, on GCRS axes (ICRS to
@@ -7,9 +8,10 @@
 //! campaign sets `render.apparent_positions`; the header says which. The visual magnitude at
 //! mid-exposure is `MAG` (a TDM 2.0 data keyword); the SNR a comment.
 //!
+//! A catalogue scene's image (`[population]`) gives one segment per object with an ephemeris.
 //! Images with several placed objects (`[objects]`) carry no per-object ephemeris in their
 //! truth (each is turned rigidly into the field, its RA/Dec not its orbit's): they are left
-//! out, and the header counts them.
+//! out, and the header counts them (as it counts an image none of whose objects has one).
 
 use std::path::{Path, PathBuf};
 
@@ -32,15 +34,34 @@ struct Observation {
     snr: f64,
 }
 
-/// The observation of truth sidecar `path`; None for an image of placed objects (no
-/// ephemeris per object) or without an ephemeris.
-fn observation(path: &Path) -> anyhow::Result<Option<Observation>> {
+/// The observations of truth sidecar `path`: its one object's, or each of its `objects` with
+/// an ephemeris (a catalogue scene's); empty for an image of placed objects.
+fn observations_of(path: &Path) -> anyhow::Result<Vec<Observation>> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let t: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-    let e = &t["ephemeris"];
-    if t.get("objects").is_some() || e.is_null() {
+    match t.get("objects").and_then(|o| o.as_array()) {
+        None => Ok(observation_of(path, &t, &t)?.into_iter().collect()),
+        Some(objects) => {
+            let mut out = Vec::new();
+            for o in objects {
+                out.extend(observation_of(path, &t, o)?);
+            }
+            Ok(out)
+        }
+    }
+}
+
+/// The observation of object `o` (the sidecar itself for a one-object image) of sidecar `t`
+/// read from `path`; None without an ephemeris.
+fn observation_of(
+    path: &Path,
+    t: &serde_json::Value,
+    o: &serde_json::Value,
+) -> anyhow::Result<Option<Observation>> {
+    let e = &o["ephemeris"];
+    if e.is_null() {
         return Ok(None);
     }
     let bad = |field: &str| {
@@ -66,11 +87,11 @@ fn observation(path: &Path) -> anyhow::Result<Option<Observation>> {
             .unwrap_or_default()
             .to_string_lossy()
             .into_owned(),
-        object: t["object"]
+        object: o["object"]
             .as_str()
             .ok_or_else(|| bad("object"))?
             .to_string(),
-        norad: t["norad"].as_u64().ok_or_else(|| bad("norad"))?,
+        norad: o["norad"].as_u64().ok_or_else(|| bad("norad"))?,
         start,
         exposure_s: num(&t["exposure_s"], "exposure_s")?,
         radec: [
@@ -78,13 +99,13 @@ fn observation(path: &Path) -> anyhow::Result<Option<Observation>> {
             pair("debris_radec_mid_deg")?,
             pair("debris_radec_end_deg")?,
         ],
-        magnitude: num(&t["magnitude"], "magnitude")?,
-        snr: num(&t["snr"], "snr")?,
+        magnitude: num(&o["magnitude"], "magnitude")?,
+        snr: num(&o["snr"], "snr")?,
     }))
 }
 
 /// The epoch of `iso_utc`'s `YYYY-MM-DDThh:mm:ss.ffffff` (UTC).
-fn parse_utc(s: &str) -> Option<hifitime::Epoch> {
+pub(crate) fn parse_utc(s: &str) -> Option<hifitime::Epoch> {
     let (date, time) = s.split_once('T')?;
     let d: Vec<i64> = date
         .split('-')
@@ -181,6 +202,83 @@ fn tdm(observer: &str, apparent: bool, observations: &[Observation], skipped: us
     s
 }
 
+/// The detectors' observations (src/product/observations.rs) as a TDM: one segment per
+/// detection, its two ends' (RA, Dec) at the exposure's start and end in the rule's order (the
+/// end of smaller PNG x first: which is first is not known), the model's one-sigma uncertainty
+/// a comment (TDM has no per-angle sigma keyword). An end the image's edge cuts is left out; a
+/// detection with both cut has no segment.
+pub fn detections(
+    observations: &[&crate::observations::Observation],
+    observer: &str,
+    apparent: bool,
+) -> String {
+    let places = if apparent {
+        "apparent (render.apparent_positions)"
+    } else {
+        "geometric"
+    };
+    let mut s = format!(
+        "CCSDS_TDM_VERS = 2.0\n\
+         COMMENT soig detections: each detection's two streak ends through the image's FITS WCS,\n\
+         COMMENT the first (by PNG x, then y) at the exposure's start, the second at its end: which\n\
+         COMMENT end came first is not known. Angles in degrees, on the WCS's ICRS axes ({places}).\n\
+         CREATION_DATE = {}\n\
+         ORIGINATOR = soig\n",
+        observations
+            .first()
+            .map_or("2000-01-01T00:00:00.000000".to_string(), |o| {
+                crate::render::iso_utc(o.times[0])
+            }),
+    );
+    for o in observations.iter().filter(|o| !(o.cut[0] && o.cut[1])) {
+        let [t0, t1] = o.times.map(crate::render::iso_utc);
+        let sigma = match o.uncertainty {
+            Some(u) => format!(
+                "one-sigma {:.4}\" along, {:.4}\" across the streak",
+                u.along_arcsec, u.across_arcsec
+            ),
+            None => "no uncertainty (the detector gives no SNR)".to_string(),
+        };
+        s += &format!(
+            "\nMETA_START\n\
+             COMMENT {} {} detection {}: score {:.4}, {sigma}\n\
+             TIME_SYSTEM = UTC\n\
+             START_TIME = {t0}\n\
+             STOP_TIME = {t1}\n\
+             PARTICIPANT_1 = {}\n\
+             PARTICIPANT_2 = {} {} detection {}\n\
+             MODE = SEQUENTIAL\n\
+             PATH = 2,1\n\
+             ANGLE_TYPE = RADEC\n\
+             REFERENCE_FRAME = ICRF\n\
+             META_STOP\n\
+             DATA_START\n",
+            o.detector,
+            o.image,
+            o.detection,
+            o.score,
+            kvn_text(observer),
+            kvn_text(&o.detector),
+            o.image,
+            o.detection,
+        );
+        // An end the image's edge cuts is no observation (observations.rs).
+        for ((t, [ra, dec]), _) in [&t0, &t1]
+            .into_iter()
+            .zip(o.radec[0])
+            .zip(o.cut)
+            .filter(|(_, cut)| !cut)
+        {
+            s += &format!(
+                "ANGLE_1 = {t} {:.10}\nANGLE_2 = {t} {dec:.10}\n",
+                ra.rem_euclid(360.0)
+            );
+        }
+        s += "DATA_STOP\n";
+    }
+    s
+}
+
 /// Write the truth's TDM of the output `output`, made by the resolved `campaign`, into `dest`;
 /// returns the file written.
 pub fn write(
@@ -202,10 +300,11 @@ pub fn write(
     let mut observations = Vec::new();
     let mut skipped = 0;
     for stem in super::stems(&truth, "json")? {
-        match observation(&truth.join(format!("{stem}.json")))? {
-            Some(o) => observations.push(o),
-            None => skipped += 1,
+        let found = observations_of(&truth.join(format!("{stem}.json")))?;
+        if found.is_empty() {
+            skipped += 1;
         }
+        observations.extend(found);
     }
     fs::create_dir_all(dest)?;
     let path = dest.join(FILE);

@@ -1,0 +1,237 @@
+//! The detections' astrometry (`artifacts.astrometry`, issue #45 item 2): the PNG pixel ->
+//! (RA, Dec) chain against astropy on soig's own FITS (tests/reference/astrometry_reference.py,
+//! run here), including a rotated survey frame with its start and end WCS; a detection put
+//! exactly on the truth's ends gives ~0" whichever order its ends come in, and one moved by a
+//! known shift gives that shift; the campaign field refused without the detect stage.
+
+// Tests, benches and examples write their fixtures with std::fs; the product writes through the
+// store (clippy.toml's disallowed-methods, checked on every target by scripts/test.sh).
+#![allow(clippy::disallowed_methods)]
+
+mod common;
+
+use std::io::Write as _;
+use std::path::Path;
+
+use common::{json, ok, python_with_astropy, repo, run_quickstart, soig};
+use soig::detect::Detection;
+use soig::observations::{FrameSky, Line, observe};
+use soig::report::astrometry::{TruthObject, offset_arcsec, residual};
+
+/// Render `campaign` with `sets` (no detect stage) into `out`.
+fn render(campaign: &str, sets: &[&str], out: &Path) {
+    let campaign = repo(campaign);
+    let mut args = vec!["run", campaign.to_str().unwrap(), "--quiet"];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    args.extend(["--out", out.to_str().unwrap()]);
+    ok(soig(&args));
+}
+
+/// soig's (RA, Dec) of PNG pixel-edge points against astropy's on the same FITS, at the
+/// exposure's start and end: a rotated survey frame (GEOA a rotation and shift; alternate WCS S
+/// and E) and the quickstart's original fixed frame. The tolerance, 1 mas, is far above two
+/// double-precision TAN deprojections' disagreement (micro-arcseconds) and far below any
+/// convention slip (half a pixel, 0.35" at the quickstart's scale, 7" in the survey's).
+#[test]
+fn pixel_to_sky_agrees_with_astropy() {
+    let Some(python) = python_with_astropy() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let survey = tmp.path().join("survey");
+    render(
+        "campaigns/survey-quickstart.toml",
+        &["images=2", "stages=[\"render\", \"enhance\"]"],
+        &survey,
+    );
+    let fixed = tmp.path().join("fixed");
+    ok(run_quickstart(
+        &[
+            "--set",
+            "images=2",
+            "--set",
+            "stages=[\"render\", \"enhance\"]",
+            "--quiet",
+        ],
+        &fixed,
+    ));
+    let mut checked = 0;
+    for (out, moving) in [(&survey, true), (&fixed, false)] {
+        let fits = out.join("fits/img_000000.fits");
+        let sky = FrameSky::read(&fits).unwrap();
+        assert_eq!(sky.start_end.is_some(), moving, "{}", fits.display());
+        let points: Vec<([f64; 2], bool)> =
+            [[0.0, 0.0], [100.25, 900.5], [512.0, 512.0], [1000.75, 30.0]]
+                .into_iter()
+                .flat_map(|p| [(p, false), (p, true)])
+                .collect();
+        let input: String = points
+            .iter()
+            .map(|(p, e)| format!("{} {} {}\n", p[0], p[1], u8::from(*e)))
+            .collect();
+        let mut child = std::process::Command::new(&python)
+            .arg(repo("tests/reference/astrometry_reference.py"))
+            .arg(&fits)
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(input.as_bytes())
+            .unwrap();
+        let o = child.wait_with_output().unwrap();
+        assert!(o.status.success());
+        let text = String::from_utf8(o.stdout).unwrap();
+        for ((p, at_end), line) in points.iter().zip(text.lines()) {
+            let v: Vec<f64> = line.split(' ').map(|x| x.parse().unwrap()).collect();
+            let got = sky.radec(*p, *at_end);
+            let sep = offset_arcsec([v[0], v[1]], got).0;
+            assert!(
+                sep < 1e-3,
+                "{p:?} at_end {at_end}: soig {got:?}, astropy {v:?}: {sep}\""
+            );
+            checked += 1;
+        }
+        if moving {
+            // The start and end WCS differ: the same pixel is elsewhere on the sky then.
+            let (a, b) = (
+                sky.radec([512.0, 512.0], false),
+                sky.radec([512.0, 512.0], true),
+            );
+            assert!(offset_arcsec(a, b).0 > 60.0);
+        }
+    }
+    assert_eq!(checked, 16);
+}
+
+/// The PNG pixel-edge point of original-image pixel `p` (centres at integers), by the truth's
+/// frame matrix.
+fn png_edge(matrix: &serde_json::Value, p: &serde_json::Value) -> [f64; 2] {
+    let m = |i: usize, j: usize| matrix[i][j].as_f64().unwrap();
+    let (x, y) = (p[0].as_f64().unwrap(), p[1].as_f64().unwrap());
+    [
+        m(0, 0) * x + m(0, 1) * y + m(0, 2) + 0.5,
+        m(1, 0) * x + m(1, 1) * y + m(1, 2) + 0.5,
+    ]
+}
+
+/// A detection whose ends are exactly the truth's streak ends gives ~0" against the places the
+/// truth says its FITS WCS gives there (`streak_*_wcs_radec_deg`), with either end first (the
+/// pairing swaps when the rule's order is not the truth's), and one moved 4 px along x gives
+/// 4 px of the WCS's scale at each end. Quickstart images: fixed pointing, one WCS.
+#[test]
+fn residuals_of_known_detections() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    ok(run_quickstart(
+        &[
+            "--set",
+            "images=4",
+            "--set",
+            "stages=[\"render\", \"enhance\"]",
+            "--quiet",
+        ],
+        &out,
+    ));
+    let mut swapped = 0;
+    for i in 0..4 {
+        let stem = format!("img_{i:06}");
+        let t = json(&out.join(format!("truth/{stem}.json")));
+        let sky = FrameSky::read(&out.join(format!("fits/{stem}.fits"))).unwrap();
+        let matrix = &t["frame"]["matrix"];
+        let start = png_edge(matrix, &t["streak_start_px"]);
+        let end = png_edge(matrix, &t["streak_end_px"]);
+        let place = |k: &str| [t[k][0].as_f64().unwrap(), t[k][1].as_f64().unwrap()];
+        let object = TruthObject {
+            name: "debris".into(),
+            norad: t["norad"].as_u64().unwrap(),
+            label: Some(0),
+            ephemeris: Some([
+                place("streak_start_wcs_radec_deg"),
+                place("streak_end_wcs_radec_deg"),
+            ]),
+            snr: 50.0,
+            magnitude: 12.0,
+            ends_px: [[0.0; 2]; 2],
+        };
+        let scale = sky.png_scale_arcsec();
+        for (shift, ends) in [
+            (0.0, [start, end]),
+            (0.0, [end, start]),
+            (4.0, [start, end]),
+        ] {
+            let moved = ends.map(|[x, y]| [x + shift, y]);
+            let d = Detection {
+                x1: moved[0][0].min(moved[1][0]) - 2.0,
+                y1: moved[0][1].min(moved[1][1]) - 2.0,
+                x2: moved[0][0].max(moved[1][0]) + 2.0,
+                y2: moved[0][1].max(moved[1][1]) + 2.0,
+                score: 1.0,
+                class: 0,
+            };
+            let line = Line {
+                ends: moved,
+                snr: Some(30.0),
+            };
+            let o = observe(&stem, "test", 0, &d, Some(line), &[], (0, 0), &sky, 1.5);
+            let truth_box = [[d.x1, d.y1, d.x2, d.y2]];
+            // Ends beyond the image are cut by its edge: only the ends inside are compared.
+            let Some(r) = residual(&o, &truth_box, std::slice::from_ref(&object)) else {
+                assert!(
+                    o.cut[0] && o.cut[1],
+                    "{stem}: no residual though an end is inside"
+                );
+                continue;
+            };
+            let rule_first_is_start = start[0] <= end[0];
+            assert_eq!(r.pairing == 0, rule_first_is_start, "{stem}: pairing");
+            // The same streak run the other way in time: the other pairing.
+            let mut reversed = object.clone();
+            reversed.ephemeris = object.ephemeris.map(|[a, b]| [b, a]);
+            let back = residual(&o, &truth_box, std::slice::from_ref(&reversed)).unwrap();
+            assert_eq!(back.pairing, 1 - r.pairing, "{stem}: reversed pairing");
+            swapped += r.pairing + back.pairing;
+            for e in r.ends.iter().flatten() {
+                // TAN's scale changes by under 0.1% within the quickstart's 0.1-degree field.
+                let want = shift * scale;
+                assert!(
+                    (e.0 - want).abs() < 1e-3 + 2e-3 * want,
+                    "{stem} shift {shift}: {}\" vs {want}\"",
+                    e.0
+                );
+            }
+            assert!(r.correlated);
+        }
+    }
+    assert!(
+        swapped > 0,
+        "some truth streak runs towards smaller x (the swap is exercised)"
+    );
+}
+
+/// The campaign field needs the detect stage: refused with its name.
+#[test]
+fn astrometry_needs_the_detect_stage() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = run_quickstart(
+        &[
+            "--set",
+            "stages=[\"render\", \"enhance\"]",
+            "--set",
+            "artifacts.astrometry=true",
+            "--quiet",
+        ],
+        &tmp.path().join("run"),
+    );
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("artifacts.astrometry") && err.contains("detect"),
+        "{err}"
+    );
+}
