@@ -28,6 +28,17 @@ pub fn seeing_fwhm_arcsec(zenith_fwhm_arcsec: f64, x: f64) -> f64 {
     zenith_fwhm_arcsec * x.powf(0.6)
 }
 
+/// The seeing of one exposure, as the renderer draws it and the truth records it: a Moffat
+/// of FWHM `fwhm_arcsec` (the zenith value times the boresight's airmass^0.6) and index
+/// `beta`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Seeing {
+    pub fwhm_arcsec: f64,
+    pub beta: f64,
+    /// The boresight's airmass at mid-exposure.
+    pub airmass: f64,
+}
+
 /// A Moffat (1969, A&A 3, 455) point-spread function of FWHM `fwhm` and index `beta` > 1,
 /// normalised to unit volume: I(r) = (beta - 1) / (pi alpha^2) (1 + r^2 / alpha^2)^-beta, with
 /// alpha = FWHM / (2 sqrt(2^(1/beta) - 1)). beta = 4.765 is Trujillo et al.'s (2001, MNRAS

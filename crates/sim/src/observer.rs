@@ -8,7 +8,7 @@ use soig_sky::orbit::Propagator;
 use soig_sky::site::{STANDARD_PRESSURE_HPA, STANDARD_TEMPERATURE_C, Site, refraction_deg};
 use soig_sky::{dot, unit};
 
-use crate::atmosphere::{airmass, extinction_mag};
+use crate::atmosphere::{Seeing, airmass, extinction_mag, seeing_fwhm_arcsec};
 
 use crate::scene::Body;
 
@@ -58,6 +58,8 @@ pub struct GroundGate {
     pub spans: Vec<Vec<(Epoch, Epoch)>>,
     /// The band's extinction, magnitudes per airmass (0: none).
     pub extinction_mag_per_airmass: f64,
+    /// The seeing at the zenith: FWHM (arcsec) and Moffat beta; None: the sensor's own PSF.
+    pub seeing_zenith: Option<(f64, f64)>,
 }
 
 /// The air's dimming of a source over one exposure: the site's zenith at mid-exposure (it
@@ -72,10 +74,16 @@ impl Extinction {
     /// Magnitudes taken from a source in GCRS direction `dir`: k X, X the Kasten-Young airmass of
     /// its refracted altitude.
     pub fn mag(&self, dir: Vec3) -> f64 {
-        let alt = dot(unit(dir), self.up).clamp(-1.0, 1.0).asin().to_degrees();
-        let seen = alt + refraction_deg(alt, STANDARD_PRESSURE_HPA, STANDARD_TEMPERATURE_C);
-        extinction_mag(self.k_mag_per_airmass, airmass(seen))
+        extinction_mag(self.k_mag_per_airmass, airmass_toward(self.up, dir))
     }
+}
+
+/// The Kasten-Young airmass of GCRS direction `dir` seen from a site whose zenith is `up`, at
+/// its refracted altitude.
+pub fn airmass_toward(up: Vec3, dir: Vec3) -> f64 {
+    let alt = dot(unit(dir), up).clamp(-1.0, 1.0).asin().to_degrees();
+    let seen = alt + refraction_deg(alt, STANDARD_PRESSURE_HPA, STANDARD_TEMPERATURE_C);
+    airmass(seen)
 }
 
 impl GroundGate {
@@ -84,6 +92,20 @@ impl GroundGate {
         (self.extinction_mag_per_airmass > 0.0).then(|| Extinction {
             up: self.site.up(mid),
             k_mag_per_airmass: self.extinction_mag_per_airmass,
+        })
+    }
+
+    /// The seeing of an exposure whose middle is `mid` and boresight GCRS direction
+    /// `boresight`: the zenith FWHM times its airmass^0.6 (`seeing_fwhm_arcsec`); None
+    /// without seeing.
+    pub fn seeing(&self, mid: Epoch, boresight: Vec3) -> Option<Seeing> {
+        self.seeing_zenith.map(|(fwhm, beta)| {
+            let x = airmass_toward(self.site.up(mid), boresight);
+            Seeing {
+                fwhm_arcsec: seeing_fwhm_arcsec(fwhm, x),
+                beta,
+                airmass: x,
+            }
         })
     }
 

@@ -36,6 +36,26 @@ pub struct SiteSpec {
     /// the boresight's airmass. 0 (default): no air.
     #[serde(default)]
     pub extinction_mag_per_airmass: f64,
+    /// The seeing at the zenith: the renderer's PSF becomes a Moffat of this FWHM times the
+    /// boresight's airmass^0.6 (in place of the sensor's Gaussian). Absent: no seeing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seeing: Option<SeeingSpec>,
+}
+
+/// Seeing-limited imaging: a Moffat profile (docs/ground.md).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SeeingSpec {
+    /// FWHM at the zenith, arcsec (0.05 .. 20; ~0.7-1.5 at a good site).
+    pub fwhm_arcsec: f64,
+    /// Moffat index beta (1.1 .. 20): 4.765 (default) is Trujillo et al.'s (2001) Kolmogorov
+    /// fit, 2.5 has wider wings.
+    #[serde(default = "kolmogorov_beta")]
+    pub beta: f64,
+}
+
+fn kolmogorov_beta() -> f64 {
+    4.765
 }
 
 fn nautical() -> f64 {
@@ -79,7 +99,13 @@ pub(super) fn ground_of(spec: &ObjectSpec) -> Result<Option<Ground>, (String, St
             5.0,
         ),
     ];
-    for (field, v, lo, hi) in checks {
+    let seeing = s.seeing.as_ref().map_or([None, None], |g| {
+        [
+            Some((".site.seeing.fwhm_arcsec", g.fwhm_arcsec, 0.05, 20.0)),
+            Some((".site.seeing.beta", g.beta, 1.1, 20.0)),
+        ]
+    });
+    for (field, v, lo, hi) in checks.into_iter().chain(seeing.into_iter().flatten()) {
         if !(lo..=hi).contains(&v) {
             return Err((field.into(), format!("is {v}: must be within {lo} .. {hi}")));
         }
@@ -165,5 +191,6 @@ fn night_spans(
         night,
         spans,
         extinction_mag_per_airmass: spec.extinction_mag_per_airmass,
+        seeing_zenith: spec.seeing.as_ref().map(|g| (g.fwhm_arcsec, g.beta)),
     })
 }

@@ -18,6 +18,8 @@ mod detector;
 pub mod expected;
 mod jitter;
 mod photons;
+#[cfg(test)]
+mod seeing_tests;
 mod sources;
 #[cfg(test)]
 mod tests;
@@ -254,11 +256,13 @@ fn photons(
 ) -> (Canvas, Vec<TracedStar>, expected::DebrisFlux) {
     let s = sensor;
     let (width, height) = (s.width_px, s.height_px);
-    let psf_px = sensor.psf_sigma_px();
+    let psf = scene.psf(sensor);
     let merge = (settings.merge_threshold, settings.merge_factor);
     let mut photons = match settings.method {
         RenderMethod::PhotonMapping => Photons::Mapped(Tally::new(width, height)),
-        RenderMethod::Expected => Photons::Expected(expected::Flux::new(width, height, psf_px)),
+        RenderMethod::Expected => {
+            Photons::Expected(expected::Flux::with_psf(width, height, psf.clone()))
+        }
     };
     // The debris' trajectory samples share one source's packet budget (2000 samples of a
     // magnitude -1 debris would otherwise trace 2e9 packets).
@@ -285,7 +289,7 @@ fn photons(
                 merge,
                 budget,
                 jitter,
-                psf_px,
+                &psf,
                 source,
             );
         }

@@ -9,7 +9,9 @@ use serde::Serialize;
 
 use super::visibility::Snr;
 use super::{Pointing, Rejection, Spec};
+use crate::atmosphere::Seeing;
 use crate::background::FrameChoice;
+use soig_image::psf_shape::Psf;
 use crate::sensor::Sensor;
 use crate::sighting::Ephemeris;
 use soig_sky::photometry::photon_rate;
@@ -94,6 +96,9 @@ pub struct Scene {
     /// checks rejected, with the reason; None in any other scene.
     #[serde(skip)]
     pub unseen: Option<Vec<super::Unseen>>,
+    /// A ground site's seeing over the exposure (None: the sensor's Gaussian PSF).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seeing: Option<Seeing>,
 }
 
 /// A frame's place in its collect, recorded in the truth: the object keeps its `track_id`
@@ -108,6 +113,12 @@ pub struct CollectFrame {
 }
 
 impl Scene {
+    /// The PSF the renderer draws: the seeing's Moffat where the exposure has seeing, else
+    /// the sensor's Gaussian.
+    pub fn psf(&self, sensor: &Sensor) -> Psf {
+        psf_of(sensor, self.seeing)
+    }
+
     /// The projection at mid-exposure: the one the FITS WCS describes.
     pub fn projection(&self, sensor: &Sensor) -> Tan {
         let (ra, dec) = self.pointing.mid_radec_deg();
@@ -155,6 +166,7 @@ impl Scene {
             },
             stars,
             background: None,
+            seeing: None,
         };
         let object = Object {
             debris_index: 0,
@@ -205,6 +217,14 @@ impl Scene {
     }
 }
 
+/// The PSF of an exposure with `seeing` (`Scene::psf`).
+pub fn psf_of(sensor: &Sensor, seeing: Option<Seeing>) -> Psf {
+    match seeing {
+        Some(s) => Psf::moffat(s.fwhm_arcsec / 3600.0 / sensor.pixel_scale_deg(), s.beta),
+        None => Psf::gaussian(sensor.psf_sigma_px()),
+    }
+}
+
 /// The exposure a scene's object is seen in: which image, when, how long, where the sensor
 /// points, its field stars and its real background frame.
 pub(super) struct Exposure {
@@ -214,6 +234,7 @@ pub(super) struct Exposure {
     pub pointing: Pointing,
     pub stars: Vec<Star>,
     pub background: Option<FrameChoice>,
+    pub seeing: Option<Seeing>,
 }
 
 impl Exposure {
@@ -227,6 +248,7 @@ impl Exposure {
             pointing: at.pointing.clone(),
             stars: Vec::new(),
             background: at.background,
+            seeing: at.seeing,
         }
     }
 }
@@ -272,6 +294,7 @@ impl Scene {
             collect: None,
             placed: None,
             unseen: None,
+            seeing: exposure.seeing,
         }
     }
 

@@ -186,6 +186,7 @@ fn sight_object(
         mid_tan: &at.projection(sensor),
         shadowed: false,
         extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
+        psf_core_px: at.psf(sensor).core_sigma_px(),
     };
     // A path too fast to sample has samples in the field (`trajectory`): it crossed it.
     let trajectory = match trajectory(spec, sensor, &|t_s| track.at(t_s), &shot) {
@@ -290,6 +291,10 @@ pub(super) fn draw_stare(
             },
             stars,
             background: d.background,
+            seeing: spec
+                .ground
+                .as_ref()
+                .and_then(|g| g.seeing(mid, radec_unit(ra, dec))),
         };
         // The stare's own "object" is the boresight: no light, no path, NORAD 0.
         let object = Object {

@@ -14,6 +14,7 @@ use super::accepted::{Exposure, Object};
 use super::catalogue::{draw_stare, in_field};
 use super::object_draws::{draw_tumble, pick_debris};
 use super::place::place;
+use super::accepted::psf_of;
 use super::pointing::point_sensor;
 use super::trajectory::{Shot, trajectory};
 use super::visibility::{gate_snr, in_sight, visibility};
@@ -281,6 +282,10 @@ fn try_draw(
     let stars = field_stars(spec, sensor, inputs, (ra_p, dec_p, cone), mid, gated)?;
 
     let mid_tan = sensor.projection(ra_p, dec_p);
+    let seeing = spec
+        .ground
+        .as_ref()
+        .and_then(|g| g.seeing(mid, radec_unit(ra_p, dec_p)));
     let track = sighting
         .track(start, exposure_s)
         .ok_or(Rejection::PropagationFailed)?;
@@ -297,6 +302,7 @@ fn try_draw(
             mid_tan: &mid_tan,
             shadowed,
             extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
+            psf_core_px: psf_of(sensor, seeing).core_sigma_px(),
         },
     )?;
 
@@ -318,6 +324,7 @@ fn try_draw(
         pointing,
         stars,
         background,
+        seeing,
     };
     let object = Object {
         debris_index,

@@ -190,6 +190,7 @@ fn try_place(
             mid_tan: &at.projection(sensor),
             shadowed,
             extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
+            psf_core_px: at.psf(sensor).core_sigma_px(),
         },
     )?;
     let snr = gate_snr(
