@@ -36,6 +36,9 @@ pub enum Purpose {
     /// A catalogue object's own draws (size, tumble: `scene::catalogue`), keyed by its NORAD
     /// number in place of the image, so an object keeps them in every image.
     CatalogueObject = 17,
+    /// A ground site's scintillation of an object in one exposure (`object_stream`, keyed by
+    /// the image and the object's place among those it shows).
+    Scintillation = 18,
 }
 
 /// A purpose of draws per photon or per pixel; each has an independent [`PixelRng`] stream

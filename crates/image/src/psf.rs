@@ -116,7 +116,12 @@ impl DebrisFlux {
 
     /// `of_samples` through any PSF shape ([`Psf`]): each of its Gaussians integrated over
     /// the pixels of its own support, weighted.
-    pub fn of_samples_psf(samples: &[(f64, f64, f64)], psf: &Psf, w: usize, h: usize) -> DebrisFlux {
+    pub fn of_samples_psf(
+        samples: &[(f64, f64, f64)],
+        psf: &Psf,
+        w: usize,
+        h: usize,
+    ) -> DebrisFlux {
         let widest = psf.max_sigma_px();
         let samples: Vec<(f64, f64, f64)> = samples
             .iter()

@@ -163,7 +163,10 @@ mod tests {
         for &(w, s) in psf.components() {
             let share = drawn.iter().filter(|&&d| d == s).count() as f64 / f64::from(n);
             // A regular grid of u: each share within one grid step of its weight.
-            assert!((share - w).abs() <= 1.0 / f64::from(n) + 1e-12, "{s}: {share} vs {w}");
+            assert!(
+                (share - w).abs() <= 1.0 / f64::from(n) + 1e-12,
+                "{s}: {share} vs {w}"
+            );
         }
         assert_eq!(psf.component_of(1.0), psf.components().last().unwrap().1);
     }

@@ -8,7 +8,9 @@ use soig_sky::orbit::Propagator;
 use soig_sky::site::{STANDARD_PRESSURE_HPA, STANDARD_TEMPERATURE_C, Site, refraction_deg};
 use soig_sky::{dot, unit};
 
-use crate::atmosphere::{Seeing, airmass, extinction_mag, seeing_fwhm_arcsec};
+use crate::atmosphere::{
+    Seeing, airmass, extinction_mag, scintillation_variance, seeing_fwhm_arcsec,
+};
 
 use crate::scene::Body;
 
@@ -60,6 +62,8 @@ pub struct GroundGate {
     pub extinction_mag_per_airmass: f64,
     /// The seeing at the zenith: FWHM (arcsec) and Moffat beta; None: the sensor's own PSF.
     pub seeing_zenith: Option<(f64, f64)>,
+    /// Scintillation: Osborn et al.'s C_Y and the telescope's aperture, metres; None: none.
+    pub scintillation: Option<(f64, f64)>,
 }
 
 /// The air's dimming of a source over one exposure: the site's zenith at mid-exposure (it
@@ -106,6 +110,17 @@ impl GroundGate {
                 beta,
                 airmass: x,
             }
+        })
+    }
+
+    /// The relative variance of an object's flux from scintillation over an exposure of
+    /// `exposure_s` whose middle is `mid`, the object then in GCRS direction `dir`, and its
+    /// airmass; None without scintillation.
+    pub fn scintillation(&self, mid: Epoch, dir: Vec3, exposure_s: f64) -> Option<(f64, f64)> {
+        self.scintillation.map(|(c_y, aperture_m)| {
+            let x = airmass_toward(self.site.up(mid), dir);
+            let v = scintillation_variance(c_y, aperture_m, x, self.site.height_m, exposure_s);
+            (v, x)
         })
     }
 

@@ -40,6 +40,25 @@ pub struct SiteSpec {
     /// boresight's airmass^0.6 (in place of the sensor's Gaussian). Absent: no seeing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seeing: Option<SeeingSpec>,
+    /// Scintillation: each object's flux in each exposure multiplied by a log-normal factor
+    /// of mean 1 and Young's relative rms with Osborn et al.'s correction. Absent: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scintillation: Option<ScintillationSpec>,
+}
+
+/// Scintillation noise (docs/ground.md): sigma^2 = 10e-6 C_Y^2 D^-4/3 t^-1 X^3 exp(-2h/8000 m).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ScintillationSpec {
+    /// The telescope's aperture D, metres (0.01 .. 50).
+    pub aperture_m: f64,
+    /// Osborn et al.'s (2015) empirical correction C_Y of the site (0.1 .. 10; default 1.5).
+    #[serde(default = "typical_c_y")]
+    pub c_y: f64,
+}
+
+fn typical_c_y() -> f64 {
+    1.5
 }
 
 /// Seeing-limited imaging: a Moffat profile (docs/ground.md).
@@ -105,7 +124,14 @@ pub(super) fn ground_of(spec: &ObjectSpec) -> Result<Option<Ground>, (String, St
             Some((".site.seeing.beta", g.beta, 1.1, 20.0)),
         ]
     });
-    for (field, v, lo, hi) in checks.into_iter().chain(seeing.into_iter().flatten()) {
+    let scintillation = s.scintillation.as_ref().map_or([None, None], |c| {
+        [
+            Some((".site.scintillation.aperture_m", c.aperture_m, 0.01, 50.0)),
+            Some((".site.scintillation.c_y", c.c_y, 0.1, 10.0)),
+        ]
+    });
+    let optional = seeing.into_iter().chain(scintillation).flatten();
+    for (field, v, lo, hi) in checks.into_iter().chain(optional) {
         if !(lo..=hi).contains(&v) {
             return Err((field.into(), format!("is {v}: must be within {lo} .. {hi}")));
         }
@@ -192,5 +218,6 @@ fn night_spans(
         spans,
         extinction_mag_per_airmass: spec.extinction_mag_per_airmass,
         seeing_zenith: spec.seeing.as_ref().map(|g| (g.fwhm_arcsec, g.beta)),
+        scintillation: spec.scintillation.as_ref().map(|c| (c.c_y, c.aperture_m)),
     })
 }

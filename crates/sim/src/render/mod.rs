@@ -397,5 +397,7 @@ fn truth_of(
         rejections: scene.rejections.clone(),
         ephemeris: scene.ephemeris,
         collect: scene.collect,
+        seeing: scene.seeing,
+        scintillation: scene.scintillation,
     }
 }

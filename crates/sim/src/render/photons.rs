@@ -6,8 +6,8 @@ use rand_distr::StandardNormal;
 use soig_base::rng::PixelRng;
 
 use super::{Jitter, Path, Source};
-use soig_image::psf_shape::Psf;
 use rand::RngExt;
+use soig_image::psf_shape::Psf;
 
 /// Photon counts on the detector, all sources and debris alone.
 pub(super) struct Canvas {

@@ -9,11 +9,11 @@ use serde::Serialize;
 
 use super::visibility::Snr;
 use super::{Pointing, Rejection, Spec};
-use crate::atmosphere::Seeing;
+use crate::atmosphere::{Scintillation, Seeing};
 use crate::background::FrameChoice;
-use soig_image::psf_shape::Psf;
 use crate::sensor::Sensor;
 use crate::sighting::Ephemeris;
+use soig_image::psf_shape::Psf;
 use soig_sky::photometry::photon_rate;
 use soig_sky::projection::Tan;
 use soig_sky::stars::Star;
@@ -99,6 +99,10 @@ pub struct Scene {
     /// A ground site's seeing over the exposure (None: the sensor's Gaussian PSF).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub seeing: Option<Seeing>,
+    /// A ground site's scintillation of this object in this exposure (`scintillation`), its
+    /// factor already in the trajectory's expected electrons.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scintillation: Option<Scintillation>,
 }
 
 /// A frame's place in its collect, recorded in the truth: the object keeps its `track_id`
@@ -295,6 +299,7 @@ impl Scene {
             placed: None,
             unseen: None,
             seeing: exposure.seeing,
+            scintillation: None,
         }
     }
 

@@ -10,12 +10,13 @@ use hifitime::{Duration, Epoch};
 use rand::RngExt;
 use rand_chacha::ChaCha12Rng;
 
+use super::accepted::psf_of;
 use super::accepted::{Exposure, Object};
 use super::catalogue::{draw_stare, in_field};
 use super::object_draws::{draw_tumble, pick_debris};
 use super::place::place;
-use super::accepted::psf_of;
 use super::pointing::point_sensor;
+use super::scintillation::scintillate;
 use super::trajectory::{Shot, trajectory};
 use super::visibility::{gate_snr, in_sight, visibility};
 use super::{
@@ -40,6 +41,17 @@ pub fn choose_debris(spec: &Spec, debris: usize, seed: u64, image: u64) -> usize
 /// streams are the collect's, the gate judges its first frame, and a later frame follows the
 /// first's pointing plan whatever it shows (the object may leave a fixed field or fade).
 pub fn draw(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    seed: u64,
+    image: u64,
+) -> Result<Scene, NoScene> {
+    draw_accepted(spec, sensor, inputs, seed, image).map(|s| scintillate(spec, seed, s))
+}
+
+/// `draw` before the air's scintillation of the accepted scene's objects.
+fn draw_accepted(
     spec: &Spec,
     sensor: &Sensor,
     inputs: &Inputs,

@@ -1,0 +1,130 @@
+//! The air over a ground site in the rendered campaign (issue #46): the seeing the truth
+//! records follows the zenith FWHM times the boresight's airmass^0.6; scintillation multiplies
+//! each object's flux by a factor drawn from its own stream (the scenes otherwise the same)
+//! whose spread is the formula's sigma; out-of-range values are refused naming the field.
+
+// Tests, benches and examples write their fixtures with std::fs; the product writes through the
+// store (clippy.toml's disallowed-methods, checked on every target by scripts/test.sh).
+#![allow(clippy::disallowed_methods)]
+
+use soig::atmosphere::scintillation_variance;
+use soig::campaign::Campaign;
+use soig::experiment;
+
+mod common;
+use common::{CampaignToml, assert_refused, rendered, run_quiet, tle_object};
+
+/// Siding Spring, tracking the stars on two LEO objects in late January 2022, 256 px images,
+/// with the site's further keys `air` (each starting with a comma).
+fn campaign_toml(air: &str, images: u32) -> CampaignToml {
+    CampaignToml::new("ground-air", 20220122, images)
+        .observer(&format!(
+            "name = \"Siding Spring\"\nsite = {{ lat_deg = -31.2733, lon_deg = 149.0644, height_m = 1165.0{air} }}"
+        ))
+        .debris(&tle_object(37476))
+        .debris(&tle_object(41335))
+        .tables(
+            "[window]\nstart = \"2022-01-22T00:00:00 UTC\"\nend = \"2022-01-26T00:00:00 UTC\"\n\
+             [sensor]\nwidth_px = 256\nheight_px = 256\n[pointing]\nmode = \"fixed\"\n",
+        )
+}
+
+fn campaign(air: &str, images: u32) -> Campaign {
+    campaign_toml(air, images).load("ground-air.toml")
+}
+
+const SEEING: &str = ", seeing = { fwhm_arcsec = 1.5, beta = 3.0 }";
+
+#[test]
+fn the_truth_records_the_seeing_of_the_boresights_airmass() {
+    let c = campaign(SEEING, 2);
+    for image in rendered(&c, 2) {
+        let s = image.exposure.truth.seeing.expect("seeing in the truth");
+        assert_eq!(s.beta, 3.0);
+        assert!(s.airmass >= 1.0 && s.airmass < 3.0, "{}", s.airmass);
+        assert!((s.fwhm_arcsec - 1.5 * s.airmass.powf(0.6)).abs() < 1e-12);
+        assert!(image.exposure.truth.scintillation.is_none());
+    }
+    // Without `seeing` nothing is recorded and the campaign's hash is the plain site's.
+    let plain = campaign("", 1);
+    assert!(rendered(&plain, 1)[0].exposure.truth.seeing.is_none());
+    let json = serde_json::to_value(&plain.resolved).unwrap();
+    assert!(json["observer"]["site"].get("seeing").is_none(), "{json}");
+}
+
+#[test]
+fn scintillation_scales_each_objects_flux_by_a_factor_of_the_formulas_spread() {
+    let n = 120;
+    let off = campaign(SEEING, n);
+    let on = campaign(
+        &format!("{SEEING}, scintillation = {{ aperture_m = 0.1, c_y = 1.5 }}"),
+        n,
+    );
+    let (x_off, x_on) = (experiment::of(&off), experiment::of(&on));
+    let (in_off, in_on) = (
+        experiment::inputs(&off).unwrap(),
+        experiment::inputs(&on).unwrap(),
+    );
+    let mut z = Vec::new();
+    for i in 0..u64::from(n) {
+        let a = soig::scene::draw(&x_off.scene, &x_off.sensor, &in_off, x_off.seed, i).unwrap();
+        let b = soig::scene::draw(&x_on.scene, &x_on.sensor, &in_on, x_on.seed, i).unwrap();
+        // The same scene: scintillation draws from a stream of its own.
+        assert_eq!((a.debris_index, a.start), (b.debris_index, b.start));
+        assert!(a.scintillation.is_none());
+        let s = b.scintillation.expect("scintillated");
+        // The object's flux, every trajectory sample, times the factor.
+        for (p, q) in a.trajectory.iter().zip(&b.trajectory) {
+            assert!(
+                (q.expected_electrons - p.expected_electrons * s.factor).abs()
+                    <= 1e-12 * p.expected_electrons
+            );
+        }
+        // Sigma is the formula's at the object's airmass, this exposure and the site's height.
+        let v = scintillation_variance(1.5, 0.1, s.airmass, 1165.0, b.exposure_s);
+        assert!(
+            (s.sigma - v.sqrt()).abs() < 1e-15,
+            "{} vs {}",
+            s.sigma,
+            v.sqrt()
+        );
+        assert!(s.sigma > 0.005 && s.sigma < 0.2, "{}", s.sigma);
+        // ln(factor) is normal of mean -s^2/2 and deviation s, s^2 = ln(1 + sigma^2).
+        let s2 = s.sigma.powi(2).ln_1p();
+        z.push((s.factor.ln() + s2 / 2.0) / s2.sqrt());
+    }
+    let m = z.iter().sum::<f64>() / z.len() as f64;
+    let sd = (z.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (z.len() - 1) as f64).sqrt();
+    eprintln!("scintillation z over {n} images: mean {m:.3}, sd {sd:.3}");
+    // 120 standard normal draws: the mean's standard error is 0.091 and the deviation's
+    // 0.065; four of each bound a right draw and catch a factor twice or half the formula's.
+    assert!(m.abs() < 4.0 * 0.091, "mean z {m}");
+    assert!((sd - 1.0).abs() < 4.0 * 0.065, "sd z {sd}");
+}
+
+#[test]
+fn air_out_of_range_is_refused_naming_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    for (air, field) in [
+        (
+            ", seeing = { fwhm_arcsec = -1.0 }",
+            "observer.site.seeing.fwhm_arcsec",
+        ),
+        (
+            ", seeing = { fwhm_arcsec = 1.0, beta = 1.0 }",
+            "observer.site.seeing.beta",
+        ),
+        (
+            ", scintillation = { aperture_m = 0.0 }",
+            "observer.site.scintillation.aperture_m",
+        ),
+        (
+            ", scintillation = { aperture_m = 1.0, c_y = nan }",
+            "observer.site.scintillation.c_y",
+        ),
+    ] {
+        let path = campaign_toml(air, 1).write(&dir.path().join("air.toml"));
+        let o = run_quiet(&path, &dir.path().join("out"));
+        assert_refused(&o, field);
+    }
+}
