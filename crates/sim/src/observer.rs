@@ -3,10 +3,13 @@
 
 use hifitime::{Duration, Epoch};
 use soig_sky::Vec3;
+use soig_sky::ephemeris::{moon_position_km, sun_position_km};
 use soig_sky::night::NightRule;
 use soig_sky::orbit::Propagator;
 use soig_sky::site::{STANDARD_PRESSURE_HPA, STANDARD_TEMPERATURE_C, Site, refraction_deg};
-use soig_sky::{dot, unit};
+use soig_sky::{angle_deg, dot, scale, sub, unit};
+
+use crate::sky_glow::{SkyGeometry, sky_v};
 
 use crate::atmosphere::{
     Seeing, airmass, extinction_mag, scintillation_variance, seeing_fwhm_arcsec,
@@ -64,6 +67,18 @@ pub struct GroundGate {
     pub seeing_zenith: Option<(f64, f64)>,
     /// Scintillation: Osborn et al.'s C_Y and the telescope's aperture, metres; None: none.
     pub scintillation: Option<(f64, f64)>,
+    /// The sky's glow from the site's dark sky, twilight and Moon (`sky_glow`); None: the
+    /// noise model's own sky.
+    pub sky: Option<SkyModel>,
+}
+
+/// A ground site's sky (`sky_glow::sky_v`): its dark zenith in V mag/arcsec^2, and whether
+/// twilight and the Moon brighten it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SkyModel {
+    pub zenith_v: f64,
+    pub twilight: bool,
+    pub moon: bool,
 }
 
 /// The air's dimming of a source over one exposure: the site's zenith at mid-exposure (it
@@ -111,6 +126,36 @@ impl GroundGate {
                 airmass: x,
             }
         })
+    }
+
+    /// The sky toward `boresight` over an exposure whose middle is `mid`, V mag/arcsec^2, and
+    /// the geometry it came from (the Moon seen from the site: topocentric); None without a
+    /// sky model.
+    pub fn sky(&self, mid: Epoch, boresight: Vec3) -> Option<(f64, SkyGeometry)> {
+        let model = self.sky?;
+        let up = self.site.up(mid);
+        let (site_km, _) = self.site.gcrs_state(mid);
+        let alt = |dir: Vec3| dot(unit(dir), up).clamp(-1.0, 1.0).asin().to_degrees();
+        let moon_geo = moon_position_km(mid);
+        let moon = sub(moon_geo, site_km);
+        let sun = sun_position_km(mid);
+        // The phase angle: Sun - Moon - observer, at the Moon.
+        let phase = angle_deg(sub(sun, moon_geo), scale(moon, -1.0));
+        let g = SkyGeometry {
+            target_z_deg: 90.0 - alt(boresight),
+            sun_alt_deg: alt(sub(sun, site_km)),
+            moon_z_deg: 90.0 - alt(moon),
+            moon_sep_deg: angle_deg(boresight, moon),
+            moon_phase_deg: phase,
+        };
+        let v = sky_v(
+            model.zenith_v,
+            self.extinction_mag_per_airmass,
+            &g,
+            model.twilight,
+            model.moon,
+        );
+        Some((v, g))
     }
 
     /// The relative variance of an object's flux from scintillation over an exposure of

@@ -175,6 +175,8 @@ pub fn render_placed(
     noise_rng: &mut PixelRng,
     object_photons: &dyn Fn(u64) -> PixelRng,
 ) -> Exposure {
+    // A ground site's sky for this image, in the detector's noise and the truth's sigma.
+    let sensor = &*sensor.under_sky(scene.sky_v_mag_per_arcsec2);
     let (width, height) = (sensor.width_px, sensor.height_px);
     let unrendered;
     let own = match &scene.placed {
@@ -399,5 +401,6 @@ fn truth_of(
         collect: scene.collect,
         seeing: scene.seeing,
         scintillation: scene.scintillation,
+        sky_v_mag_per_arcsec2: scene.sky_v_mag_per_arcsec2,
     }
 }

@@ -81,6 +81,9 @@ pub struct Truth {
     /// (already in `expected_debris_electrons`) and the object's airmass.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub scintillation: Option<crate::atmosphere::Scintillation>,
+    /// A ground site's sky toward the boresight, V mag/arcsec^2 (dark sky, twilight, Moon).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sky_v_mag_per_arcsec2: Option<f64>,
 }
 
 /// The truth sidecar of an image of a campaign with `[objects]` (#34): the frame's fields of

@@ -103,6 +103,10 @@ pub struct Scene {
     /// factor already in the trajectory's expected electrons.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub scintillation: Option<Scintillation>,
+    /// A ground site's sky toward the boresight, V mag/arcsec^2 (`GroundGate::sky`): the
+    /// physical noise model's sky for this image.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sky_v_mag_per_arcsec2: Option<f64>,
 }
 
 /// A frame's place in its collect, recorded in the truth: the object keeps its `track_id`
@@ -171,6 +175,7 @@ impl Scene {
             stars,
             background: None,
             seeing: None,
+            sky_v_mag_per_arcsec2: None,
         };
         let object = Object {
             debris_index: 0,
@@ -239,6 +244,7 @@ pub(super) struct Exposure {
     pub stars: Vec<Star>,
     pub background: Option<FrameChoice>,
     pub seeing: Option<Seeing>,
+    pub sky_v_mag_per_arcsec2: Option<f64>,
 }
 
 impl Exposure {
@@ -253,6 +259,7 @@ impl Exposure {
             stars: Vec::new(),
             background: at.background,
             seeing: at.seeing,
+            sky_v_mag_per_arcsec2: at.sky_v_mag_per_arcsec2,
         }
     }
 }
@@ -300,6 +307,7 @@ impl Scene {
             unseen: None,
             seeing: exposure.seeing,
             scintillation: None,
+            sky_v_mag_per_arcsec2: exposure.sky_v_mag_per_arcsec2,
         }
     }
 

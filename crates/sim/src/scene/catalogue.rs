@@ -200,7 +200,8 @@ fn sight_object(
     let judged =
         visibility(spec, sensor, &sight, (sun, mid), area_m2, true).and_then(|(geometry, _)| {
             let frame = inputs.frame(at.background);
-            let snr = gate_snr(spec, sensor, &trajectory, exposure_s, frame, true)?;
+            let sensor = sensor.under_sky(at.sky_v_mag_per_arcsec2);
+            let snr = gate_snr(spec, &sensor, &trajectory, exposure_s, frame, true)?;
             Ok((geometry, snr))
         });
     let (geometry, snr) = match judged {
@@ -295,6 +296,11 @@ pub(super) fn draw_stare(
                 .ground
                 .as_ref()
                 .and_then(|g| g.seeing(mid, radec_unit(ra, dec))),
+            sky_v_mag_per_arcsec2: spec
+                .ground
+                .as_ref()
+                .and_then(|g| g.sky(mid, radec_unit(ra, dec)))
+                .map(|(v, _)| v),
         };
         // The stare's own "object" is the boresight: no light, no path, NORAD 0.
         let object = Object {

@@ -298,6 +298,11 @@ fn try_draw(
         .ground
         .as_ref()
         .and_then(|g| g.seeing(mid, radec_unit(ra_p, dec_p)));
+    let sky = spec
+        .ground
+        .as_ref()
+        .and_then(|g| g.sky(mid, radec_unit(ra_p, dec_p)))
+        .map(|(v, _)| v);
     let track = sighting
         .track(start, exposure_s)
         .ok_or(Rejection::PropagationFailed)?;
@@ -320,7 +325,7 @@ fn try_draw(
 
     let snr = gate_snr(
         spec,
-        sensor,
+        &sensor.under_sky(sky),
         &trajectory,
         exposure_s,
         inputs.frame(background),
@@ -337,6 +342,7 @@ fn try_draw(
         stars,
         background,
         seeing,
+        sky_v_mag_per_arcsec2: sky,
     };
     let object = Object {
         debris_index,

@@ -195,7 +195,7 @@ fn try_place(
     )?;
     let snr = gate_snr(
         spec,
-        sensor,
+        &sensor.under_sky(at.sky_v_mag_per_arcsec2),
         &trajectory,
         exposure_s,
         inputs.frame(at.background),
