@@ -250,3 +250,32 @@ fn air_out_of_range_is_refused_naming_the_field() {
         assert_refused(&o, field);
     }
 }
+
+/// The two ground sensor presets (campaigns/base/ground-*.toml): their published field and
+/// pixel count give the pixel scale, their aperture the scintillation's, their place the site.
+#[test]
+fn ground_presets_carry_their_published_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    // Each with an object it can see in the window: the near-GEO MSG 4 cover from Tenerife in
+    // January, SENTINEL 3A (LEO, sunlit in the short nights) from Korla in June.
+    for (base, pixel_arcsec, aperture_m, lat, norad, month) in [
+        ("ground-ogs-1m.toml", 0.7 * 3600.0 / 4096.0, 1.0, 28.30096, 40989, "01"),
+        ("ground-survey-36cm.toml", 2.6 * 3600.0 / 4096.0, 0.355, 41.76, 41335, "06"),
+    ] {
+        let text = format!(
+            "extends = \"{}\"\nname = \"preset\"\nseed = 1\nimages = 1\n[[debris]]\n{}\n\
+             [window]\nstart = \"2022-{month}-22T00:00:00 UTC\"\nend = \"2022-{month}-26T00:00:00 UTC\"\n",
+            common::repo(&format!("campaigns/base/{base}")).display(),
+            tle_object(norad)
+        );
+        let path = dir.path().join("preset.toml");
+        std::fs::write(&path, text).unwrap();
+        let c = Campaign::load(&path).unwrap_or_else(|e| panic!("{base}: {e}"));
+        let x = experiment::of(&c);
+        let scale = x.sensor.pixel_scale_deg() * 3600.0;
+        assert!((scale - pixel_arcsec).abs() < 1e-9, "{base}: {scale}");
+        let gate = x.scene.ground.expect("a ground site");
+        assert_eq!(gate.site.lat_deg, lat);
+        assert_eq!(gate.scintillation.map(|s| s.1), Some(aperture_m));
+    }
+}
