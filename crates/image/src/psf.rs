@@ -122,7 +122,8 @@ impl DebrisFlux {
         w: usize,
         h: usize,
     ) -> DebrisFlux {
-        let widest = psf.max_sigma_px();
+        // The box holds the farthest any Gaussian reaches (one "sigma" of that many pixels).
+        let reach = psf.reach_px(DEBRIS_SUPPORT_SIGMA);
         let samples: Vec<(f64, f64, f64)> = samples
             .iter()
             .copied()
@@ -131,10 +132,8 @@ impl DebrisFlux {
         // The box: the union of every sample's support within the image.
         let (mut lo, mut hi) = ([usize::MAX; 2], [0usize; 2]);
         for &(_, x, y) in &samples {
-            let (Some(xs), Some(ys)) = (
-                support(x, widest, DEBRIS_SUPPORT_SIGMA, w),
-                support(y, widest, DEBRIS_SUPPORT_SIGMA, h),
-            ) else {
+            let (Some(xs), Some(ys)) = (support(x, reach, 1.0, w), support(y, reach, 1.0, h))
+            else {
                 continue;
             };
             lo = [lo[0].min(xs.0), lo[1].min(ys.0)];
@@ -156,10 +155,10 @@ impl DebrisFlux {
         let (mut wx, mut wy) = (Vec::new(), Vec::new());
         for &(amount, x, y) in &samples {
             // A Gaussian's one component has weight 1: `amount * 1.0` is `amount`, bit for bit.
-            for &(share, sigma) in psf.components() {
+            for (share, sigma, n) in psf.supported(DEBRIS_SUPPORT_SIGMA) {
                 let (Some(i0), Some(j0)) = (
-                    weights_into(x, sigma, DEBRIS_SUPPORT_SIGMA, w, &mut wx),
-                    weights_into(y, sigma, DEBRIS_SUPPORT_SIGMA, h, &mut wy),
+                    weights_into(x, sigma, n, w, &mut wx),
+                    weights_into(y, sigma, n, h, &mut wy),
                 ) else {
                     continue;
                 };

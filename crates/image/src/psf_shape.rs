@@ -23,11 +23,19 @@ const MAX_SIGMA_FWHM: f64 = 4.0;
 /// Components with less weight than this are left out (they change no pixel's mean by more
 /// than 1e-5 of the source).
 const MIN_WEIGHT: f64 = 1e-5;
+/// A mixture's Gaussian is integrated out to the fewest sigmas (in quarter steps, at least 3)
+/// beyond which its weight times its two-sided tail share along an axis is at most this share
+/// of the source: a light Gaussian, wide or not, needs no 7-sigma support (which cost 3 times
+/// the pixels of this one for a beta 4.765 seeing).
+const MIXTURE_TAIL_SHARE: f64 = 1e-7;
 
 /// A point-spread function as concentric Gaussians `(weight, sigma_px)`, weights summing to 1.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Psf {
     components: Vec<(f64, f64)>,
+    /// For a mixture, each Gaussian's support in sigmas (`MIXTURE_TAIL_SHARE`); empty for a
+    /// single Gaussian, whose support is the caller's.
+    supports: Vec<f64>,
     /// Full width at half maximum, pixels.
     fwhm_px: f64,
 }
@@ -38,6 +46,7 @@ impl Psf {
     pub fn gaussian(sigma_px: f64) -> Psf {
         Psf {
             components: vec![(1.0, sigma_px)],
+            supports: Vec::new(),
             fwhm_px: 2.0 * (2.0 * 2f64.ln()).sqrt() * sigma_px,
         }
     }
@@ -59,8 +68,21 @@ impl Psf {
         components.retain(|&(w, s)| w / total >= MIN_WEIGHT && s <= MAX_SIGMA_FWHM * fwhm_px);
         let kept: f64 = components.iter().map(|c| c.0).sum();
         components.iter_mut().for_each(|c| c.0 /= kept);
+        let supports = components
+            .iter()
+            .map(|&(w, _)| {
+                let mut n = 3.0;
+                while n < 7.0
+                    && w * crate::psf::erfc(n / std::f64::consts::SQRT_2) > MIXTURE_TAIL_SHARE
+                {
+                    n += 0.25;
+                }
+                n
+            })
+            .collect();
         Psf {
             components,
+            supports,
             fwhm_px,
         }
     }
@@ -68,6 +90,25 @@ impl Psf {
     /// The Gaussians `(weight, sigma_px)`, narrowest last.
     pub fn components(&self) -> &[(f64, f64)] {
         &self.components
+    }
+
+    /// The Gaussians `(weight, sigma_px, support in sigmas)`: a single Gaussian's support is
+    /// `single_support` (the caller's own), a mixture's its own (`MIXTURE_TAIL_SHARE`).
+    pub fn supported(&self, single_support: f64) -> impl Iterator<Item = (f64, f64, f64)> + '_ {
+        self.components.iter().enumerate().map(move |(i, &(w, s))| {
+            (
+                w,
+                s,
+                self.supports.get(i).copied().unwrap_or(single_support),
+            )
+        })
+    }
+
+    /// The farthest any Gaussian reaches, pixels, with `single_support` sigmas for a single one.
+    pub fn reach_px(&self, single_support: f64) -> f64 {
+        self.supported(single_support)
+            .map(|(_, s, n)| s * n)
+            .fold(0.0, f64::max)
     }
 
     /// Whether this is a single Gaussian.
@@ -146,8 +187,20 @@ mod tests {
             assert!((half - 0.5).abs() < 1e-3, "{half}");
             assert!(psf.max_sigma_px() <= 4.0 * 3.0);
         }
-        // The Gaussian is one component of its own sigma.
+        // Each of a mixture's Gaussians reaches as far as its weight needs: its tail beyond
+        // the support holds at most 1e-7 of the source, and a fourth of a sigma less would not.
+        for beta in [2.5, 4.765] {
+            let psf = Psf::moffat(3.0, beta);
+            for (w, _, n) in psf.supported(99.0) {
+                let tail = |n: f64| w * crate::psf::erfc(n / std::f64::consts::SQRT_2);
+                assert!((3.0..=7.0).contains(&n));
+                assert!(tail(n) <= 1e-7 || n == 7.0, "{w} {n}");
+                assert!(n == 3.0 || tail(n - 0.25) > 1e-7, "{w} {n}");
+            }
+        }
+        // The Gaussian is one component of its own sigma, supported as far as the caller asks.
         let g = Psf::gaussian(1.4);
+        assert_eq!(g.supported(7.0).collect::<Vec<_>>(), vec![(1.0, 1.4, 7.0)]);
         assert!(g.is_gaussian());
         assert_eq!(g.components(), &[(1.0, 1.4)]);
         assert_eq!(g.core_sigma_px(), 1.4);

@@ -70,11 +70,11 @@ impl Flux {
         } else {
             &mut self.stars
         };
-        for &(share, sigma) in self.psf.components() {
-            let Some((i0, wx)) = pixel_weights(x, sigma, self.width) else {
+        for (share, sigma, n) in self.psf.supported(PSF_SUPPORT_SIGMA) {
+            let Some((i0, wx)) = pixel_weights(x, sigma, n, self.width) else {
                 continue;
             };
-            let Some((j0, wy)) = pixel_weights(y, sigma, self.height) else {
+            let Some((j0, wy)) = pixel_weights(y, sigma, n, self.height) else {
                 continue;
             };
             add_separable(image, self.width, (i0, &wx), (j0, &wy), amount * share);
@@ -140,9 +140,9 @@ pub fn matched_filter_snr(
 
 /// First pixel and the PSF share of each pixel of the support along one axis (pixel i spans
 /// [i - 0.5, i + 0.5)); None when the support misses the image.
-fn pixel_weights(c: f64, sigma: f64, n: usize) -> Option<(usize, Vec<f64>)> {
+fn pixel_weights(c: f64, sigma: f64, support: f64, n: usize) -> Option<(usize, Vec<f64>)> {
     let mut w = Vec::new();
-    weights_into(c, sigma, PSF_SUPPORT_SIGMA, n, &mut w).map(|lo| (lo, w))
+    weights_into(c, sigma, support, n, &mut w).map(|lo| (lo, w))
 }
 
 /// Nodes (share of the source's photons, x, y) along its jittered path: the path is linear
@@ -225,9 +225,9 @@ mod tests {
             assert!((erfc(-x) - (2.0 - e)).abs() < 2e-7);
         }
         // The pixel shares of a PSF well inside the image sum to 1 (up to the support cut).
-        let (_, w) = pixel_weights(10.3, 1.4, 64).unwrap();
+        let (_, w) = pixel_weights(10.3, 1.4, PSF_SUPPORT_SIGMA, 64).unwrap();
         let total: f64 = w.iter().sum();
         assert!((total - 1.0).abs() < 2e-6, "{total}");
-        assert!(pixel_weights(-20.0, 1.0, 64).is_none());
+        assert!(pixel_weights(-20.0, 1.0, PSF_SUPPORT_SIGMA, 64).is_none());
     }
 }
