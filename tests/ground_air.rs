@@ -259,8 +259,22 @@ fn ground_presets_carry_their_published_figures() {
     // Each with an object it can see in the window: the near-GEO MSG 4 cover from Tenerife in
     // January, SENTINEL 3A (LEO, sunlit in the short nights) from Korla in June.
     for (base, pixel_arcsec, aperture_m, lat, norad, month) in [
-        ("ground-ogs-1m.toml", 0.7 * 3600.0 / 4096.0, 1.0, 28.30096, 40989, "01"),
-        ("ground-survey-36cm.toml", 2.6 * 3600.0 / 4096.0, 0.355, 41.76, 41335, "06"),
+        (
+            "ground-ogs-1m.toml",
+            0.7 * 3600.0 / 4096.0,
+            1.0,
+            28.30096,
+            40989,
+            "01",
+        ),
+        (
+            "ground-survey-36cm.toml",
+            2.6 * 3600.0 / 4096.0,
+            0.355,
+            41.76,
+            41335,
+            "06",
+        ),
     ] {
         let text = format!(
             "extends = \"{}\"\nname = \"preset\"\nseed = 1\nimages = 1\n[[debris]]\n{}\n\
