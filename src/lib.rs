@@ -55,7 +55,7 @@
 pub use soig_base::{build_id, hash, input_file, progress, python, rng};
 pub use soig_detect::{self as detect, metrics};
 pub use soig_image::{enhance, fits, frames, geometry, hint, imaging, psf, streak_label};
-pub use soig_sim::{background, noise, render, scene, sensor, sighting, simulate};
+pub use soig_sim::{atmosphere, background, noise, render, scene, sensor, sighting, simulate};
 pub use soig_sky as sky;
 
 pub use artifacts::{Provenance, provenance_cards};

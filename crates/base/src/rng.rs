@@ -38,6 +38,9 @@ pub enum Purpose {
     CatalogueObject = 17,
     /// A breakup fragment's size, area-to-mass and ejection velocity (keyed by its index).
     BreakupFragment = 18,
+    /// A ground site's scintillation of an object in one exposure (`object_stream`, keyed by
+    /// the image and the object's place among those it shows).
+    Scintillation = 19,
 }
 
 /// A purpose of draws per photon or per pixel; each has an independent [`PixelRng`] stream

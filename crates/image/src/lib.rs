@@ -7,6 +7,7 @@
 //! - [`frames`]: real frames (FITS or PNG) and their sky region, for `soig detect`;
 //! - [`enhance`]: the paper's FITS -> 8-bit conversion (stretch, CLAHE) and PNG;
 //! - [`psf`]: the streak flux model shared by the renderer's labels and the streak detector;
+//! - [`psf_shape`]: the PSF's shape, the sensor's Gaussian or a ground site's Moffat seeing;
 //! - [`hint`]: what a detector may be told besides the pixels (predicted star trails);
 //! - [`streak_label`]: the oriented box and end keypoints of a streak (YOLO-OBB, YOLO pose).
 
@@ -21,4 +22,5 @@ pub mod geometry;
 pub mod hint;
 pub mod imaging;
 pub mod psf;
+pub mod psf_shape;
 pub mod streak_label;

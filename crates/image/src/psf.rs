@@ -3,6 +3,7 @@
 //! streak detector boxes the streak it fitted with it, so truth and detection share one model.
 
 use crate::geometry::{BoxPx, flux_box};
+use crate::psf_shape::Psf;
 use soig_base::rng::{PixelRng, poisson};
 
 /// Pixels farther than this many PSF sigmas from a debris sample get none of its photons in
@@ -110,6 +111,19 @@ impl DebrisFlux {
     /// the renderer (`render::expected::debris_flux`) does with the debris' trajectory, and what the streak
     /// detector does with the streak it fitted, so that both boxes come from one model.
     pub fn of_samples(samples: &[(f64, f64, f64)], psf_px: f64, w: usize, h: usize) -> DebrisFlux {
+        DebrisFlux::of_samples_psf(samples, &Psf::gaussian(psf_px), w, h)
+    }
+
+    /// `of_samples` through any PSF shape ([`Psf`]): each of its Gaussians integrated over
+    /// the pixels of its own support, weighted.
+    pub fn of_samples_psf(
+        samples: &[(f64, f64, f64)],
+        psf: &Psf,
+        w: usize,
+        h: usize,
+    ) -> DebrisFlux {
+        // The box holds the farthest any Gaussian reaches (one "sigma" of that many pixels).
+        let reach = psf.reach_px(DEBRIS_SUPPORT_SIGMA);
         let samples: Vec<(f64, f64, f64)> = samples
             .iter()
             .copied()
@@ -118,10 +132,8 @@ impl DebrisFlux {
         // The box: the union of every sample's support within the image.
         let (mut lo, mut hi) = ([usize::MAX; 2], [0usize; 2]);
         for &(_, x, y) in &samples {
-            let (Some(xs), Some(ys)) = (
-                support(x, psf_px, DEBRIS_SUPPORT_SIGMA, w),
-                support(y, psf_px, DEBRIS_SUPPORT_SIGMA, h),
-            ) else {
+            let (Some(xs), Some(ys)) = (support(x, reach, 1.0, w), support(y, reach, 1.0, h))
+            else {
                 continue;
             };
             lo = [lo[0].min(xs.0), lo[1].min(ys.0)];
@@ -142,17 +154,20 @@ impl DebrisFlux {
         let mut spans = vec![(usize::MAX, 0); height];
         let (mut wx, mut wy) = (Vec::new(), Vec::new());
         for &(amount, x, y) in &samples {
-            let (Some(i0), Some(j0)) = (
-                weights_into(x, psf_px, DEBRIS_SUPPORT_SIGMA, w, &mut wx),
-                weights_into(y, psf_px, DEBRIS_SUPPORT_SIGMA, h, &mut wy),
-            ) else {
-                continue;
-            };
-            let (col, row) = (i0 - lo[0], j0 - lo[1]);
-            for span in &mut spans[row..row + wy.len()] {
-                *span = (span.0.min(col), span.1.max(col + wx.len()));
+            // A Gaussian's one component has weight 1: `amount * 1.0` is `amount`, bit for bit.
+            for (share, sigma, n) in psf.supported(DEBRIS_SUPPORT_SIGMA) {
+                let (Some(i0), Some(j0)) = (
+                    weights_into(x, sigma, n, w, &mut wx),
+                    weights_into(y, sigma, n, h, &mut wy),
+                ) else {
+                    continue;
+                };
+                let (col, row) = (i0 - lo[0], j0 - lo[1]);
+                for span in &mut spans[row..row + wy.len()] {
+                    *span = (span.0.min(col), span.1.max(col + wx.len()));
+                }
+                add_separable(&mut mean, width, (col, &wx), (row, &wy), amount * share);
             }
-            add_separable(&mut mean, width, (col, &wx), (row, &wy), amount);
         }
         DebrisFlux {
             x0: lo[0],

@@ -28,6 +28,28 @@ pub fn seeing_fwhm_arcsec(zenith_fwhm_arcsec: f64, x: f64) -> f64 {
     zenith_fwhm_arcsec * x.powf(0.6)
 }
 
+/// The seeing of one exposure, as the renderer draws it and the truth records it: a Moffat
+/// of FWHM `fwhm_arcsec` (the zenith value times the boresight's airmass^0.6) and index
+/// `beta`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Seeing {
+    pub fwhm_arcsec: f64,
+    pub beta: f64,
+    /// The boresight's airmass at mid-exposure.
+    pub airmass: f64,
+}
+
+/// The scintillation of one object in one exposure, as applied and as the truth records it:
+/// its relative rms `sigma` (`scintillation_variance` at the object's airmass), the drawn
+/// flux `factor` every one of its trajectory samples was multiplied by.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Scintillation {
+    pub sigma: f64,
+    pub factor: f64,
+    /// The object's airmass at mid-exposure.
+    pub airmass: f64,
+}
+
 /// A Moffat (1969, A&A 3, 455) point-spread function of FWHM `fwhm` and index `beta` > 1,
 /// normalised to unit volume: I(r) = (beta - 1) / (pi alpha^2) (1 + r^2 / alpha^2)^-beta, with
 /// alpha = FWHM / (2 sqrt(2^(1/beta) - 1)). beta = 4.765 is Trujillo et al.'s (2001, MNRAS
@@ -58,15 +80,36 @@ impl Moffat {
     }
 }
 
-/// Relative rms of a source's flux from scintillation: Young's (1967, AJ 72, 747) formula as
-/// Dravins et al. (1998, PASP 110, 610, eq. 10) write it, sigma = 0.09 D^(-2/3) X^1.75
-/// exp(-h / 8000 m) (2 t)^(-1/2), with D the aperture in cm, X the airmass, h the site's height
-/// in metres and t the exposure in seconds. It matters for bright sources, whose photon noise
-/// falls below it (a 1 m telescope at the zenith, 1 s: 0.3 %).
-pub fn scintillation_sigma(aperture_m: f64, x: f64, height_m: f64, exposure_s: f64) -> f64 {
-    let d_cm = aperture_m * 100.0;
-    0.09 * d_cm.powf(-2.0 / 3.0) * x.powf(1.75) * (-height_m / 8000.0).exp()
-        / (2.0 * exposure_s).sqrt()
+/// Scale height of the turbulence that makes scintillation, metres (Young 1967; Osborn et al.
+/// 2015).
+pub const SCINTILLATION_SCALE_HEIGHT_M: f64 = 8000.0;
+
+/// Relative variance of a source's flux from scintillation over an exposure: Young's (1967,
+/// AJ 72, 747) approximation with Osborn et al.'s (2015, MNRAS 452, 1707, eq. 7) empirical
+/// correction, sigma^2 = 10e-6 C_Y^2 D^(-4/3) t^(-1) X^3 exp(-2 h / H), with D the aperture in
+/// metres, t the exposure in seconds, X the airmass (their (cos gamma)^-3), h the site's
+/// height and H = 8000 m. C_Y = 1 is Young's own formula (in metres: his 0.09 D_cm^(-2/3)
+/// (2t)^(-1/2) squared is 8.7e-6 D_m^(-4/3) / t); C_Y depends on the site's turbulence
+/// profile (Osborn et al. tabulate it per observatory), 1.5 a typical value. It matters for bright sources, whose photon noise falls below
+/// it (a 1 m telescope at the zenith, sea level, 1 s, C_Y 1.5: 0.47 %).
+pub fn scintillation_variance(
+    c_y: f64,
+    aperture_m: f64,
+    x: f64,
+    height_m: f64,
+    exposure_s: f64,
+) -> f64 {
+    10e-6 * c_y * c_y * aperture_m.powf(-4.0 / 3.0) / exposure_s
+        * x.powi(3)
+        * (-2.0 * height_m / SCINTILLATION_SCALE_HEIGHT_M).exp()
+}
+
+/// The flux factor of one exposure from a standard normal draw `g`: log-normal (weak
+/// scintillation is, Dravins et al. 1997, PASP 109, 173) with mean 1 and relative variance
+/// `variance`, exp(s g - s^2 / 2) with s^2 = ln(1 + variance).
+pub fn scintillation_factor(variance: f64, g: f64) -> f64 {
+    let s2 = variance.ln_1p();
+    (s2.sqrt() * g - s2 / 2.0).exp()
 }
 
 #[cfg(test)]
@@ -125,21 +168,59 @@ mod tests {
     }
 
     #[test]
-    fn scintillation_follows_young() {
-        // 1 m at the zenith, sea level, 1 s: 0.09 * 100^(-2/3) / sqrt(2) = 0.2954 %.
-        let s = scintillation_sigma(1.0, 1.0, 0.0, 1.0);
-        assert!((s - 0.002_954).abs() < 1e-6, "{s}");
-        // D^(-2/3), X^1.75, exp(-h/8000), t^(-1/2).
-        let base = scintillation_sigma(0.5, 1.5, 2400.0, 10.0);
+    fn scintillation_follows_young_and_osborn() {
+        // Young (1967) in his units, 0.09 D_cm^(-2/3) X^1.75 exp(-h/8000) (2t)^(-1/2), squared,
+        // against C_Y = 1 in metres at X = 1: Young's coefficient 0.09^2 / 2 * 100^(-4/3) =
+        // 8.73e-6 is the 10e-6 of Osborn et al.'s eq. 7 to 13 % (they round it).
+        let young = 0.09f64.powi(2) / 2.0 * 100f64.powf(-4.0 / 3.0);
+        assert!((young - 8.725e-6).abs() < 1e-9, "{young}");
+        let v = scintillation_variance(1.0, 1.0, 1.0, 0.0, 1.0);
+        assert!((v - 1e-5).abs() < 1e-18, "{v}");
+        assert!((young / v - 0.8725).abs() < 1e-3);
+        // C_Y^2, D^(-4/3), 1/t, X^3, exp(-2h/H), each alone.
+        let base = scintillation_variance(1.5, 0.5, 1.5, 2400.0, 10.0);
         let ratio = |v: f64| v / base;
-        assert!(
-            (ratio(scintillation_sigma(1.0, 1.5, 2400.0, 10.0)) - 0.5f64.powf(2.0 / 3.0)).abs()
-                < 1e-12
-        );
-        assert!(
-            (ratio(scintillation_sigma(0.5, 3.0, 2400.0, 10.0)) - 2f64.powf(1.75)).abs() < 1e-12
-        );
-        assert!((ratio(scintillation_sigma(0.5, 1.5, 0.0, 10.0)) - (0.3f64).exp()).abs() < 1e-12);
-        assert!((ratio(scintillation_sigma(0.5, 1.5, 2400.0, 40.0)) - 0.5).abs() < 1e-12);
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-12 * b.abs().max(1.0);
+        assert!(close(
+            ratio(scintillation_variance(3.0, 0.5, 1.5, 2400.0, 10.0)),
+            4.0
+        ));
+        assert!(close(
+            ratio(scintillation_variance(1.5, 1.0, 1.5, 2400.0, 10.0)),
+            0.5f64.powf(4.0 / 3.0)
+        ));
+        assert!(close(
+            ratio(scintillation_variance(1.5, 0.5, 3.0, 2400.0, 10.0)),
+            8.0
+        ));
+        assert!(close(
+            ratio(scintillation_variance(1.5, 0.5, 1.5, 0.0, 10.0)),
+            0.6f64.exp()
+        ));
+        assert!(close(
+            ratio(scintillation_variance(1.5, 0.5, 1.5, 2400.0, 40.0)),
+            0.25
+        ));
+    }
+
+    #[test]
+    fn scintillation_factor_is_lognormal_of_mean_one() {
+        // The median (g = 0) is exp(-s^2/2); the mean over a fine normal quadrature is 1 and
+        // the relative variance is the one asked.
+        let var = 0.04;
+        let (n, lo, hi) = (20_000, -10.0, 10.0);
+        let dg = (hi - lo) / f64::from(n);
+        let (mut m1, mut m2) = (0.0, 0.0);
+        for i in 0..n {
+            let g = lo + (f64::from(i) + 0.5) * dg;
+            let w = (-g * g / 2.0).exp() / (2.0 * PI).sqrt() * dg;
+            let f = scintillation_factor(var, g);
+            m1 += w * f;
+            m2 += w * f * f;
+        }
+        // Midpoint rule on a smooth integrand: exact to 1e-10 here.
+        assert!((m1 - 1.0).abs() < 1e-9, "{m1}");
+        assert!((m2 - m1 * m1 - var).abs() < 1e-9, "{}", m2 - m1 * m1);
+        assert_eq!(scintillation_factor(0.0, 1.7), 1.0);
     }
 }

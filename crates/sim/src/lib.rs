@@ -5,6 +5,7 @@
 //! - [`scene`]: the draw (which object, when, where the sensor points, which stars) and its
 //!   visibility checks; [`sighting`]: an object seen from the observer over an exposure;
 //! - [`sensor`], [`noise`], [`background`]: the detector, its noise, real-frame backgrounds;
+//! - [`atmosphere`], [`sky_glow`]: a ground site's air (airmass, seeing, scintillation) and sky;
 //! - [`render`]: photons to electrons to ADU, labels and truth;
 //! - [`simulate`]: one image's products in memory, a pure function of (values, inputs, index).
 
@@ -21,3 +22,4 @@ pub mod scene;
 pub mod sensor;
 pub mod sighting;
 pub mod simulate;
+pub mod sky_glow;

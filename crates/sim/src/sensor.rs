@@ -73,6 +73,26 @@ impl Sensor {
         self.fov_radius_deg / (self.width_px as f64 / 2.0)
     }
 
+    /// This sensor under a sky of `sky_v` mag/arcsec^2 (a ground site's, `sky_glow`) in place
+    /// of its physical noise model's own; itself when None or with the paper's noise (which
+    /// has no sky in magnitudes: the campaign refuses a ground sky with it).
+    pub fn under_sky(&self, sky_v: Option<f64>) -> std::borrow::Cow<'_, Sensor> {
+        match (&self.noise, sky_v) {
+            (Noise::Physical(p), Some(v)) => {
+                let scale_arcsec = self.pixel_scale_deg() * 3600.0;
+                let sky = crate::noise::sky_e_per_s(v, self.zero_point_mag, scale_arcsec);
+                std::borrow::Cow::Owned(Sensor {
+                    noise: Noise::Physical(crate::noise::Physical {
+                        sky_e_per_s: sky,
+                        ..p.clone()
+                    }),
+                    ..self.clone()
+                })
+            }
+            _ => std::borrow::Cow::Borrowed(self),
+        }
+    }
+
     /// The PSF's Gaussian sigma in pixels.
     pub fn psf_sigma_px(&self) -> f64 {
         self.psf_sigma_arcsec / 3600.0 / self.pixel_scale_deg()

@@ -12,7 +12,7 @@ use crate::sky::frames::teme_to_gcrs;
 use crate::sky::night::{self, NightRule};
 use crate::sky::site::EARTH_RATE_DEG_S;
 use crate::sky::site::Site;
-use soig_sim::observer::{Ground, GroundGate};
+use soig_sim::observer::{Ground, GroundGate, SkyModel};
 
 /// A telescope on the ground: its WGS84 place and the limits of its night.
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
@@ -36,6 +36,69 @@ pub struct SiteSpec {
     /// the boresight's airmass. 0 (default): no air.
     #[serde(default)]
     pub extinction_mag_per_airmass: f64,
+    /// The seeing at the zenith: the renderer's PSF becomes a Moffat of this FWHM times the
+    /// boresight's airmass^0.6 (in place of the sensor's Gaussian). Absent: no seeing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seeing: Option<SeeingSpec>,
+    /// Scintillation: each object's flux in each exposure multiplied by a log-normal factor
+    /// of mean 1 and Young's relative rms with Osborn et al.'s correction. Absent: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scintillation: Option<ScintillationSpec>,
+    /// The sky's glow per image toward the boresight (Krisciunas & Schaefer 1991, twilight),
+    /// replacing `[noise] sky_*` of the physical noise model (required). Absent: the noise
+    /// model's own sky.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sky: Option<SkySpec>,
+}
+
+/// A ground site's sky (docs/ground.md): the dark sky at the zenith, brightened by twilight
+/// and the Moon.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SkySpec {
+    /// The dark night sky at the zenith, V mag/arcsec^2 (15 .. 25; ~21.5-22 at a dark site).
+    pub zenith_v_mag_per_arcsec2: f64,
+    /// Brighten it in twilight by the Sun's altitude (default true).
+    #[serde(default = "yes")]
+    pub twilight: bool,
+    /// Add the Moon's scattered light (default true; it needs the site's extinction).
+    #[serde(default = "yes")]
+    pub moon: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// Scintillation noise (docs/ground.md): sigma^2 = 10e-6 C_Y^2 D^-4/3 t^-1 X^3 exp(-2h/8000 m).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ScintillationSpec {
+    /// The telescope's aperture D, metres (0.01 .. 50).
+    pub aperture_m: f64,
+    /// Osborn et al.'s (2015) empirical correction C_Y of the site (0.1 .. 10; default 1.5).
+    #[serde(default = "typical_c_y")]
+    pub c_y: f64,
+}
+
+fn typical_c_y() -> f64 {
+    1.5
+}
+
+/// Seeing-limited imaging: a Moffat profile (docs/ground.md).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SeeingSpec {
+    /// FWHM at the zenith, arcsec (0.05 .. 20; ~0.7-1.5 at a good site).
+    pub fwhm_arcsec: f64,
+    /// Moffat index beta (1.1 .. 20): 4.765 (default) is Trujillo et al.'s (2001) Kolmogorov
+    /// fit, 2.5 has wider wings.
+    #[serde(default = "kolmogorov_beta")]
+    pub beta: f64,
+}
+
+fn kolmogorov_beta() -> f64 {
+    4.765
 }
 
 fn nautical() -> f64 {
@@ -79,7 +142,28 @@ pub(super) fn ground_of(spec: &ObjectSpec) -> Result<Option<Ground>, (String, St
             5.0,
         ),
     ];
-    for (field, v, lo, hi) in checks {
+    let seeing = s.seeing.as_ref().map_or([None, None], |g| {
+        [
+            Some((".site.seeing.fwhm_arcsec", g.fwhm_arcsec, 0.05, 20.0)),
+            Some((".site.seeing.beta", g.beta, 1.1, 20.0)),
+        ]
+    });
+    let scintillation = s.scintillation.as_ref().map_or([None, None], |c| {
+        [
+            Some((".site.scintillation.aperture_m", c.aperture_m, 0.01, 50.0)),
+            Some((".site.scintillation.c_y", c.c_y, 0.1, 10.0)),
+        ]
+    });
+    let sky = s.sky.as_ref().map(|k| {
+        (
+            ".site.sky.zenith_v_mag_per_arcsec2",
+            k.zenith_v_mag_per_arcsec2,
+            15.0,
+            25.0,
+        )
+    });
+    let optional = seeing.into_iter().chain(scintillation).flatten().chain(sky);
+    for (field, v, lo, hi) in checks.into_iter().chain(optional) {
         if !(lo..=hi).contains(&v) {
             return Err((field.into(), format!("is {v}: must be within {lo} .. {hi}")));
         }
@@ -119,6 +203,12 @@ pub(super) fn ground_gate(
     let (Observer::Ground(g), Some(spec)) = (observer, &resolved.observer.site) else {
         return Ok(None);
     };
+    if spec.sky.is_some() && resolved.noise.is_paper() {
+        return Err((
+            "observer.site.sky".into(),
+            "a ground sky in mag/arcsec^2 needs the physical noise model: add `[noise] model = \"physical\"`".into(),
+        ));
+    }
     let max_s = resolved.exposure.max_s;
     let drift = EARTH_RATE_DEG_S * max_s;
     if resolved.pointing.mode == PointingMode::Survey && drift > MAX_SURVEY_DRIFT_DEG {
@@ -165,5 +255,12 @@ fn night_spans(
         night,
         spans,
         extinction_mag_per_airmass: spec.extinction_mag_per_airmass,
+        seeing_zenith: spec.seeing.as_ref().map(|g| (g.fwhm_arcsec, g.beta)),
+        scintillation: spec.scintillation.as_ref().map(|c| (c.c_y, c.aperture_m)),
+        sky: spec.sky.as_ref().map(|k| SkyModel {
+            zenith_v: k.zenith_v_mag_per_arcsec2,
+            twilight: k.twilight,
+            moon: k.moon,
+        }),
     })
 }

@@ -13,6 +13,7 @@ use crate::sensor::Sensor;
 use soig_base::rng::poisson;
 pub use soig_image::psf::{DebrisFlux, DebrisMap};
 use soig_image::psf::{add_separable, weights_into};
+use soig_image::psf_shape::Psf;
 
 /// Pixels farther than this many PSF sigmas from the path get nothing (a share of 6e-7 of the
 /// photons per axis; photon mapping lands them).
@@ -27,17 +28,22 @@ const NODE_SPACING_SIGMA: f64 = 0.05;
 pub struct Flux {
     pub width: usize,
     pub height: usize,
-    pub psf_px: f64,
+    pub psf: Psf,
     pub stars: Vec<f64>,
     pub debris: Vec<f64>,
 }
 
 impl Flux {
     pub fn new(width: usize, height: usize, psf_px: f64) -> Flux {
+        Flux::with_psf(width, height, Psf::gaussian(psf_px))
+    }
+
+    /// `new` through any PSF shape.
+    pub fn with_psf(width: usize, height: usize, psf: Psf) -> Flux {
         Flux {
             width,
             height,
-            psf_px,
+            psf,
             stars: vec![0.0; width * height],
             debris: vec![0.0; width * height],
         }
@@ -45,29 +51,34 @@ impl Flux {
 
     /// Add one source's expected photons along its path.
     pub(super) fn add(&mut self, source: &Source, jitter: &Jitter) {
-        for (share, x, y) in path_nodes(source, jitter, NODE_SPACING_SIGMA * self.psf_px) {
+        let spacing = NODE_SPACING_SIGMA * self.psf.core_sigma_px();
+        for (share, x, y) in path_nodes(source, jitter, spacing) {
             self.deposit(source.expected * share, x, y, source.debris);
         }
     }
 
-    /// The PSF centred on (x, y), integrated over each pixel of its support: separable, so the
-    /// product of two 1-D pixel integrals (differences of the normal CDF at pixel edges).
+    /// The PSF centred on (x, y), integrated over each pixel of its support: each of its
+    /// Gaussians separable, so the product of two 1-D pixel integrals (differences of the
+    /// normal CDF at pixel edges), weighted (a Gaussian PSF's one weight is 1: bit for bit
+    /// the single Gaussian's deposit).
     fn deposit(&mut self, amount: f64, x: f64, y: f64, debris: bool) {
         if amount.is_nan() || amount <= 0.0 || !x.is_finite() || !y.is_finite() {
             return;
         }
-        let Some((i0, wx)) = pixel_weights(x, self.psf_px, self.width) else {
-            return;
-        };
-        let Some((j0, wy)) = pixel_weights(y, self.psf_px, self.height) else {
-            return;
-        };
         let image = if debris {
             &mut self.debris
         } else {
             &mut self.stars
         };
-        add_separable(image, self.width, (i0, &wx), (j0, &wy), amount);
+        for (share, sigma, n) in self.psf.supported(PSF_SUPPORT_SIGMA) {
+            let Some((i0, wx)) = pixel_weights(x, sigma, n, self.width) else {
+                continue;
+            };
+            let Some((j0, wy)) = pixel_weights(y, sigma, n, self.height) else {
+                continue;
+            };
+            add_separable(image, self.width, (i0, &wx), (j0, &wy), amount * share);
+        }
     }
 
     /// One Poisson draw per pixel (debris and stars apart, so the debris image stays known).
@@ -94,7 +105,7 @@ impl Flux {
 /// The expected flux of a scene for a jitter path, without the Poisson draw: the noise-free
 /// image an infinite number of photon-mapped renders averages to.
 pub fn expected_flux(sensor: &Sensor, scene: &Scene, jitter: &Jitter) -> Flux {
-    let mut flux = Flux::new(sensor.width_px, sensor.height_px, sensor.psf_sigma_px());
+    let mut flux = Flux::with_psf(sensor.width_px, sensor.height_px, scene.psf(sensor));
     super::for_each_source(sensor, scene, jitter, |source| flux.add(source, jitter));
     flux
 }
@@ -109,9 +120,9 @@ pub fn debris_flux(sensor: &Sensor, scene: &Scene, jitter: &Jitter) -> DebrisFlu
             (p.expected_electrons, p.x_px + jx, p.y_px + jy)
         })
         .collect();
-    DebrisFlux::of_samples(
+    DebrisFlux::of_samples_psf(
         &samples,
-        sensor.psf_sigma_px(),
+        &scene.psf(sensor),
         sensor.width_px,
         sensor.height_px,
     )
@@ -129,9 +140,9 @@ pub fn matched_filter_snr(
 
 /// First pixel and the PSF share of each pixel of the support along one axis (pixel i spans
 /// [i - 0.5, i + 0.5)); None when the support misses the image.
-fn pixel_weights(c: f64, sigma: f64, n: usize) -> Option<(usize, Vec<f64>)> {
+fn pixel_weights(c: f64, sigma: f64, support: f64, n: usize) -> Option<(usize, Vec<f64>)> {
     let mut w = Vec::new();
-    weights_into(c, sigma, PSF_SUPPORT_SIGMA, n, &mut w).map(|lo| (lo, w))
+    weights_into(c, sigma, support, n, &mut w).map(|lo| (lo, w))
 }
 
 /// Nodes (share of the source's photons, x, y) along its jittered path: the path is linear
@@ -214,9 +225,9 @@ mod tests {
             assert!((erfc(-x) - (2.0 - e)).abs() < 2e-7);
         }
         // The pixel shares of a PSF well inside the image sum to 1 (up to the support cut).
-        let (_, w) = pixel_weights(10.3, 1.4, 64).unwrap();
+        let (_, w) = pixel_weights(10.3, 1.4, PSF_SUPPORT_SIGMA, 64).unwrap();
         let total: f64 = w.iter().sum();
         assert!((total - 1.0).abs() < 2e-6, "{total}");
-        assert!(pixel_weights(-20.0, 1.0, 64).is_none());
+        assert!(pixel_weights(-20.0, 1.0, PSF_SUPPORT_SIGMA, 64).is_none());
     }
 }

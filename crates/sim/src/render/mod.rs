@@ -18,6 +18,8 @@ mod detector;
 pub mod expected;
 mod jitter;
 mod photons;
+#[cfg(test)]
+mod seeing_tests;
 mod sources;
 #[cfg(test)]
 mod tests;
@@ -173,6 +175,8 @@ pub fn render_placed(
     noise_rng: &mut PixelRng,
     object_photons: &dyn Fn(u64) -> PixelRng,
 ) -> Exposure {
+    // A ground site's sky for this image, in the detector's noise and the truth's sigma.
+    let sensor = &*sensor.under_sky(scene.sky_v_mag_per_arcsec2);
     let (width, height) = (sensor.width_px, sensor.height_px);
     let unrendered;
     let own = match &scene.placed {
@@ -254,11 +258,13 @@ fn photons(
 ) -> (Canvas, Vec<TracedStar>, expected::DebrisFlux) {
     let s = sensor;
     let (width, height) = (s.width_px, s.height_px);
-    let psf_px = sensor.psf_sigma_px();
+    let psf = scene.psf(sensor);
     let merge = (settings.merge_threshold, settings.merge_factor);
     let mut photons = match settings.method {
         RenderMethod::PhotonMapping => Photons::Mapped(Tally::new(width, height)),
-        RenderMethod::Expected => Photons::Expected(expected::Flux::new(width, height, psf_px)),
+        RenderMethod::Expected => {
+            Photons::Expected(expected::Flux::with_psf(width, height, psf.clone()))
+        }
     };
     // The debris' trajectory samples share one source's packet budget (2000 samples of a
     // magnitude -1 debris would otherwise trace 2e9 packets).
@@ -285,7 +291,7 @@ fn photons(
                 merge,
                 budget,
                 jitter,
-                psf_px,
+                &psf,
                 source,
             );
         }
@@ -393,5 +399,8 @@ fn truth_of(
         rejections: scene.rejections.clone(),
         ephemeris: scene.ephemeris,
         collect: scene.collect,
+        seeing: scene.seeing,
+        scintillation: scene.scintillation,
+        sky_v_mag_per_arcsec2: scene.sky_v_mag_per_arcsec2,
     }
 }

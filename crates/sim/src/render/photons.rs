@@ -7,6 +7,7 @@ use soig_base::rng::PixelRng;
 
 use super::{Jitter, Path, Source};
 use rand::RngExt;
+use soig_image::psf_shape::Psf;
 
 /// Photon counts on the detector, all sources and debris alone.
 pub(super) struct Canvas {
@@ -88,7 +89,7 @@ pub(super) fn trace(
     merge: (u64, u32),
     max_packets: u64,
     jitter: &Jitter,
-    psf_px: f64,
+    psf: &Psf,
     source: &Source,
 ) {
     let (threshold, factor) = merge;
@@ -119,17 +120,24 @@ pub(super) fn trace(
     let total = packets + singles + tail;
     // Every packet lands at its source's position at its arrival time (`at`, which draws the
     // arrival if it needs one), plus the PSF. Generic, so each path's loop is compiled apart.
+    // A mixture PSF (seeing) first draws which of its Gaussians the packet goes through; a
+    // single Gaussian draws nothing more (its stream unchanged).
     fn land(
         canvas: &mut Tally,
         rng: &mut PixelRng,
         total: u64,
         weight_of: impl Fn(u64) -> u32,
-        psf_px: f64,
+        psf: &Psf,
         debris: bool,
         mut at: impl FnMut(&mut PixelRng) -> (f64, f64),
     ) {
+        let single = psf.is_gaussian().then(|| psf.components()[0].1);
         for n in 0..total {
             let (x0, y0) = at(rng);
+            let psf_px = match single {
+                Some(s) => s,
+                None => psf.component_of(rng.random::<f64>()),
+            };
             let gx: f64 = rng.sample(StandardNormal);
             let gy: f64 = rng.sample(StandardNormal);
             canvas.add(x0 + gx * psf_px, y0 + gy * psf_px, weight_of(n), debris);
@@ -142,18 +150,18 @@ pub(super) fn trace(
         Path::Instant { t, x, y } => {
             let (jx, jy) = jitter.at(t);
             let (x0, y0) = (x + jx, y + jy);
-            land(canvas, rng, total, weight_of, psf_px, debris, |_| (x0, y0));
+            land(canvas, rng, total, weight_of, psf, debris, |_| (x0, y0));
         }
         // A fixed star's photons arrive uniformly over the whole exposure, which the jitter
         // grid spans: the arrival drawn in grid steps gives the cell and fraction directly.
         Path::Still { x, y } => {
             let steps = jitter.steps() as f64;
-            land(canvas, rng, total, weight_of, psf_px, debris, |rng| {
+            land(canvas, rng, total, weight_of, psf, debris, |rng| {
                 let (jx, jy) = jitter.at_step(rng.random_range(0.0..steps));
                 (x + jx, y + jy)
             });
         }
-        _ => land(canvas, rng, total, weight_of, psf_px, debris, |rng| {
+        _ => land(canvas, rng, total, weight_of, psf, debris, |rng| {
             let t = source.arrival(rng);
             let (x0, y0) = source.path.at(t);
             let (jx, jy) = jitter.at(t);

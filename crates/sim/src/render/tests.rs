@@ -199,7 +199,7 @@ fn debris_drawn_per_pixel_is_distributed_as_its_photons_traced() {
         "{} of {lambda}",
         flux.total()
     );
-    let psf_px = c.sensor.psf_sigma_px();
+    let psf = s.psf(&c.sensor);
     let runs = 300;
     let (mut traced, mut drawn) = (Vec::new(), Vec::new());
     for i in 0..runs {
@@ -215,7 +215,7 @@ fn debris_drawn_per_pixel_is_distributed_as_its_photons_traced() {
                 singles,
                 u64::MAX,
                 &jitter,
-                psf_px,
+                &psf,
                 source,
             );
         });

@@ -73,6 +73,17 @@ pub struct Truth {
     /// The image's place in its multi-frame collect, with the object's track id.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub collect: Option<crate::scene::CollectFrame>,
+    /// A ground site's seeing in this image: the Moffat's FWHM, beta and the boresight's
+    /// airmass.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seeing: Option<crate::atmosphere::Seeing>,
+    /// A ground site's scintillation of the object: its relative rms, the flux factor drawn
+    /// (already in `expected_debris_electrons`) and the object's airmass.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scintillation: Option<crate::atmosphere::Scintillation>,
+    /// A ground site's sky toward the boresight, V mag/arcsec^2 (dark sky, twilight, Moon).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sky_v_mag_per_arcsec2: Option<f64>,
 }
 
 /// The truth sidecar of an image of a campaign with `[objects]` (#34): the frame's fields of

@@ -9,9 +9,11 @@ use serde::Serialize;
 
 use super::visibility::Snr;
 use super::{Pointing, Rejection, Spec};
+use crate::atmosphere::{Scintillation, Seeing};
 use crate::background::FrameChoice;
 use crate::sensor::Sensor;
 use crate::sighting::Ephemeris;
+use soig_image::psf_shape::Psf;
 use soig_sky::photometry::photon_rate;
 use soig_sky::projection::Tan;
 use soig_sky::stars::Star;
@@ -97,6 +99,17 @@ pub struct Scene {
     /// A generated object of a catalogue scene's population (a breakup fragment).
     #[serde(skip)]
     pub generated: bool,
+    /// A ground site's seeing over the exposure (None: the sensor's Gaussian PSF).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seeing: Option<Seeing>,
+    /// A ground site's scintillation of this object in this exposure (`scintillation`), its
+    /// factor already in the trajectory's expected electrons.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scintillation: Option<Scintillation>,
+    /// A ground site's sky toward the boresight, V mag/arcsec^2 (`GroundGate::sky`): the
+    /// physical noise model's sky for this image.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sky_v_mag_per_arcsec2: Option<f64>,
 }
 
 /// A frame's place in its collect, recorded in the truth: the object keeps its `track_id`
@@ -111,6 +124,12 @@ pub struct CollectFrame {
 }
 
 impl Scene {
+    /// The PSF the renderer draws: the seeing's Moffat where the exposure has seeing, else
+    /// the sensor's Gaussian.
+    pub fn psf(&self, sensor: &Sensor) -> Psf {
+        psf_of(sensor, self.seeing)
+    }
+
     /// The projection at mid-exposure: the one the FITS WCS describes.
     pub fn projection(&self, sensor: &Sensor) -> Tan {
         let (ra, dec) = self.pointing.mid_radec_deg();
@@ -158,6 +177,8 @@ impl Scene {
             },
             stars,
             background: None,
+            seeing: None,
+            sky_v_mag_per_arcsec2: None,
         };
         let object = Object {
             debris_index: 0,
@@ -208,6 +229,14 @@ impl Scene {
     }
 }
 
+/// The PSF of an exposure with `seeing` (`Scene::psf`).
+pub fn psf_of(sensor: &Sensor, seeing: Option<Seeing>) -> Psf {
+    match seeing {
+        Some(s) => Psf::moffat(s.fwhm_arcsec / 3600.0 / sensor.pixel_scale_deg(), s.beta),
+        None => Psf::gaussian(sensor.psf_sigma_px()),
+    }
+}
+
 /// The exposure a scene's object is seen in: which image, when, how long, where the sensor
 /// points, its field stars and its real background frame.
 pub(super) struct Exposure {
@@ -217,6 +246,8 @@ pub(super) struct Exposure {
     pub pointing: Pointing,
     pub stars: Vec<Star>,
     pub background: Option<FrameChoice>,
+    pub seeing: Option<Seeing>,
+    pub sky_v_mag_per_arcsec2: Option<f64>,
 }
 
 impl Exposure {
@@ -230,6 +261,8 @@ impl Exposure {
             pointing: at.pointing.clone(),
             stars: Vec::new(),
             background: at.background,
+            seeing: at.seeing,
+            sky_v_mag_per_arcsec2: at.sky_v_mag_per_arcsec2,
         }
     }
 }
@@ -276,6 +309,9 @@ impl Scene {
             placed: None,
             unseen: None,
             generated: false,
+            seeing: exposure.seeing,
+            scintillation: None,
+            sky_v_mag_per_arcsec2: exposure.sky_v_mag_per_arcsec2,
         }
     }
 

@@ -190,6 +190,7 @@ fn sight_object(
         mid_tan: &at.projection(sensor),
         shadowed: false,
         extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
+        psf_core_px: at.psf(sensor).core_sigma_px(),
     };
     // A path too fast to sample has samples in the field (`trajectory`): it crossed it.
     let trajectory = match trajectory(spec, sensor, &|t_s| track.at(t_s), &shot) {
@@ -203,7 +204,8 @@ fn sight_object(
     let judged =
         visibility(spec, sensor, &sight, (sun, mid), area_m2, true).and_then(|(geometry, _)| {
             let frame = inputs.frame(at.background);
-            let snr = gate_snr(spec, sensor, &trajectory, exposure_s, frame, true)?;
+            let sensor = sensor.under_sky(at.sky_v_mag_per_arcsec2);
+            let snr = gate_snr(spec, &sensor, &trajectory, exposure_s, frame, true)?;
             Ok((geometry, snr))
         });
     let (geometry, snr) = match judged {
@@ -291,6 +293,15 @@ pub(super) fn draw_stare(
             },
             stars,
             background: d.background,
+            seeing: spec
+                .ground
+                .as_ref()
+                .and_then(|g| g.seeing(mid, radec_unit(ra, dec))),
+            sky_v_mag_per_arcsec2: spec
+                .ground
+                .as_ref()
+                .and_then(|g| g.sky(mid, radec_unit(ra, dec)))
+                .map(|(v, _)| v),
         };
         // The stare's own "object" is the boresight: no light, no path, NORAD 0.
         let object = Object {

@@ -10,11 +10,13 @@ use hifitime::{Duration, Epoch};
 use rand::RngExt;
 use rand_chacha::ChaCha12Rng;
 
+use super::accepted::psf_of;
 use super::accepted::{Exposure, Object};
 use super::catalogue::{draw_stare, in_field};
 use super::object_draws::{draw_tumble, pick_debris};
 use super::place::place;
 use super::pointing::point_sensor;
+use super::scintillation::scintillate;
 use super::trajectory::{Shot, trajectory};
 use super::visibility::{gate_snr, in_sight, visibility};
 use super::{
@@ -39,6 +41,17 @@ pub fn choose_debris(spec: &Spec, debris: usize, seed: u64, image: u64) -> usize
 /// streams are the collect's, the gate judges its first frame, and a later frame follows the
 /// first's pointing plan whatever it shows (the object may leave a fixed field or fade).
 pub fn draw(
+    spec: &Spec,
+    sensor: &Sensor,
+    inputs: &Inputs,
+    seed: u64,
+    image: u64,
+) -> Result<Scene, NoScene> {
+    draw_accepted(spec, sensor, inputs, seed, image).map(|s| scintillate(spec, seed, s))
+}
+
+/// `draw` before the air's scintillation of the accepted scene's objects.
+fn draw_accepted(
     spec: &Spec,
     sensor: &Sensor,
     inputs: &Inputs,
@@ -281,6 +294,15 @@ fn try_draw(
     let stars = field_stars(spec, sensor, inputs, (ra_p, dec_p, cone), mid, gated)?;
 
     let mid_tan = sensor.projection(ra_p, dec_p);
+    let seeing = spec
+        .ground
+        .as_ref()
+        .and_then(|g| g.seeing(mid, radec_unit(ra_p, dec_p)));
+    let sky = spec
+        .ground
+        .as_ref()
+        .and_then(|g| g.sky(mid, radec_unit(ra_p, dec_p)))
+        .map(|(v, _)| v);
     let track = sighting
         .track(start, exposure_s)
         .ok_or(Rejection::PropagationFailed)?;
@@ -297,12 +319,13 @@ fn try_draw(
             mid_tan: &mid_tan,
             shadowed,
             extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
+            psf_core_px: psf_of(sensor, seeing).core_sigma_px(),
         },
     )?;
 
     let snr = gate_snr(
         spec,
-        sensor,
+        &sensor.under_sky(sky),
         &trajectory,
         exposure_s,
         inputs.frame(background),
@@ -318,6 +341,8 @@ fn try_draw(
         pointing,
         stars,
         background,
+        seeing,
+        sky_v_mag_per_arcsec2: sky,
     };
     let object = Object {
         debris_index,

@@ -23,6 +23,7 @@ mod object_draws;
 mod place;
 mod pointing;
 mod rejection;
+mod scintillation;
 mod spec;
 mod trajectory;
 mod visibility;

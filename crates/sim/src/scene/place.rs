@@ -190,11 +190,12 @@ fn try_place(
             mid_tan: &at.projection(sensor),
             shadowed,
             extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
+            psf_core_px: at.psf(sensor).core_sigma_px(),
         },
     )?;
     let snr = gate_snr(
         spec,
-        sensor,
+        &sensor.under_sky(at.sky_v_mag_per_arcsec2),
         &trajectory,
         exposure_s,
         inputs.frame(at.background),

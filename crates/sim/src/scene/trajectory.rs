@@ -23,6 +23,9 @@ pub(super) struct Shot<'a> {
     pub shadowed: bool,
     /// A ground site's air, which dims the object by its airmass at each sample.
     pub extinction: Option<Extinction>,
+    /// The core sigma of the PSF drawn (`Psf::core_sigma_px`), pixels: the sensor's own, or
+    /// the seeing's.
+    pub psf_core_px: f64,
 }
 
 /// The trajectory of one object, cut in samples at the centres of equal time slices, sampled
@@ -42,6 +45,7 @@ pub(super) fn trajectory(
         mid_tan,
         shadowed,
         extinction,
+        ..
     } = *shot;
     let sample = |n: usize| -> Result<Vec<TrajectorySample>, Rejection> {
         let dt = exposure_s / n as f64;
@@ -94,7 +98,7 @@ pub(super) fn trajectory(
     // streak (a 600 s exposure of LEO debris with 2000 samples: one dot per 128 px; 0.7% of the
     // quickstart draws: 4-8 px). Such a trajectory is sampled again, finer by the factor that
     // brings the spacing to two sigmas; beyond MAX_TRAJECTORY_SAMPLES the draw is rejected.
-    let psf_px = sensor.psf_sigma_px();
+    let psf_px = shot.psf_core_px;
     let spacing = max_sample_spacing_px(sensor, &trajectory);
     if spacing > MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px {
         let factor = (spacing / (MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px)).ceil() as usize;
