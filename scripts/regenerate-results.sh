@@ -30,6 +30,9 @@ for experiment in experiments/*.toml; do
     rm -rf "results/experiments/$name" && mkdir -p "results/experiments/$name"
     cp -r "$scratch/experiments/$name/"{digest.txt,experiment.json,plots,summary.csv,summary.md} \
         "results/experiments/$name/"
+    # Each point's values (`points/<hash>.json`: the folder names are hashes of them).
+    mkdir -p "results/experiments/$name/points"
+    cp "$scratch/experiments/$name/points/"*.json "results/experiments/$name/points/"
     # Each point's detection-efficiency curves (runs with a detect stage).
     for point in "$scratch/experiments/$name/points/"*/; do
         [ -f "$point/report/efficiency.png" ] || continue
