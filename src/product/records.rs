@@ -6,7 +6,7 @@
 use serde::Serialize;
 
 use crate::render::{Exposure, FrameTruth, Truth};
-use crate::simulate::{ImageProducts, FinalImage};
+use crate::simulate::{FinalImage, ImageProducts};
 
 /// An image's truth sidecar as `soig run` writes it: the one object of a campaign without
 /// `[objects]`, or the frame and each of its objects.

@@ -105,7 +105,10 @@ impl StreakDetector {
         match stars {
             Stars::Unknown => streak::detect_streaks_on_frame(pixels, width, height, p, None, None),
             Stars::Points => (streak::detect_streaks(pixels, width, height, p, None), None),
-            Stars::Along(a) => (streak::detect_streaks(pixels, width, height, p, Some(a)), None),
+            Stars::Along(a) => (
+                streak::detect_streaks(pixels, width, height, p, Some(a)),
+                None,
+            ),
             Stars::Catalogue { angle_deg, trails } => (
                 streak::detect_streaks_among_stars(
                     pixels,

@@ -21,8 +21,8 @@ use anyhow::{Context, bail};
 use crate::campaign::{Campaign, Detect};
 use crate::detect::detector::Frame as DetectorFrame;
 use crate::detect::streak::{Dropped, OwnTrails, StreakParams, detect_streaks_explained};
-use crate::detect::{Detection, Detector, Stars, StreakDetector};
 use crate::detect::yolo::{YoloDetector, YoloParams};
+use crate::detect::{Detection, Detector, Stars, StreakDetector};
 use crate::enhance::{self, Gray8};
 use crate::frames::{Frame, RegionPixels};
 
