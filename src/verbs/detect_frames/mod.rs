@@ -408,25 +408,33 @@ fn detect_frame(
             psf_sigma_px,
             ..opts.streak.clone()
         };
-        let explain = |angle: Option<f64>| {
-            detect_streaks_explained(&enhanced.pixels, rw, rh, &params, angle).1
-        };
-        let stars = match (&sky, opts.star_trail_angle_deg) {
-            (Some((trails, angle, _)), _) => Stars::told(*angle, Some(trails)),
-            (None, angle) => angle.map_or(Stars::Unknown, Stars::Along),
-        };
-        let (cands, own) = StreakDetector {
+        let detector = StreakDetector {
             params: params.clone(),
-        }
-        .detect_measuring(image, stars);
-        // --explain explains the first pass: along the given direction, or the measured one
-        // (none with a catalogue: its pass drops what the predicted trails explain).
-        let why = match stars {
-            _ if !opts.explain => Vec::new(),
-            Stars::Catalogue { .. } => Vec::new(),
-            Stars::Along(a) => explain(Some(a)),
-            Stars::Points => explain(None),
-            Stars::Unknown => explain(own.as_ref().and_then(|o| o.model()).map(|m| m.angle_deg)),
+        };
+        let explained =
+            |angle: Option<f64>| detect_streaks_explained(&enhanced.pixels, rw, rh, &params, angle);
+        let (cands, own, why) = match (&sky, opts.star_trail_angle_deg) {
+            // The catalogue's pass drops what the predicted trails explain: not explained.
+            (Some((trails, angle, _)), _) => {
+                let (c, o) = detector.detect_measuring(image, Stars::told(*angle, Some(trails)));
+                (c, o, Vec::new())
+            }
+            // --explain along a given direction: one pass gives both (what `Stars::Along` runs).
+            (None, Some(a)) if opts.explain => {
+                let (c, why) = explained(Some(a));
+                (c, None, why)
+            }
+            (None, angle) => {
+                let (c, o) =
+                    detector.detect_measuring(image, angle.map_or(Stars::Unknown, Stars::Along));
+                // --explain on a bare frame explains the first pass along the measured direction.
+                let why = if opts.explain {
+                    explained(o.as_ref().and_then(|o| o.model()).map(|m| m.angle_deg)).1
+                } else {
+                    Vec::new()
+                };
+                (c, o, why)
+            }
         };
         own_trails = own;
         if opts.explain {
