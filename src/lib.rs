@@ -8,7 +8,8 @@
 //! an upward import does not compile (docs/architecture.md draws the graph):
 //!
 //! ```text
-//! soig (this crate)  verbs/: pipeline (run, train) detect_stage merge study compare tables
+//! soig (this crate)  verbs/: plan (what a run does, from the campaign, once) pipeline (run,
+//!                           train) detect_stage merge study compare tables
 //!                           sweep convert launch detect_frames summary; the CLI in src/bin/soig/
 //!                    report/
 //!                    product/: artifacts dataset collect export star_trails light_curve shard

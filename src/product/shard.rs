@@ -14,7 +14,6 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use serde::{Deserialize, Serialize};
 
-use crate::campaign::Campaign;
 use crate::journal::Record;
 use crate::manifest::Manifest;
 
@@ -159,9 +158,22 @@ impl Shard {
     }
 }
 
+/// What a shard's manifest records of its campaign.
+pub(crate) struct Seal<'a> {
+    /// The campaign's hash and its resolved JSON.
+    pub hash: &'a str,
+    pub resolved: &'a serde_json::Value,
+    /// The campaign's images, all shards together.
+    pub images: u64,
+    /// The campaign's folder, where a merge finds its inputs again.
+    pub campaign_dir: &'a Path,
+    /// The hashes of the run's input files.
+    pub inputs: std::collections::BTreeMap<String, String>,
+}
+
 /// Seal shard output `dir`: its records, its timing and its manifest. Returns the digest.
 pub(crate) fn seal(
-    campaign: &Campaign,
+    run: &Seal,
     dir: &Path,
     shard: Shard,
     records: &[Record],
@@ -177,9 +189,9 @@ pub(crate) fn seal(
     }
     crate::store::fs::create(&dir.join(RECORDS), lines)?;
     crate::store::fs::create(&dir.join(TIMING), serde_json::to_string(&timing)? + "\n")?;
-    let images = shard.images(u64::from(campaign.resolved.images));
-    let campaign_dir = std::path::absolute(&campaign.base_dir)
-        .with_context(|| format!("cannot resolve {}", campaign.base_dir.display()))?;
+    let images = shard.images(run.images);
+    let campaign_dir = std::path::absolute(run.campaign_dir)
+        .with_context(|| format!("cannot resolve {}", run.campaign_dir.display()))?;
     let section = Section {
         index: shard.index,
         count: shard.count,
@@ -187,10 +199,9 @@ pub(crate) fn seal(
         campaign_dir,
         build: crate::build_id::identity().into(),
     };
-    let resolved = serde_json::to_value(&campaign.resolved)?;
-    let mut m = Manifest::build(dir, &campaign.hash, resolved, &[TIMING.into()])?;
+    let mut m = Manifest::build(dir, run.hash, run.resolved.clone(), &[TIMING.into()])?;
     m.shard = Some(serde_json::to_value(section)?);
-    m.inputs = campaign.input_hashes()?;
+    m.inputs = run.inputs.clone();
     m.seal();
     m.write(dir)?;
     Ok(m.digest)

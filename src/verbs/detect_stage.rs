@@ -12,27 +12,14 @@ use anyhow::Context;
 use rayon::prelude::*;
 
 use crate::artifacts::WrittenPng;
-use crate::campaign::{Campaign, PointingMode, StarHint};
 use crate::dataset::Subset;
 use crate::detect::detector::Frame;
-use crate::detect::yolo::{YoloDetector, YoloParams};
+use crate::detect::yolo::YoloDetector;
 use crate::detect::{Detection, Detector, Found, Stars, StreakDetector};
-use crate::experiment;
-use crate::geometry::FrameKind;
 use crate::observations::Line;
 use crate::progress::Progress;
 use crate::report::{self, DetectorRun, ObjectFacts, TestImage};
-
-/// The YOLO detector's settings of a campaign.
-pub(crate) fn yolo_params(campaign: &Campaign) -> YoloParams {
-    let d = &campaign.resolved.detect;
-    YoloParams {
-        conf: d.conf,
-        iou: d.iou,
-        max_det: d.max_det as usize,
-        ..YoloParams::default()
-    }
-}
+use crate::verbs::plan::Plan;
 
 /// What an image left for the detect stage.
 pub(crate) struct Written {
@@ -49,45 +36,38 @@ pub(crate) struct Written {
 /// Run the detectors on the test split (every image when there is no split) and write the
 /// report.
 pub(crate) fn detect_and_report(
-    campaign: &Campaign,
+    plan: &Plan,
     dir: &Path,
     written: &[Written],
     dataset_digest: &str,
     model: Option<&Path>,
     progress: &dyn Progress,
 ) -> anyhow::Result<()> {
-    let c = &campaign.resolved;
     let chosen: Vec<&Written> = written
         .iter()
         .filter(|w| w.png.is_some() && matches!(w.subset, None | Some(Subset::Test)))
         .collect();
-    let runs = run_detectors(campaign, &chosen, model, progress)?;
+    let runs = run_detectors(plan, &chosen, model, progress)?;
     let images = test_images(dir, &chosen)?;
     let conversion: Vec<f64> = written.iter().filter_map(|w| w.conversion_s).collect();
     report::write(
         dir,
-        &c.name,
-        &campaign.hash,
+        &plan.name,
+        &plan.hash,
         dataset_digest,
-        &row_kind(campaign),
+        &plan.detect.row_kind,
         &images,
         &runs,
-        c.detect.conf,
+        plan.detect.conf,
         &conversion,
         progress,
     )?;
-    if c.artifacts.astrometry {
-        let observer = serde_json::to_value(&c.observer)?;
-        let observer = observer["name"]
-            .as_str()
-            .map(String::from)
-            .or_else(|| observer["norad"].as_u64().map(|n| format!("NORAD {n}")))
-            .unwrap_or_else(|| "observer".to_string());
+    if let Some(a) = &plan.detect.astrometry {
         let setup = report::astrometry::Setup {
-            psf_sigma_px: c.detect.streak.psf_sigma_px,
-            observer: &observer,
-            conf: c.detect.conf,
-            apparent: c.render.apparent_positions,
+            psf_sigma_px: a.psf_sigma_px,
+            observer: &a.observer,
+            conf: plan.detect.conf,
+            apparent: a.apparent,
         };
         report::astrometry::write(dir, &images, &runs, &setup)?;
     }
@@ -95,20 +75,20 @@ pub(crate) fn detect_and_report(
 }
 
 /// Each detector of the campaign over the chosen images: what a detector sees of an image is
-/// its `TestFrame` (the PNG and its size) and the campaign, never its truth.
+/// its `TestFrame` (the PNG and its size) and the plan, never its truth.
 fn run_detectors(
-    campaign: &Campaign,
+    plan: &Plan,
     chosen: &[&Written],
     model: Option<&Path>,
     progress: &dyn Progress,
 ) -> anyhow::Result<Vec<DetectorRun>> {
     let frames: Vec<TestFrame> = chosen.iter().map(|w| TestFrame::of(w)).collect();
     let mut runs = Vec::new();
-    if campaign.resolved.detect.classical {
-        runs.push(streak_run(campaign, &frames, chosen, progress)?);
+    if let Some(params) = &plan.detect.streak {
+        runs.push(streak_run(plan, params, &frames, chosen, progress)?);
     }
     if let Some(path) = model {
-        runs.push(yolo_run(campaign, path, &frames, progress)?);
+        runs.push(yolo_run(plan, path, &frames, progress)?);
     }
     Ok(runs)
 }
@@ -240,18 +220,16 @@ fn run_detector<T: Send>(
 /// With `[detect] stars = "frame"`, no image gets either: the detector measures the star trails
 /// on the image itself (`Stars::Unknown`), as on a user's bare frame.
 fn streak_run(
-    campaign: &Campaign,
+    plan: &Plan,
+    params: &crate::detect::streak::StreakParams,
     images: &[TestFrame],
     chosen: &[&Written],
     progress: &dyn Progress,
 ) -> anyhow::Result<DetectorRun> {
-    let params = &campaign.resolved.detect.streak;
-    let told = campaign.resolved.detect.stars == StarHint::Catalogue;
-    let sky = match campaign.resolved.pointing.mode {
-        PointingMode::Survey if told => {
-            Some((experiment::of(campaign), experiment::inputs(campaign)?))
-        }
-        PointingMode::Survey | PointingMode::Fixed | PointingMode::Track => None,
+    let told = plan.detect.told;
+    let inputs = match plan.detect.star_trails {
+        true => Some(plan.inputs()?),
+        false => None,
     };
     let detector = StreakDetector {
         params: params.clone(),
@@ -260,9 +238,9 @@ fn streak_run(
         let pixels = load(img)?;
         // The prediction is part of the detector's time.
         let t = Instant::now();
-        let trails = match &sky {
-            Some((x, inputs)) => Some(crate::star_trails::of_image(
-                x,
+        let trails = match &inputs {
+            Some(inputs) => Some(crate::star_trails::of_image(
+                &plan.experiment,
                 inputs,
                 chosen[i].index,
                 &pixels,
@@ -315,16 +293,16 @@ fn streak_run(
 /// stage uses every core. Nothing inside `detect` waits on rayon, so at most that many images
 /// are in flight and the pool never runs dry.
 fn yolo_run(
-    campaign: &Campaign,
+    plan: &Plan,
     path: &Path,
     images: &[TestFrame],
     progress: &dyn Progress,
 ) -> anyhow::Result<DetectorRun> {
-    let d = &campaign.resolved.detect;
+    let d = &plan.detect;
     let sessions = std::sync::Mutex::new(
         (0..rayon::current_num_threads())
             .map(|_| {
-                YoloDetector::load(path, yolo_params(campaign))
+                YoloDetector::load(path, d.yolo)
                     .with_context(|| format!("loading model {}", path.display()))
             })
             .collect::<anyhow::Result<Vec<_>>>()?,
@@ -350,11 +328,11 @@ fn yolo_run(
         name: "yolo".into(),
         description: format!(
             "YOLOv8 {} through ONNX Runtime, conf {}, NMS IoU {}",
-            d.model
+            d.model_name
                 .as_deref()
                 .unwrap_or("train/model.onnx (trained by this run)"),
             d.conf,
-            d.iou
+            d.yolo.iou
         ),
         model_sha256: match &d.model_sha256 {
             Some(sha) => Some(sha.clone()),
@@ -366,30 +344,10 @@ fn yolo_run(
     })
 }
 
-/// The report's row kind: pointing, frame and background (`survey, rotated and expanded
-/// frame, semisynthetic`).
-fn row_kind(campaign: &Campaign) -> String {
-    let c = &campaign.resolved;
-    let geometry = match c.enhance.geometry {
-        FrameKind::Original => "original frame",
-        FrameKind::Padded => "padded frame",
-        FrameKind::Rotated => "rotated and expanded frame",
-    };
-    let kind = match c.background {
-        crate::campaign::Background::Uniform => "synthetic",
-        crate::campaign::Background::Frames { .. } => "semisynthetic",
-    };
-    let mode = match c.pointing.mode {
-        PointingMode::Fixed => "fixed",
-        PointingMode::Survey => "survey",
-        PointingMode::Track => "track",
-    };
-    format!("{mode}, {geometry}, {kind}")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::campaign::Campaign;
     use crate::pipeline::{RunOptions, run_with, written};
     use crate::shard::{RECORDS, Shard};
 
@@ -430,12 +388,13 @@ mod tests {
                 .lines()
                 .map(|l| serde_json::from_str(l).unwrap())
                 .collect();
-            let written = written(&campaign, &dir, &records);
+            let plan = Plan::new(&campaign).unwrap();
+            let written = written(&plan, &dir, &records);
             let chosen: Vec<&Written> = written.iter().filter(|w| w.png.is_some()).collect();
             assert_eq!(chosen.len(), 4);
             let hidden = tmp.path().join("hidden-truth");
             std::fs::rename(dir.join("truth"), &hidden).unwrap();
-            let runs = run_detectors(&campaign, &chosen, None, &crate::progress::Silent).unwrap();
+            let runs = run_detectors(&plan, &chosen, None, &crate::progress::Silent).unwrap();
             assert_eq!(runs.len(), 1, "the streak detector");
             let found: usize = runs[0].detections.iter().map(Vec::len).sum();
             assert!(found > 0, "{stars}: the detector ran and found streaks");

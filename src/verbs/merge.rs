@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 
-use crate::campaign::{Campaign, Stage};
+use crate::campaign::Campaign;
 use crate::journal::Record;
 use crate::manifest::{self, Manifest};
 use crate::output::write_replacing;
@@ -17,6 +17,7 @@ use crate::pipeline::{self, RunSummary};
 use crate::progress::Progress;
 use crate::shard::{RECORDS, Section, Shard, TIMING};
 use crate::store;
+use crate::verbs::plan::Plan;
 
 /// One shard output, checked.
 struct Part {
@@ -57,16 +58,17 @@ pub fn merge(
             first.manifest.campaign_hash
         );
     }
+    let plan = Plan::new(&campaign)?;
     for p in &parts {
         let block = p.section.images[0]..p.section.images[1];
-        let check = crate::pipeline::record_check(&campaign, block);
+        let check = crate::pipeline::record_check(&plan, block);
         for r in &p.records {
             check(r).map_err(|why| {
                 anyhow::anyhow!("{}: a record is not the campaign's: {why}", p.dir.display())
             })?;
         }
     }
-    let inputs = campaign.input_hashes()?;
+    let inputs = plan.input_hashes()?;
     if inputs != first.manifest.inputs {
         bail!(
             "the input files beside the campaign ({}) are not those the shards were rendered from: {}",
@@ -74,14 +76,14 @@ pub fn merge(
             differing(&first.manifest.inputs, &inputs)
         );
     }
-    let python = if campaign.resolved.stages.contains(&Stage::Train) {
+    let python = if plan.stages.train {
         Some(crate::train::find_python(python)?)
     } else {
         None
     };
     let started = std::time::Instant::now();
     let mut steps = Vec::new();
-    let mut keep = crate::pipeline::keep_paths(&campaign);
+    let mut keep = plan.keep.clone();
     keep.extend(parts.iter().map(|p| p.dir.clone()));
     let keep: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
     let (digest, mix) = write_replacing(output, &keep, |dir| {
@@ -96,7 +98,7 @@ pub fn merge(
         steps.push(("merge", started.elapsed().as_secs_f64()));
         let records: Vec<Record> = parts.iter().flat_map(|p| p.records.clone()).collect();
         let (digest, mix, finished) =
-            pipeline::finish(&campaign, dir, &records, python.as_deref(), progress)?;
+            pipeline::finish(&plan, dir, &records, python.as_deref(), progress)?;
         steps.extend(finished);
         Ok((digest, mix))
     })?;

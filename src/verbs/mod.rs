@@ -8,6 +8,7 @@ pub(crate) mod detect_stage;
 pub mod launch;
 pub mod merge;
 pub mod pipeline;
+pub mod plan;
 pub mod study;
 pub mod summary;
 pub mod sweep;

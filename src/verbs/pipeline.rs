@@ -12,12 +12,11 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::artifacts::{self, Provenance, WrittenPng};
-use crate::campaign::{Campaign, Stage};
+use crate::artifacts::{self, WrittenPng};
+use crate::campaign::Campaign;
 use crate::dataset::{self, Subset};
 use crate::detect::yolo::YoloDetector;
-use crate::detect_stage::{Written, detect_and_report, yolo_params};
-use crate::experiment;
+use crate::detect_stage::{Written, detect_and_report};
 use crate::geometry::FrameKind;
 use crate::journal::{self, Identity, Journal, PngRecord, Record};
 use crate::manifest::{self, MANIFEST, Manifest};
@@ -30,6 +29,7 @@ use crate::simulate;
 use crate::store;
 pub use crate::train::{Chunk, parse_budget};
 use crate::train::{TRAIN_DIR, find_python, fit, volatile_files};
+use crate::verbs::plan::Plan;
 
 /// What a finished run reports.
 #[derive(Debug)]
@@ -60,19 +60,19 @@ pub struct DebrisCount {
 }
 
 /// Images per debris object, from the object index of each image.
-fn debris_mix(campaign: &Campaign, shown: impl Iterator<Item = Vec<usize>>) -> Vec<DebrisCount> {
-    let mut mix: Vec<DebrisCount> = campaign
+fn debris_mix(plan: &Plan, shown: impl Iterator<Item = Vec<usize>>) -> Vec<DebrisCount> {
+    let mut mix: Vec<DebrisCount> = plan
+        .objects
         .debris
         .iter()
-        .map(|d| DebrisCount {
-            object: d.name.clone(),
-            norad: d.norad,
+        .map(|(name, norad)| DebrisCount {
+            object: name.clone(),
+            norad: *norad,
             images: 0,
         })
         .collect();
     // A stare points at no debris object (its objects are the population's, in the truth).
-    let stare = campaign.resolved.pointing.stare.is_some();
-    for objects in shown.filter(|_| !stare) {
+    for objects in shown.filter(|_| !plan.objects.stare) {
         let mut objects = objects;
         objects.sort_unstable();
         objects.dedup();
@@ -115,36 +115,43 @@ pub fn run_with(
     python: Option<&Path>,
     progress: &dyn Progress,
 ) -> anyhow::Result<RunSummary> {
+    run_plan(&Plan::new(campaign)?, output, options, python, progress)
+}
+
+/// [`run_with`] of a campaign's plan.
+pub(crate) fn run_plan(
+    plan: &Plan,
+    output: &Path,
+    options: RunOptions,
+    python: Option<&Path>,
+    progress: &dyn Progress,
+) -> anyhow::Result<RunSummary> {
     if let Some(s) = options.shard {
-        s.check_against(campaign.resolved.images.into())?;
+        s.check_against(plan.images)?;
     }
     // Find the training Python and load the campaign's model before rendering anything, so a
     // missing interpreter or a bad model fails at once, not after every image. A shard neither
     // trains nor detects (its merge does).
     let whole = options.shard.is_none();
-    let python = if whole && campaign.resolved.stages.contains(&Stage::Train) {
+    let python = if whole && plan.stages.train {
         Some(find_python(python)?)
     } else {
         None
     };
-    if let (true, Some(m)) = (
-        campaign.resolved.stages.contains(&Stage::Detect),
-        &campaign.resolved.detect.model,
-    ) {
-        let path = campaign.base_dir.join(m);
-        YoloDetector::load(&path, yolo_params(campaign))
-            .map_err(|e| campaign.error_at("detect.model", e.to_string()))?;
+    if let (true, Some(path)) = (plan.stages.detect, &plan.detect.model) {
+        YoloDetector::load(path, plan.detect.yolo)
+            .map_err(|e| plan.error_at("detect.model", e.to_string()))?;
     }
-    let n = u64::from(campaign.resolved.images);
+    let n = plan.images;
     let images = options.shard.map_or(n, |s| {
         let share = s.images(n);
         share.end - share.start
     });
-    crate::work::check_run(campaign, images, options.force)?;
-    crate::disk::check(campaign, images, output, &|m| progress.note(m))?;
-    let inputs = campaign.input_hashes()?;
+    plan.check_work(images, options.force)?;
+    plan.check_disk(images, output, &|m| progress.note(m))?;
+    let inputs = plan.input_hashes()?;
     let id = Identity::new(
-        &campaign.hash,
+        &plan.hash,
         &crate::hash::hash_json(&inputs),
         options.shard.map(|s| (s.index, s.count)),
     );
@@ -160,11 +167,10 @@ pub fn run_with(
         matches: &matches,
         note: &note,
     };
-    let keep = keep_paths(campaign);
-    let keep: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
+    let keep: Vec<&Path> = plan.keep.iter().map(PathBuf::as_path).collect();
     let summary = write_resumable(output, &keep, &resume, |staging| {
         write_all(
-            campaign,
+            plan,
             staging,
             &id,
             options.shard,
@@ -178,24 +184,16 @@ pub fn run_with(
     })
 }
 
-/// What an output of `campaign` may not be or contain: the campaign's folder and its inputs.
-pub(crate) fn keep_paths(campaign: &Campaign) -> Vec<PathBuf> {
-    let mut keep = vec![campaign.base_dir.clone()];
-    keep.extend(campaign.input_paths());
-    keep
-}
-
-/// The check of a journal or shard record against `campaign` (see `journal::Check`): its
+/// The check of a journal or shard record against `plan` (see `journal::Check`): its
 /// index within `share`, its debris object one of the campaign's, its files exactly those
 /// its image writes, its PNG there exactly when the campaign enhances, with a finite label
 /// inside it, and a finite trail angle.
-pub(crate) fn record_check(
-    campaign: &Campaign,
+pub(crate) fn record_check<'p>(
+    plan: &'p Plan,
     share: std::ops::Range<u64>,
-) -> impl Fn(&Record) -> Result<(), String> + Sync + use<'_> {
-    let c = &campaign.resolved;
-    let enhance = c.stages.contains(&Stage::Enhance);
-    let subsets = subsets(c);
+) -> impl Fn(&Record) -> Result<(), String> + Sync + use<'p> {
+    let enhance = plan.stages.enhance;
+    let debris = plan.objects.debris.len();
     move |r: &Record| {
         if !share.contains(&r.index) {
             return Err(format!(
@@ -205,24 +203,23 @@ pub(crate) fn record_check(
         }
         // A stare points at no debris object; a catalogue scene's objects are the population's.
         if let Some(i) = std::iter::once(r.debris_index)
-            .filter(|_| c.pointing.stare.is_none())
+            .filter(|_| !plan.objects.stare)
             .chain(r.objects.iter().flatten().copied())
-            .find(|&i| i >= campaign.debris.len())
+            .find(|&i| i >= debris)
         {
             return Err(format!(
-                "debris index {i} of image {}, the campaign has {} debris object(s)",
+                "debris index {i} of image {}, the campaign has {debris} debris object(s)",
                 r.index,
-                campaign.debris.len()
             ));
         }
-        if r.objects.is_some() != c.objects.is_some() {
+        if r.objects.is_some() != plan.objects.listed {
             return Err(format!(
                 "image {}: a list of objects where the campaign has no `[objects]`, or none where it has",
                 r.index
             ));
         }
-        let subset = subsets.as_ref().map(|s| s[r.index as usize]);
-        let expected = artifacts::expected_files(r.index, subset, &c.artifacts, enhance);
+        let subset = plan.subset(r.index);
+        let expected = artifacts::expected_files(r.index, subset, &plan.artifacts, enhance);
         if !r.files.keys().eq(expected.iter()) {
             return Err(format!(
                 "image {} names files {:?}, not its {:?}",
@@ -282,33 +279,33 @@ pub fn train(
     chunk: Chunk,
     progress: &dyn Progress,
 ) -> anyhow::Result<Option<PathBuf>> {
-    if campaign.resolved.stages.contains(&Stage::Train) {
+    let plan = Plan::new(campaign)?;
+    if plan.stages.train {
         if chunk.budget_s.is_some() || chunk.epochs.is_some() || chunk.resume {
             anyhow::bail!(
                 "--budget, --chunk-epochs and --resume train a dataset in chunks: take `train` out of the campaign's stages"
             );
         }
         // The pipeline finds (and checks) the interpreter itself.
-        run(campaign, out, python, progress)?;
+        run_plan(&plan, out, RunOptions::default(), python, progress)?;
         return Ok(Some(out.join(TRAIN_DIR).join("model.onnx")));
     }
     // Refused before anything is written: an output that is or holds an input (the starting
     // weights of a chunk trained before, `OUT/train/.../best.pt`), which training replaces.
-    let keep = keep_paths(campaign);
-    let keep: Vec<&Path> = keep.iter().map(PathBuf::as_path).collect();
+    let keep: Vec<&Path> = plan.keep.iter().map(PathBuf::as_path).collect();
     crate::output::check_folder(out, &keep)?;
     let python = find_python(python)?;
     let reusable = out.join(MANIFEST).is_file()
         && manifest::verify(out)
-            .is_ok_and(|(m, problems)| problems.is_empty() && m.campaign_hash == campaign.hash);
+            .is_ok_and(|(m, problems)| problems.is_empty() && m.campaign_hash == plan.hash);
     if !reusable {
         progress.note(&format!(
             "soig train: writing the dataset into {}",
             out.display()
         ));
-        run(campaign, out, None, progress)?;
+        run_plan(&plan, out, RunOptions::default(), None, progress)?;
     }
-    let trained = fit(campaign, out, &python, chunk, progress)?;
+    let trained = fit(&plan, out, &python, chunk, progress)?;
     let old = Manifest::read(out)?;
     let mut volatile = volatile_files(out)?;
     volatile.extend(old.volatile.iter().cloned());
@@ -316,7 +313,7 @@ pub fn train(
     volatile.dedup();
     seal_manifest(
         out,
-        campaign,
+        &plan,
         old.campaign.clone(),
         &volatile,
         Some(trained.record),
@@ -329,15 +326,15 @@ pub fn train(
 /// mix, and write it.
 fn seal_manifest(
     dir: &Path,
-    campaign: &Campaign,
+    plan: &Plan,
     resolved: serde_json::Value,
     volatile: &[String],
     training: Option<serde_json::Value>,
     debris_mix: Option<serde_json::Value>,
 ) -> anyhow::Result<Manifest> {
-    let mut m = Manifest::build(dir, &campaign.hash, resolved, volatile)?;
+    let mut m = Manifest::build(dir, &plan.hash, resolved, volatile)?;
     m.debris_mix = debris_mix;
-    seal(&mut m, dir, campaign, training)?;
+    seal(&mut m, dir, plan, training)?;
     Ok(m)
 }
 
@@ -345,17 +342,14 @@ fn seal_manifest(
 fn seal(
     m: &mut Manifest,
     dir: &Path,
-    campaign: &Campaign,
+    plan: &Plan,
     training: Option<serde_json::Value>,
 ) -> anyhow::Result<()> {
-    m.effective = Some(serde_json::to_value(crate::experiment::effective(
-        &crate::experiment::of(campaign),
-        campaign,
-    ))?);
+    m.effective = Some(plan.effective.clone());
     if training.is_some() {
         m.training = training;
     }
-    m.inputs = campaign.input_hashes()?;
+    m.inputs = plan.input_hashes()?;
     m.seal();
     m.write(dir)?;
     Ok(())
@@ -364,7 +358,7 @@ fn seal(
 /// Write the campaign (or its shard) into staging directory `dir`, resuming what its journal
 /// holds. The summary's `output` is `dir`.
 fn write_all(
-    campaign: &Campaign,
+    plan: &Plan,
     dir: &Path,
     id: &Identity,
     shard: Option<Shard>,
@@ -388,22 +382,29 @@ fn write_all(
             steps: Vec::new(),
         });
     }
-    let n = u64::from(campaign.resolved.images);
+    let n = plan.images;
     let share = shard.map_or(0..n, |s| s.images(n));
-    let check = record_check(campaign, share.clone());
+    let check = record_check(plan, share.clone());
     let (journal, done) = Journal::open(dir, id, &check)?;
     let resumed = done.len();
-    let (records, rendered, seconds) = render(campaign, dir, &journal, done, share, progress)?;
+    let (records, rendered, seconds) = render(plan, dir, &journal, done, share, progress)?;
     let mut steps = vec![("render", seconds)];
     let (digest, mix) = match shard {
         Some(s) => {
             let started = Instant::now();
-            let digest = crate::shard::seal(campaign, dir, s, &records)?;
+            let seal = crate::shard::Seal {
+                hash: &plan.hash,
+                resolved: &plan.resolved,
+                images: plan.images,
+                campaign_dir: &plan.campaign_dir,
+                inputs: plan.input_hashes()?,
+            };
+            let digest = crate::shard::seal(&seal, dir, s, &records)?;
             steps.push(("manifest", started.elapsed().as_secs_f64()));
             (digest, Vec::new())
         }
         None => {
-            let (digest, mix, finished) = finish(campaign, dir, &records, python, progress)?;
+            let (digest, mix, finished) = finish(plan, dir, &records, python, progress)?;
             steps.extend(finished);
             (digest, mix)
         }
@@ -423,20 +424,18 @@ fn write_all(
 /// Render the images of `share` that `done` lacks into `dir`, journaling each. Returns the
 /// records of every image of `share`, by index, how many were rendered and the time taken.
 fn render(
-    campaign: &Campaign,
+    plan: &Plan,
     dir: &Path,
     journal: &Journal,
     mut done: Vec<Record>,
     share: std::ops::Range<u64>,
     progress: &dyn Progress,
 ) -> anyhow::Result<(Vec<Record>, usize, f64)> {
-    let c = &campaign.resolved;
-    let enhance_stage = c.stages.contains(&Stage::Enhance);
-    let dataset_stage = c.stages.contains(&Stage::Dataset);
-    let subsets = subsets(c);
+    let enhance_stage = plan.stages.enhance;
+    let dataset_stage = plan.stages.dataset;
 
     let mut dirs = vec![dir.join("truth")];
-    if c.artifacts.fits || c.artifacts.noise_free_fits {
+    if plan.artifacts.fits || plan.artifacts.noise_free_fits {
         dirs.push(dir.join("fits"));
     }
     if enhance_stage {
@@ -449,22 +448,15 @@ fn render(
             dirs.push(dir.join("images"));
             dirs.push(dir.join("labels"));
         }
-        let streak_sets = crate::streak_labels::dirs(&c.artifacts, dataset_stage);
+        let streak_sets = crate::streak_labels::dirs(&plan.artifacts, dataset_stage);
         dirs.extend(streak_sets.iter().map(|d| dir.join(d)));
     }
     for d in &dirs {
         store::fs::create_dir_all(d)?;
     }
 
-    let x = crate::experiment::of(campaign);
-    let inputs = experiment::inputs(campaign)?;
-    let provenance = Provenance {
-        campaign: c.name.clone(),
-        campaign_hash: campaign.hash.clone(),
-        seed: c.seed,
-        observer: campaign.observer.name().to_string(),
-        site: campaign.observer.ground().map(|g| g.site),
-    };
+    let x = &plan.experiment;
+    let inputs = plan.inputs()?;
     let have: std::collections::BTreeSet<u64> = done.iter().map(|r| r.index).collect();
     let todo: Vec<u64> = share.filter(|i| !have.contains(i)).collect();
     progress.start("render", todo.len() as u64);
@@ -474,15 +466,15 @@ fn render(
         .par_iter()
         .map(|&i| -> anyhow::Result<Record> {
             crate::progress::check(progress)?;
-            let subset = subsets.as_ref().map(|s| s[i as usize]);
-            let products = simulate::image(&x, &inputs, i).map_err(|e| {
+            let subset = plan.subset(i);
+            let products = simulate::image(x, &inputs, i).map_err(|e| {
                 // Draws meet the checks in turn, so a rare reason can be the one that matters.
                 let fields: Vec<String> = e
                     .reasons_by_count()
                     .into_iter()
                     .map(|r| format!("{r}: {}", rejection_fields(r)))
                     .collect();
-                let at = campaign.error_at(
+                let at = plan.error_at(
                     &format!("debris[{}]", e.debris_index),
                     format!(
                         "{e}; remove the object, lower its `weight` or relax the rules (an object no draw shows is an error, not a silently smaller share); what decides each rejection: {}",
@@ -499,25 +491,20 @@ fn render(
                 .filter(|v| !v.is_finite())
                 .count();
             if bad > 0 {
-                anyhow::bail!(
-                    "image {i}: {bad} non-finite pixels in the noisy image (sensor.gain_e_per_adu {}, background {:?})",
-                    c.sensor.gain_e_per_adu,
-                    c.background
-                );
+                return Err(plan.non_finite_pixels(i, bad));
             }
             let image = artifacts::write_image(
                 dir,
                 i,
                 &products,
                 subset,
-                &c.artifacts,
-                &provenance,
+                &plan.artifacts,
+                &plan.provenance,
                 &x.sensor,
             )?;
             let conversion_s = products.product.as_ref().map_or(0.0, |p| p.seconds)
                 + image.png.as_ref().map_or(0.0, |p| p.seconds);
-            let trail_angle_deg: Option<f64> = match (&products.scene.pointing, c.enhance.geometry)
-            {
+            let trail_angle_deg: Option<f64> = match (&products.scene.pointing, plan.frame) {
                 (Pointing::Fixed { .. }, _) => None,
                 (_, FrameKind::Rotated) => Some(0.0),
                 (p, _) => p.trail_angle_deg(),
@@ -554,28 +541,13 @@ fn render(
     Ok((done, count, seconds))
 }
 
-/// Each image's subset of the split (collects kept together), where the campaign has a dataset
-/// stage; None without one (no split).
-fn subsets(c: &crate::campaign::CampaignFile) -> Option<Vec<Subset>> {
-    c.stages.contains(&Stage::Dataset).then(|| {
-        dataset::assign_collects(
-            c.seed,
-            c.images as usize,
-            c.collect_frames() as usize,
-            c.split.train,
-            c.split.val,
-        )
-    })
-}
-
 /// What each image of `records` left for the detect stage, its files in `dir` (a run's
 /// staging directory, a merge's, or a shard's).
-pub(crate) fn written(campaign: &Campaign, dir: &Path, records: &[Record]) -> Vec<Written> {
-    let subsets = subsets(&campaign.resolved);
+pub(crate) fn written(plan: &Plan, dir: &Path, records: &[Record]) -> Vec<Written> {
     records
         .iter()
         .map(|r| {
-            let subset = subsets.as_ref().map(|s| s[r.index as usize]);
+            let subset = plan.subset(r.index);
             Written {
                 index: r.index,
                 subset,
@@ -598,7 +570,7 @@ pub(crate) fn written(campaign: &Campaign, dir: &Path, records: &[Record]) -> Ve
 /// digest is returned with the debris mix and each step's wall time. A single run and a merge
 /// of shards both end here.
 pub(crate) fn finish(
-    campaign: &Campaign,
+    plan: &Plan,
     dir: &Path,
     records: &[Record],
     python: Option<&Path>,
@@ -610,28 +582,23 @@ pub(crate) fn finish(
         steps.push((name, step.elapsed().as_secs_f64()));
         step = Instant::now();
     };
-    let c = &campaign.resolved;
-    let stages = &c.stages;
-    let dataset_stage = stages.contains(&Stage::Dataset);
-    let subsets = subsets(c);
-    let written = written(campaign, dir, records);
+    let written = written(plan, dir, records);
 
-    if dataset_stage {
+    if plan.stages.dataset {
         store::fs::create(
             &dir.join("data.yaml"),
-            dataset::data_yaml(&c.name, &campaign.hash),
+            dataset::data_yaml(&plan.name, &plan.hash),
         )?;
-        for set in crate::streak_labels::sets(&c.artifacts) {
+        for set in crate::streak_labels::sets(&plan.artifacts) {
             store::fs::create(
                 &dir.join(set.dir()).join("data.yaml"),
-                set.data_yaml(&c.name, &campaign.hash),
+                set.data_yaml(&plan.name, &plan.hash),
             )?;
         }
     }
-    if c.collect_frames() > 1 {
+    if plan.collect_frames > 1 {
         let indices: Vec<u64> = records.iter().map(|r| r.index).collect();
-        let subset = |i: u64| subsets.as_ref().map(|s| s[i as usize]);
-        crate::collect::write_manifests(dir, &indices, subset)?;
+        crate::collect::write_manifests(dir, &indices, |i| plan.subset(i))?;
     }
     journal::abort_if_testing("dataset");
     // The dataset's own digest goes into the report: taken before training and detection add
@@ -641,28 +608,27 @@ pub(crate) fn finish(
         .iter()
         .flat_map(|r| r.files.iter().map(|(f, sha)| (f.as_str(), sha.as_str())))
         .collect();
-    let dataset_digest = if stages.contains(&Stage::Detect) {
-        let resolved = serde_json::to_value(c)?;
-        Manifest::build_knowing(dir, &campaign.hash, resolved, &[], &known)?.digest
+    let dataset_digest = if plan.stages.detect {
+        Manifest::build_knowing(dir, &plan.hash, plan.resolved.clone(), &[], &known)?.digest
     } else {
         String::new()
     };
     lap("dataset");
     let trained = match python {
-        Some(python) => Some(fit(campaign, dir, python, Chunk::default(), progress)?),
+        Some(python) => Some(fit(plan, dir, python, Chunk::default(), progress)?),
         None => None,
     };
     if trained.is_some() {
         lap("train");
     }
-    if stages.contains(&Stage::Detect) {
+    if plan.stages.detect {
         // A train stage's model, else the campaign's (validation allows one, not both).
         let model = match &trained {
             Some(t) => t.model.clone(),
-            None => c.detect.model.as_ref().map(|m| campaign.base_dir.join(m)),
+            None => plan.detect.model.clone(),
         };
         detect_and_report(
-            campaign,
+            plan,
             dir,
             &written,
             &dataset_digest,
@@ -672,17 +638,16 @@ pub(crate) fn finish(
         lap("detect");
     }
     // The exports read the labels and the predictions back, so they come after the report.
-    let a = &c.artifacts;
+    let a = &plan.artifacts;
     if a.coco || a.ds9_regions || a.tdm {
         let formats = crate::export::Formats {
             coco: a.coco,
             ds9: a.ds9_regions,
             tdm: a.tdm,
         };
-        let resolved = serde_json::to_value(c)?;
         crate::export::write(
             dir,
-            &resolved,
+            &plan.resolved,
             &dir.join(crate::export::EXPORT_DIR),
             formats,
         )?;
@@ -695,16 +660,11 @@ pub(crate) fn finish(
     if trained.is_some() {
         volatile.extend(volatile_files(dir)?);
     }
-    let mix = debris_mix(campaign, records.iter().map(Record::shown));
-    let mut manifest = Manifest::build_knowing(
-        dir,
-        &campaign.hash,
-        serde_json::to_value(c)?,
-        &volatile,
-        &known,
-    )?;
+    let mix = debris_mix(plan, records.iter().map(Record::shown));
+    let mut manifest =
+        Manifest::build_knowing(dir, &plan.hash, plan.resolved.clone(), &volatile, &known)?;
     manifest.debris_mix = Some(serde_json::to_value(&mix)?);
-    seal(&mut manifest, dir, campaign, trained.map(|t| t.record))?;
+    seal(&mut manifest, dir, plan, trained.map(|t| t.record))?;
     journal::abort_if_testing("manifest");
     lap("manifest");
     Ok((manifest.digest, mix, steps))

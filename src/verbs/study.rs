@@ -13,7 +13,7 @@ use anyhow::Context;
 use serde::Serialize;
 
 use crate::campaign::Campaign;
-use crate::experiment::{self, Experiment};
+use crate::experiment::Experiment;
 use crate::geometry::{BoxPx, LABEL_SHARE, flux_box};
 use crate::manifest::Manifest;
 use crate::render::expected::expected_flux;
@@ -21,6 +21,7 @@ use crate::render::{Jitter, RenderMethod, render_with_jitter};
 use crate::rng::{PixelPurpose, pixel_stream};
 use crate::scene::{self, Inputs, MAX_TRAJECTORY_SAMPLES, Scene};
 use crate::store::fs;
+use crate::verbs::plan::Plan;
 
 /// The reference takes this many times the campaign's trajectory samples and jitter steps.
 const REFERENCE_REFINEMENT: u32 = 10;
@@ -95,28 +96,29 @@ struct Setting {
 
 /// Run the study into `out`, whole or not at all.
 pub fn run(campaign: &Campaign, out: &Path, opts: &Options) -> anyhow::Result<Summary> {
+    let plan = Plan::new(campaign)?;
     anyhow::ensure!(
         opts.seeds >= 2,
         "--seeds must be at least 2 (got {})",
         opts.seeds
     );
     anyhow::ensure!(
-        opts.image < campaign.resolved.images as u64,
+        opts.image < plan.images,
         "--image {} is past the campaign's {} images",
         opts.image,
-        campaign.resolved.images
+        plan.images
     );
     if !opts.force {
-        check_work(campaign, opts)?;
+        check_work(&plan, opts)?;
     }
-    crate::output::write_replacing(out, &[&campaign.base_dir], |dir| study(campaign, dir, opts))
+    crate::output::write_replacing(out, &[&plan.campaign_dir], |dir| study(&plan, dir, opts))
 }
 
 /// Refuse a study whose settings times seeds would take beyond `work::MAX_SECONDS`, saying so.
-fn check_work(campaign: &Campaign, opts: &Options) -> anyhow::Result<()> {
-    let base = crate::experiment::of(campaign);
+fn check_work(plan: &Plan, opts: &Options) -> anyhow::Result<()> {
+    let base = &plan.experiment;
     let ref_steps = base.render.jitter_steps * REFERENCE_REFINEMENT as usize;
-    let settings = settings(&base, opts.quick, ref_steps);
+    let settings = settings(base, opts.quick, ref_steps);
     let per_seed: f64 = settings
         .iter()
         .map(|s| crate::render::cost::image(&s.x).seconds)
@@ -136,10 +138,10 @@ fn check_work(campaign: &Campaign, opts: &Options) -> anyhow::Result<()> {
 }
 
 /// The study itself, its files written into `dir`.
-fn study(campaign: &Campaign, dir: &Path, opts: &Options) -> anyhow::Result<Summary> {
+fn study(plan: &Plan, dir: &Path, opts: &Options) -> anyhow::Result<Summary> {
     let started = Instant::now();
-    let inputs = experiment::inputs(campaign)?;
-    let base = crate::experiment::of(campaign);
+    let inputs = plan.inputs()?;
+    let base = plan.experiment.clone();
 
     // The reference: exact renderer, no merging, refined trajectory and jitter path.
     let ref_samples = base
@@ -194,7 +196,7 @@ fn study(campaign: &Campaign, dir: &Path, opts: &Options) -> anyhow::Result<Summ
             &s, &scene, &path, &truth, opts.seeds, &inputs, scene_ms,
         ));
     }
-    write(dir, campaign, opts, &rows, ref_samples, ref_steps)?;
+    write(dir, plan, opts, &rows, ref_samples, ref_steps)?;
     Ok(Summary {
         rows,
         seconds: started.elapsed().as_secs_f64(),
@@ -404,7 +406,7 @@ fn centroid(img: &[f64], width: usize) -> Option<(f64, f64)> {
 /// times: volatile), and the manifest.
 fn write(
     out: &Path,
-    campaign: &Campaign,
+    plan: &Plan,
     opts: &Options,
     rows: &[Row],
     ref_samples: usize,
@@ -412,8 +414,8 @@ fn write(
 ) -> anyhow::Result<()> {
     fs::create_dir_all(out)?;
     let params = serde_json::json!({
-        "campaign": campaign.resolved.name,
-        "campaign_hash": campaign.hash,
+        "campaign": plan.name,
+        "campaign_hash": plan.hash,
         "image": opts.image,
         "seeds": opts.seeds,
         "quick": opts.quick,
@@ -457,31 +459,26 @@ fn write(
     )?;
     fs::create(
         &out.join("study.md"),
-        table(campaign, opts, rows, ref_samples, ref_steps),
+        table(plan, opts, rows, ref_samples, ref_steps),
     )?;
     plot(&out.join("study.png"), rows)?;
     let volatile: Vec<String> = VOLATILE.iter().map(|v| v.to_string()).collect();
-    let manifest = Manifest::build(
-        out,
-        &campaign.hash,
-        serde_json::to_value(&campaign.resolved)?,
-        &volatile,
-    )?;
+    let manifest = Manifest::build(out, &plan.hash, plan.resolved.clone(), &volatile)?;
     manifest.write(out)?;
     Ok(())
 }
 
 fn table(
-    campaign: &Campaign,
+    plan: &Plan,
     opts: &Options,
     rows: &[Row],
     ref_samples: usize,
     ref_steps: usize,
 ) -> String {
-    let r = &campaign.resolved.render;
+    let r = &plan.render;
     let mut s = format!(
         "# Render settings: error against run time\n\nCampaign `{}`, image {}, {} photon seeds per setting, one fixed jitter path. Each knob varies alone; the others stay at the campaign's values (method {}, merge_factor {}, merge_threshold {}, trajectory_samples {}, jitter_steps {}). Reference: the expected-flux renderer, no merging, {ref_samples} trajectory samples, {ref_steps} jitter steps; errors are on the noise-free photon image.\n\n",
-        campaign.resolved.name,
+        plan.name,
         opts.image,
         opts.seeds,
         r.method.name(),

@@ -15,11 +15,11 @@ use std::process::Command;
 
 use anyhow::{Context, bail};
 
-use crate::campaign::Campaign;
 use crate::hash::sha256_file;
 use crate::manifest;
 use crate::progress::Progress;
 use crate::store::fs;
+use crate::verbs::plan::{Plan, TrainPlan};
 
 /// The training driver, shipped inside the binary so a run records exactly what trained it.
 pub const TRAIN_PY: &str = include_str!("../../python/train.py");
@@ -110,7 +110,7 @@ pub fn volatile_files(out: &Path) -> anyhow::Result<Vec<String>> {
 /// it; once the schedule is done, export ONNX to `out/train/model.onnx` and check that the
 /// detector loads it.
 pub fn fit(
-    campaign: &Campaign,
+    plan: &Plan,
     out: &Path,
     python: &Path,
     chunk: Chunk,
@@ -124,7 +124,7 @@ pub fn fit(
         );
     }
     // Checked before the last training is removed.
-    let (model_arg, start_weights) = start_weights(campaign)?;
+    let (model_arg, start_weights) = start_weights(&plan.train)?;
     let tdir = out.join(TRAIN_DIR);
     let chunk_no = if chunk.resume {
         resumable_chunks(&tdir)? + 1
@@ -145,7 +145,7 @@ pub fn fit(
             script.display()
         );
     }
-    let args = script_args(&script, &data, &tdir, model_arg, campaign, chunk);
+    let args = script_args(&script, &data, &tdir, model_arg, &plan.train, chunk);
     // One log per chunk: the first keeps the name whole runs always had.
     let log_name = if chunk_no == 1 {
         "train.log".to_string()
@@ -207,17 +207,16 @@ pub fn fit(
 /// The `--model` argument and, for starting weights (a .pt beside the campaign, hashed into the
 /// record), their path and sha256; a model YAML names an architecture that Ultralytics builds
 /// from scratch.
-fn start_weights(campaign: &Campaign) -> anyhow::Result<(String, Option<serde_json::Value>)> {
-    let t = &campaign.resolved.train;
-    Ok(if t.model.ends_with(".pt") {
-        let pt = campaign.base_dir.join(&t.model);
+fn start_weights(train: &TrainPlan) -> anyhow::Result<(String, Option<serde_json::Value>)> {
+    let t = &train.settings;
+    Ok(if let Some(pt) = &train.weights {
         if !pt.is_file() {
             bail!(
                 "train.model: starting weights {} not found (relative to the campaign file)",
                 pt.display()
             );
         }
-        let sha = sha256_file(&pt)?.0;
+        let sha = sha256_file(pt)?.0;
         (
             pt.display().to_string(),
             Some(serde_json::json!({"path": t.model, "sha256": sha})),
@@ -233,11 +232,11 @@ fn script_args(
     data: &Path,
     tdir: &Path,
     model_arg: String,
-    campaign: &Campaign,
+    train: &TrainPlan,
     chunk: Chunk,
 ) -> Vec<String> {
-    let t = &campaign.resolved.train;
-    let (imgsz, batch) = crate::experiment::train_size_and_batch(campaign);
+    let t = &train.settings;
+    let (imgsz, batch) = (train.imgsz, train.batch);
     let mut args: Vec<String> = vec![
         script.display().to_string(),
         "--data".into(),
