@@ -80,15 +80,79 @@ pub(super) fn label_components(
     (label, parent.len())
 }
 
+/// A component's pixel count and first and second moments of its pixel places.
 #[derive(Default, Clone, Copy)]
-struct Acc {
-    n: u64,
-    peak: f32,
+pub(super) struct Moments {
+    pub(super) n: usize,
     sx: f64,
     sy: f64,
     sxx: f64,
     sxy: f64,
     syy: f64,
+}
+
+/// A component's centroid and principal axes from its [`Moments`] (pixels as unit squares).
+pub(super) struct Shape {
+    pub(super) cx: f64,
+    pub(super) cy: f64,
+    /// The major axis' direction, radians in (-pi/2, pi/2].
+    pub(super) theta: f64,
+    /// Variance along the major and the minor axis, px^2.
+    pub(super) major: f64,
+    pub(super) minor: f64,
+}
+
+impl Moments {
+    fn add(&mut self, x: usize, y: usize) {
+        let (xf, yf) = (x as f64, y as f64);
+        self.n += 1;
+        self.sx += xf;
+        self.sy += yf;
+        self.sxx += xf * xf;
+        self.sxy += xf * yf;
+        self.syy += yf * yf;
+    }
+
+    pub(super) fn shape(&self) -> Shape {
+        let n = self.n as f64;
+        let (cx, cy) = (self.sx / n, self.sy / n);
+        let mxx = self.sxx / n - cx * cx + 1.0 / 12.0;
+        let myy = self.syy / n - cy * cy + 1.0 / 12.0;
+        let mxy = self.sxy / n - cx * cy;
+        let tr = 0.5 * (mxx + myy);
+        let det = (0.25 * (mxx - myy) * (mxx - myy) + mxy * mxy).sqrt();
+        Shape {
+            cx,
+            cy,
+            theta: 0.5 * (2.0 * mxy).atan2(mxx - myy),
+            major: tr + det,
+            minor: tr - det,
+        }
+    }
+}
+
+/// The [`Moments`] of each of the `roots` components of `label` (`w` x `h`), in row order,
+/// calling `also(root, pixel, x, y)` on every labelled pixel for what a caller adds up beside.
+pub(super) fn moments_by_label(
+    label: &[u32],
+    roots: usize,
+    w: usize,
+    h: usize,
+    mut also: impl FnMut(usize, usize, usize, usize),
+) -> Vec<Moments> {
+    let mut moments = vec![Moments::default(); roots];
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            if label[i] == NONE {
+                continue;
+            }
+            let root = label[i] as usize;
+            moments[root].add(x, y);
+            also(root, i, x, y);
+        }
+    }
+    moments
 }
 
 #[inline(never)]
@@ -112,46 +176,25 @@ pub(super) fn components(
         |i| !(best[i].is_nan() || best[i] < thr),
         |i, ni| compat(arg[ni], arg[i]),
     );
-    let mut accs = vec![Acc::default(); roots];
-    for y in 0..h {
-        for x in 0..w {
-            let i = y * w + x;
-            if label[i] == NONE {
-                continue;
-            }
-            let a = &mut accs[label[i] as usize];
-            let (xf, yf) = (x as f64, y as f64);
-            a.n += 1;
-            a.peak = a.peak.max(best[i]);
-            a.sx += xf;
-            a.sy += yf;
-            a.sxx += xf * xf;
-            a.sxy += xf * yf;
-            a.syy += yf * yf;
-        }
-    }
+    let mut peaks = vec![0f32; roots];
+    let moments = moments_by_label(&label, roots, w, h, |root, i, _, _| {
+        peaks[root] = peaks[root].max(best[i]);
+    });
     let mut out = Vec::new();
-    for a in accs {
-        if (a.n as usize) < p.min_pixels || a.peak < p.seed {
+    for (m, peak) in moments.iter().zip(peaks) {
+        if m.n < p.min_pixels || peak < p.seed {
             continue;
         }
-        let n = a.n as f64;
-        let (cx, cy) = (a.sx / n, a.sy / n);
-        let mxx = a.sxx / n - cx * cx + 1.0 / 12.0;
-        let myy = a.syy / n - cy * cy + 1.0 / 12.0;
-        let mxy = a.sxy / n - cx * cy;
-        let theta = 0.5 * (2.0 * mxy).atan2(mxx - myy);
-        let tr = 0.5 * (mxx + myy);
-        let det = (0.25 * (mxx - myy) * (mxx - myy) + mxy * mxy).sqrt();
-        let l1 = tr + det;
-        let half_len = (3.0 * l1).sqrt();
+        let s = m.shape();
+        // A uniform line of length L has variance L^2 / 12 along it.
+        let half_len = (3.0 * s.major).sqrt();
         if 2.0 * half_len < p.min_fragment {
             continue;
         }
         out.push(Component {
-            cx,
-            cy,
-            theta,
+            cx: s.cx,
+            cy: s.cy,
+            theta: s.theta,
             half_len,
         });
     }

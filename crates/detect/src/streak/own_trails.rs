@@ -8,7 +8,7 @@
 //! uncertainty) is the trails', when enough of them share it. Point stars give round features,
 //! and a frame of them no common direction.
 
-use super::components::{NONE, label_components};
+use super::components::{label_components, moments_by_label};
 use super::output::Candidate;
 use super::segment::angle_diff_deg;
 use super::stats::median_of;
@@ -354,60 +354,29 @@ fn features(z: &[f32], w: usize, h: usize) -> Vec<Feature> {
         |i| !(z[i].is_nan() || z[i] < FEATURE_SIGMA),
         |_, _| true,
     );
-    // Per root: count, sum of levels, moments, and whether it reaches the edge.
-    #[derive(Clone, Copy, Default)]
-    struct Acc {
-        n: usize,
-        sz: f64,
-        sx: f64,
-        sy: f64,
-        sxx: f64,
-        sxy: f64,
-        syy: f64,
-        edge: bool,
-    }
-    let mut accs = vec![Acc::default(); roots];
-    for y in 0..h {
-        for x in 0..w {
-            let i = y * w + x;
-            if label[i] == NONE {
-                continue;
-            }
-            let a = &mut accs[label[i] as usize];
-            let (xf, yf) = (x as f64, y as f64);
-            a.n += 1;
-            a.sz += z[i] as f64;
-            a.sx += xf;
-            a.sy += yf;
-            a.sxx += xf * xf;
-            a.sxy += xf * yf;
-            a.syy += yf * yf;
-            a.edge |= x == 0 || y == 0 || x + 1 == w || y + 1 == h;
-        }
-    }
+    // Per root, beside its moments: the sum of levels and whether it reaches the edge.
+    let (mut levels, mut edges) = (vec![0f64; roots], vec![false; roots]);
+    let moments = moments_by_label(&label, roots, w, h, |root, i, x, y| {
+        levels[root] += z[i] as f64;
+        edges[root] |= x == 0 || y == 0 || x + 1 == w || y + 1 == h;
+    });
     // Block (i, j) covers the frame's pixels BIN i ..= BIN (i + 1) - 1.
     let b = BIN as f64;
-    accs.iter()
-        .filter(|a| a.n >= MIN_PIXELS)
-        .map(|a| {
-            let n = a.n as f64;
-            let (cx, cy) = (a.sx / n, a.sy / n);
-            let mxx = a.sxx / n - cx * cx + 1.0 / 12.0;
-            let myy = a.syy / n - cy * cy + 1.0 / 12.0;
-            let mxy = a.sxy / n - cx * cy;
-            let tr = 0.5 * (mxx + myy);
-            let det = (0.25 * (mxx - myy) * (mxx - myy) + mxy * mxy).sqrt();
+    moments
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.n >= MIN_PIXELS)
+        .map(|(root, m)| {
+            let s = m.shape();
             Feature {
-                level: a.sz / n,
-                cx: b * cx + 0.5 * (b - 1.0),
-                cy: b * cy + 0.5 * (b - 1.0),
-                angle_deg: (0.5 * (2.0 * mxy).atan2(mxx - myy))
-                    .to_degrees()
-                    .rem_euclid(180.0),
+                level: levels[root] / m.n as f64,
+                cx: b * s.cx + 0.5 * (b - 1.0),
+                cy: b * s.cy + 0.5 * (b - 1.0),
+                angle_deg: s.theta.to_degrees().rem_euclid(180.0),
                 // A uniform line of length L has variance L^2 / 12 along it.
-                length: b * (12.0 * (tr + det)).sqrt(),
-                width: b * (tr - det).max(0.0).sqrt(),
-                at_edge: a.edge,
+                length: b * (12.0 * s.major).sqrt(),
+                width: b * s.minor.max(0.0).sqrt(),
+                at_edge: edges[root],
             }
         })
         .collect()
