@@ -142,13 +142,7 @@ impl NativeCampaign {
                 Ok(Prepared {
                     experiment: soig::experiment::of(&c),
                     inputs: soig::experiment::inputs(&c)?,
-                    provenance: soig::Provenance {
-                        campaign: c.resolved.name.clone(),
-                        campaign_hash: c.hash.clone(),
-                        seed: c.resolved.seed,
-                        observer: c.observer.name().to_string(),
-                        site: c.observer.ground().map(|g| g.site),
-                    },
+                    provenance: soig::Provenance::of(&c),
                 })
             })
             .map_err(to_py)?;

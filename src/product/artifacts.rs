@@ -28,6 +28,20 @@ pub struct Provenance {
     pub site: Option<crate::sky::site::Site>,
 }
 
+impl Provenance {
+    /// What the files of `campaign`'s images say of where they come from (the run's `Plan` and
+    /// Python's `Campaign.image` both take it from here).
+    pub fn of(campaign: &crate::campaign::Campaign) -> Provenance {
+        Provenance {
+            campaign: campaign.resolved.name.clone(),
+            campaign_hash: campaign.hash.clone(),
+            seed: campaign.resolved.seed,
+            observer: campaign.observer.name().to_string(),
+            site: campaign.observer.ground().map(|g| g.site),
+        }
+    }
+}
+
 /// File stem of image i.
 pub fn stem(i: u64) -> String {
     format!("img_{i:06}")
