@@ -182,6 +182,10 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "0479280e90cadcaa107db5684bdf889d5851a2df6325c15582c66d00bd798067",
     ),
     (
+        "results/campaigns/faint-limit-survey.toml",
+        "4d7fd11f65a452cc07f36e9dfa64927b44beda5d86e04f5ef8de472fe3df538d",
+    ),
+    (
         "results/campaigns/results-fixed-original-semisynthetic.toml",
         "147e7e32437371dd26048d97f29c60918947cee87b17c3c1c5455998693fc59e",
     ),
