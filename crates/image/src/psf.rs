@@ -133,7 +133,7 @@ impl DebrisFlux {
         // Each Gaussian's nodes: a Gaussian's are its samples; a mixture's wide Gaussians
         // have fewer (`merge_samples`).
         let spacing = max_spacing(&samples);
-        let gaussians: Vec<((f64, f64, f64), Cow<[(f64, f64, f64)]>)> = psf
+        let gaussians: Vec<(Supported, Cow<[Sample]>)> = psf
             .supported(DEBRIS_SUPPORT_SIGMA)
             .map(|g| match psf.is_gaussian() {
                 true => (g, Cow::Borrowed(samples.as_slice())),
@@ -298,6 +298,12 @@ pub fn add_separable(
         }
     }
 }
+
+/// A point sample of a path: (electrons, x, y).
+type Sample = (f64, f64, f64);
+
+/// One of a PSF's Gaussians: (weight, sigma px, support in sigmas), as `Psf::supported`.
+type Supported = (f64, f64, f64);
 
 /// Samples of a mixture's Gaussian this many of its sigmas apart, at most, once merged: a row
 /// of Gaussians of one sigma 1.5 sigmas apart ripples by 2 exp(-2 pi^2 / 1.5^2) = 3e-4 of
