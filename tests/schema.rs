@@ -171,15 +171,15 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/ground-sidereal-leo.toml",
-        "1df4c964065a4571f5995c8301f5d60df27d33172f11ccdf1dbf993e941c1838",
+        "9306d929f54888b8edde2414f035522664b346cdedcc26bb87d8d6893fdace44",
     ),
     (
         "campaigns/ground-geo-stare.toml",
-        "01c04ef3617c817cd82c30b0b5eee4a7e58d84e71a12e36bdf9a07cb1801c312",
+        "41158cebba03eff2e25bee2858a024d20ebc4e0b10083f9de2545ceaa1e379ac",
     ),
     (
         "campaigns/ground-geo-track.toml",
-        "0479280e90cadcaa107db5684bdf889d5851a2df6325c15582c66d00bd798067",
+        "f2356a0442a167e6ccf694340b110529d151add3a72fb989379bd21fad44a697",
     ),
     (
         "results/campaigns/faint-limit-survey.toml",

@@ -143,19 +143,6 @@ impl Psf {
             })
             .sum()
     }
-
-    /// The component of a uniform draw `u` in [0, 1): the first whose cumulative weight
-    /// exceeds `u` (the last if rounding leaves `u` beyond them all).
-    pub fn component_of(&self, u: f64) -> f64 {
-        let mut left = u;
-        for &(w, s) in &self.components {
-            if left < w {
-                return s;
-            }
-            left -= w;
-        }
-        self.components.last().map_or(0.0, |c| c.1)
-    }
 }
 
 #[cfg(test)]
@@ -204,23 +191,5 @@ mod tests {
         assert!(g.is_gaussian());
         assert_eq!(g.components(), &[(1.0, 1.4)]);
         assert_eq!(g.core_sigma_px(), 1.4);
-    }
-
-    #[test]
-    fn components_are_drawn_by_weight() {
-        let psf = Psf::moffat(2.0, 2.5);
-        let n = 100_000;
-        let drawn: Vec<f64> = (0..n)
-            .map(|i| psf.component_of((f64::from(i) + 0.5) / f64::from(n)))
-            .collect();
-        for &(w, s) in psf.components() {
-            let share = drawn.iter().filter(|&&d| d == s).count() as f64 / f64::from(n);
-            // A regular grid of u: each share within one grid step of its weight.
-            assert!(
-                (share - w).abs() <= 1.0 / f64::from(n) + 1e-12,
-                "{s}: {share} vs {w}"
-            );
-        }
-        assert_eq!(psf.component_of(1.0), psf.components().last().unwrap().1);
     }
 }

@@ -165,8 +165,30 @@ fn nutation_iau80(t: f64) -> (f64, f64) {
     (dpsi * ARCSEC * 1e-4, deps * ARCSEC * 1e-4)
 }
 
-/// Rotation matrix taking TEME vectors at UTC instant `t` to GCRS.
+thread_local! {
+    /// The last instant's matrix on this thread: the ground night search asks for one
+    /// instant's matrix twice in a row (the object's GCRS place, then the site's place and
+    /// horizon), and its 106 nutation terms were 10 % of a ground run.
+    static LAST_TEME_TO_GCRS: std::cell::Cell<Option<(Epoch, Mat3)>> =
+        const { std::cell::Cell::new(None) };
+}
+
+/// Rotation matrix taking TEME vectors at UTC instant `t` to GCRS (the same instant twice in a
+/// row on a thread is computed once: the same bits).
 pub fn teme_to_gcrs_matrix(t: Epoch) -> Mat3 {
+    if let Some((last, m)) = LAST_TEME_TO_GCRS.get()
+        && last.time_scale == t.time_scale
+        && last.duration == t.duration
+    {
+        return m;
+    }
+    let m = teme_to_gcrs_matrix_of(t);
+    LAST_TEME_TO_GCRS.set(Some((t, m)));
+    m
+}
+
+/// `teme_to_gcrs_matrix`, computed.
+fn teme_to_gcrs_matrix_of(t: Epoch) -> Mat3 {
     let tc = t.to_tt_centuries_j2k();
     // IAU 1976 precession angles (Lieske 1977), J2000 -> mean of date.
     let zeta = (2306.2181 + (0.30188 + 0.017998 * tc) * tc) * tc * ARCSEC;

@@ -42,11 +42,11 @@ impl NightRule {
 /// The Sun's and the object's altitude at the site and whether the object is sunlit at `t`,
 /// given the object's geocentric GCRS position (km).
 pub fn conditions(site: &Site, t: Epoch, object_gcrs_km: Vec3) -> Conditions {
-    let (r, _) = site.gcrs_state(t);
+    let (r, horizon) = site.gcrs_horizon(t);
     let sun = sun_position_km(t);
     Conditions {
-        sun_alt_deg: site.alt_az_deg(t, sub(sun, r)).0,
-        object_alt_deg: site.alt_az_deg(t, sub(object_gcrs_km, r)).0,
+        sun_alt_deg: horizon.alt_az_deg(sub(sun, r)).0,
+        object_alt_deg: horizon.alt_az_deg(sub(object_gcrs_km, r)).0,
         object_sunlit: !segment_hits_sphere(object_gcrs_km, sun, SHADOW_RADIUS_KM),
     }
 }

@@ -16,7 +16,7 @@
 use hifitime::{Epoch, Unit};
 
 use super::frames::teme_to_gcrs_matrix;
-use super::{Vec3, cross, dot, mat_vec, transpose};
+use super::{Mat3, Vec3, cross, dot, mat_vec, transpose};
 
 /// WGS84 equatorial radius, km, and flattening.
 const WGS84_A_KM: f64 = 6378.137;
@@ -96,10 +96,14 @@ impl Site {
     /// East, north and up unit vectors of the site's horizon in GCRS axes at `t` (north and up
     /// from the geodetic latitude, as a spirit level sets them).
     fn horizon_axes(&self, t: Epoch) -> [Vec3; 3] {
+        self.horizon_axes_by(gmst82_rad(t), &teme_to_gcrs_matrix(t))
+    }
+
+    /// `horizon_axes` from the sidereal angle `g` and TEME -> GCRS matrix `m` of an instant.
+    fn horizon_axes_by(&self, g: f64, m: &Mat3) -> [Vec3; 3] {
         let (sl, cl) = self.lat_deg.to_radians().sin_cos();
         let (so, co) = self.lon_deg.to_radians().sin_cos();
-        let (g, m) = (gmst82_rad(t), teme_to_gcrs_matrix(t));
-        let to_gcrs = |v: Vec3| mat_vec(&m, turn_z(v, g));
+        let to_gcrs = |v: Vec3| mat_vec(m, turn_z(v, g));
         [
             to_gcrs([-so, co, 0.0]),
             to_gcrs([-sl * co, -sl * so, cl]),
@@ -115,10 +119,16 @@ impl Site {
     /// Altitude and azimuth (north through east), degrees, of the GCRS direction `dir` seen from
     /// the site at `t`; geometric (no refraction: [`refraction_deg`] lifts it).
     pub fn alt_az_deg(&self, t: Epoch, dir: Vec3) -> (f64, f64) {
-        let [e, n, u] = self.horizon_axes(t);
-        let (x, y, z) = (dot(dir, e), dot(dir, n), dot(dir, u));
-        let alt = z.atan2(x.hypot(y)).to_degrees();
-        (alt, x.atan2(y).to_degrees().rem_euclid(360.0))
+        alt_az_in(&self.horizon_axes(t), dir)
+    }
+
+    /// The site's GCRS position (km) and horizon at `t` from one precession-nutation matrix
+    /// (each of `gcrs_state` and `alt_az_deg` computes its own: the night search, which asks
+    /// for all three at each grid instant, spent 10 % of a ground run on the matrices).
+    pub fn gcrs_horizon(&self, t: Epoch) -> (Vec3, Horizon) {
+        let (g, m) = (gmst82_rad(t), teme_to_gcrs_matrix(t));
+        let r = turn_z(self.itrs_km(), g);
+        (mat_vec(&m, r), Horizon(self.horizon_axes_by(g, &m)))
     }
 
     /// The GCRS unit vector at altitude `alt_deg`, azimuth `az_deg` (north through east) at `t`:
@@ -139,6 +149,23 @@ impl Site {
         let axis = mat_vec(&teme_to_gcrs_matrix(t), [0.0, 0.0, 1.0]);
         (axis, EARTH_RATE_RAD_S.to_degrees())
     }
+}
+
+/// A site's east, north and up axes (GCRS) at one instant ([`Site::gcrs_horizon`]).
+pub struct Horizon([Vec3; 3]);
+
+impl Horizon {
+    /// Altitude and azimuth, degrees, of the GCRS direction `dir`, as [`Site::alt_az_deg`].
+    pub fn alt_az_deg(&self, dir: Vec3) -> (f64, f64) {
+        alt_az_in(&self.0, dir)
+    }
+}
+
+/// Altitude and azimuth (north through east), degrees, of `dir` in the horizon `[e, n, u]`.
+fn alt_az_in(&[e, n, u]: &[Vec3; 3], dir: Vec3) -> (f64, f64) {
+    let (x, y, z) = (dot(dir, e), dot(dir, n), dot(dir, u));
+    let alt = z.atan2(x.hypot(y)).to_degrees();
+    (alt, x.atan2(y).to_degrees().rem_euclid(360.0))
 }
 
 /// Standard air for [`refraction_deg`]: 1010 hPa and 10 C, Meeus' reference conditions.
