@@ -83,7 +83,15 @@ pub(crate) fn detect_and_report(
             .map(String::from)
             .or_else(|| observer["norad"].as_u64().map(|n| format!("NORAD {n}")))
             .unwrap_or_else(|| "observer".to_string());
+        let x = crate::experiment::of(campaign);
         let setup = report::astrometry::Setup {
+            trajectory_samples: x.scene.trajectory_samples,
+            seeing: x
+                .scene
+                .ground
+                .as_ref()
+                .is_some_and(|g| g.seeing_zenith.is_some()),
+            sensor: x.sensor,
             psf_sigma_px: c.detect.streak.psf_sigma_px,
             observer: &observer,
             conf: c.detect.conf,

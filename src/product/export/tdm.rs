@@ -211,17 +211,25 @@ pub fn detections(
     observations: &[&crate::observations::Observation],
     observer: &str,
     apparent: bool,
+    truth: bool,
 ) -> String {
     let places = if apparent {
         "apparent (render.apparent_positions)"
     } else {
         "geometric"
     };
+    let what = if truth {
+        "COMMENT soig truth: each labelled object's streak ends (its first and last trajectory samples)\n\
+         COMMENT through the image's FITS WCS, each at its own instant (half a time slice inside the\n\
+         COMMENT exposure). Angles in degrees, on the WCS's ICRS axes"
+    } else {
+        "COMMENT soig detections: each detection's two streak ends through the image's FITS WCS,\n\
+         COMMENT the first (by PNG x, then y) at the exposure's start, the second at its end: which\n\
+         COMMENT end came first is not known. Angles in degrees, on the WCS's ICRS axes"
+    };
     let mut s = format!(
         "CCSDS_TDM_VERS = 2.0\n\
-         COMMENT soig detections: each detection's two streak ends through the image's FITS WCS,\n\
-         COMMENT the first (by PNG x, then y) at the exposure's start, the second at its end: which\n\
-         COMMENT end came first is not known. Angles in degrees, on the WCS's ICRS axes ({places}).\n\
+         {what} ({places}).\n\
          CREATION_DATE = {}\n\
          ORIGINATOR = soig\n",
         observations
@@ -230,6 +238,8 @@ pub fn detections(
                 crate::render::iso_utc(o.times[0])
             }),
     );
+    // The truth's ends are numbered by the image's label lines.
+    let item = if truth { "label" } else { "detection" };
     for o in observations.iter().filter(|o| !(o.cut[0] && o.cut[1])) {
         let [t0, t1] = o.times.map(crate::render::iso_utc);
         let sigma = match o.uncertainty {
@@ -241,12 +251,12 @@ pub fn detections(
         };
         s += &format!(
             "\nMETA_START\n\
-             COMMENT {} {} detection {}: score {:.4}, {sigma}\n\
+             COMMENT {} {} {item} {}: score {:.4}, {sigma}\n\
              TIME_SYSTEM = UTC\n\
              START_TIME = {t0}\n\
              STOP_TIME = {t1}\n\
              PARTICIPANT_1 = {}\n\
-             PARTICIPANT_2 = {} {} detection {}\n\
+             PARTICIPANT_2 = {} {} {item} {}\n\
              MODE = SEQUENTIAL\n\
              PATH = 2,1\n\
              ANGLE_TYPE = RADEC\n\
