@@ -8,6 +8,7 @@ pub mod dataset;
 pub mod export;
 pub mod light_curve;
 pub mod observations;
+pub mod population_omm;
 pub mod records;
 pub mod shard;
 pub(crate) mod site_cards;

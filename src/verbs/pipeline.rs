@@ -628,6 +628,8 @@ pub(crate) fn finish(
             )?;
         }
     }
+    // A breakup cloud's fragments: their fitted orbits, for an independent propagation.
+    crate::population_omm::write(dir, &campaign.population)?;
     if c.collect_frames() > 1 {
         let indices: Vec<u64> = records.iter().map(|r| r.index).collect();
         let subset = |i: u64| subsets.as_ref().map(|s| s[i as usize]);
