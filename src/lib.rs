@@ -83,7 +83,7 @@ pub use config::{campaign, experiment, work};
 pub(crate) use product::artifacts;
 pub use product::{
     collect, dataset, export, light_curve, observations, population_omm, shard, star_trails,
-    streak_labels,
+    streak_labels, truth_sidecar,
 };
 pub use verbs::{
     compare, convert, detect_frames, launch, merge, pipeline, study, summary, sweep, tables,

@@ -12,5 +12,7 @@ pub mod population_omm;
 pub mod records;
 pub mod shard;
 pub(crate) mod site_cards;
+pub mod sky_track;
 pub mod star_trails;
 pub mod streak_labels;
+pub mod truth_sidecar;

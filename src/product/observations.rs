@@ -228,7 +228,7 @@ impl FrameSky {
                     let (ra, dec) = w.sky(p[0], p[1]);
                     [ra, dec]
                 };
-                interpolate([at(s), at(&self.mid), at(e)], self.exposure_s, t_s)
+                super::sky_track::interpolate([at(s), at(&self.mid), at(e)], self.exposure_s, t_s)
             }
         }
     }
@@ -690,6 +690,7 @@ mod tests {
             start: Epoch::from_gregorian_utc_at_midnight(2022, 1, 1),
             exposure_s,
             png_to_image: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            image_to_png: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             size: [100.0, 80.0],
             gain: Some(2.0),
             zero_point_mag: Some(20.0),
@@ -761,25 +762,4 @@ mod tests {
             "along the NE diagonal RA and Dec errors go together"
         );
     }
-}
-
-/// The value at `t` of the parabola through `v` at 0, `span / 2` and `span` (Lagrange's form:
-/// exactly `v[k]` at those instants), for (RA, Dec) in degrees: RA taken on the branch of
-/// `v[0]`'s so that a track across RA 0 stays continuous, and returned in [0, 360).
-pub fn interpolate(v: [[f64; 2]; 3], span: f64, t: f64) -> [f64; 2] {
-    let nodes = [0.0, span / 2.0, span];
-    let w: [f64; 3] = std::array::from_fn(|i| {
-        (0..3)
-            .filter(|&j| j != i)
-            .map(|j| (t - nodes[j]) / (nodes[i] - nodes[j]))
-            .product()
-    });
-    let ra: Vec<f64> = v
-        .iter()
-        .map(|p| v[0][0] + (p[0] - v[0][0] + 540.0).rem_euclid(360.0) - 180.0)
-        .collect();
-    [
-        (w[0] * ra[0] + w[1] * ra[1] + w[2] * ra[2]).rem_euclid(360.0),
-        w[0] * v[0][1] + w[1] * v[1][1] + w[2] * v[2][1],
-    ]
 }

@@ -29,7 +29,8 @@ use anyhow::Context;
 use serde::Deserialize;
 
 use super::{DetectorRun, TestImage};
-use crate::observations::{FrameSky, Observation, end_at, interpolate, observe, streak_magnitude};
+use crate::observations::{FrameSky, Observation, end_at, observe, streak_magnitude};
+use crate::product::sky_track::interpolate;
 use crate::store::fs;
 
 /// The SNR bins' lower edges (matched-filter SNR of the truth).
@@ -100,33 +101,21 @@ struct SidecarEphemeris {
 pub fn truth_objects(path: &Path) -> anyhow::Result<Vec<TruthObject>> {
     #[derive(Deserialize)]
     struct Frame {
-        #[serde(default)]
-        objects: Option<Vec<SidecarObject>>,
         exposure_s: f64,
         #[serde(default)]
         seeing: Option<crate::atmosphere::Seeing>,
     }
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let bad =
-        |e: serde_json::Error| anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display());
-    let frame: Frame = serde_json::from_str(&text).map_err(bad)?;
-    let objects = match frame.objects {
-        Some(o) => o,
-        None => vec![serde_json::from_str(&text).map_err(bad)?],
-    };
+    let sidecar = crate::truth_sidecar::read::<Frame, SidecarObject>(path)?;
+    let frame = sidecar.frame;
     let mut next = 0;
-    Ok(objects
+    Ok(sidecar
+        .objects
         .into_iter()
         .map(|o| {
-            let label = o
-                .label_box_final_px
-                .as_ref()
-                .is_some_and(|b| !b.is_null())
-                .then(|| {
-                    next += 1;
-                    next - 1
-                });
+            let label = crate::truth_sidecar::labelled(&o.label_box_final_px).then(|| {
+                next += 1;
+                next - 1
+            });
             TruthObject {
                 name: o.object,
                 norad: o.norad,
