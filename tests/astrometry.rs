@@ -323,5 +323,25 @@ fn geo_stare_truth_ends_at_their_own_instants() {
         assert_eq!(r[8], format!("{want}Z"), "{stem} label {label}");
         // Half a slice inside the exposure, not its start or end.
         assert_ne!(want, t["start_utc"].as_str().unwrap());
+
+        // A space-based observer's place (ADES `sys`, `ctr`, `pos1..3`): the stare has no
+        // object of its own, yet its FITS states the observer's mid-exposure GCRS state
+        // (`OBSPOS-*`, `OBSVEL-*`), the very state each object's ephemeris gives (a card's 15
+        // significant digits: 1e-9 km), moved to the record's instant by its velocity
+        // (written to 0.1 m: 5e-5 km).
+        let sky = FrameSky::read(&out.join(format!("fits/{stem}.fits"))).unwrap();
+        let (p, v) = sky.observer.expect("OBSPOS and OBSVEL on a catalogue stare's FITS");
+        let e = &object["ephemeris"];
+        for k in 0..3 {
+            assert!((p[k] - e["observer_gcrs_km"][k].as_f64().unwrap()).abs() < 1e-9);
+            assert!((v[k] - e["observer_gcrs_km_s"][k].as_f64().unwrap()).abs() < 1e-9);
+        }
+        assert_eq!((r[3], r[4]), ("ICRF_KM", "399"));
+        let t_s = if first { 0.0025 } else { 9.9975 };
+        for k in 0..3 {
+            let want = p[k] + v[k] * (t_s - 5.0);
+            let got: f64 = r[5 + k].parse().unwrap();
+            assert!((got - want).abs() < 5e-5 + 1e-9, "pos{}: {got} vs {want}", k + 1);
+        }
     }
 }
