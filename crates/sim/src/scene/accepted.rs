@@ -99,7 +99,7 @@ pub struct Scene {
     /// A generated object of a catalogue scene's population (a breakup fragment).
     #[serde(skip)]
     pub generated: bool,
-    /// A satellite observer's GCRS state (km, km/s) at mid-exposure where the scene has no
+    /// The observer's GCRS state (km, km/s) at mid-exposure where the scene has no
     /// ephemeris of its own to state it (a catalogue stare): the FITS `OBSPOS-*`, `OBSVEL-*`.
     #[serde(skip)]
     pub observer_gcrs: Option<(soig_sky::Vec3, soig_sky::Vec3)>,
