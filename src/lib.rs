@@ -83,7 +83,8 @@ pub mod verbs;
 pub use config::{campaign, experiment, work};
 pub(crate) use product::artifacts;
 pub use product::{
-    collect, dataset, export, light_curve, observations, shard, star_trails, streak_labels,
+    collect, dataset, export, light_curve, observations, population_omm, shard, star_trails,
+    streak_labels, truth_sidecar,
 };
 pub use verbs::{
     compare, convert, detect_frames, launch, merge, pipeline, study, summary, sweep, tables,

@@ -3,7 +3,11 @@
 //! in tests/fixtures/breakup/sbm_reference.json); campaigns/breakup.toml runs, verifies and
 //! gives the same digest on one thread and on two, and every fragment it shows is the state an
 //! independent back-integration put on its parent's place at the breakup
-//! (tests/reference/breakup_cloud_reference.py, pinned in cloud_reference.json); its truth,
+//! (tests/reference/breakup_cloud_reference.py, pinned in cloud_reference.json), and every
+//! object it shows, fragment or belt object, is within 1" of where python-sgp4 + astropy put
+//! it from its catalogue entry (the fragments' fitted elements that the run writes,
+//! `population/generated.omm.json`; tests/reference/breakup_sky_reference.py, pinned in
+//! sky_reference.json), none that the reference puts in the field left out; its truth,
 //! COCO annotations and DS9 regions carry the fragments' generated ids. Bad breakup settings
 //! are refused naming the field.
 
@@ -100,12 +104,89 @@ fn sbm_laws_match_the_independent_implementation() {
     }
 }
 
-/// The committed cloud: deterministic across thread counts, verified, and each fragment shown
-/// in the state the reference integrated back onto its parent.
+/// Arcseconds between two (RA, Dec) in degrees.
+fn separation_arcsec(a: &Value, b: &Value) -> f64 {
+    let (ra1, de1) = (f(&a[0]), f(&a[1]));
+    let (ra2, de2) = (f(&b[0]), f(&b[1]));
+    let dra = ((ra1 - ra2 + 540.0) % 360.0 - 180.0) * de1.to_radians().cos();
+    dra.hypot(de1 - de2) * 3600.0
+}
+
+/// The run `out` of campaigns/breakup.toml against python-sgp4 + astropy from the catalogue
+/// entries the run states (sky_reference.json): every object shown within 1" of its place, and
+/// every object the reference puts in the field shown or listed unseen with a reason. Returns
+/// (objects shown, fragments among them, unseen).
+fn check_sky(out: &std::path::Path) -> (usize, usize, usize) {
+    let r = json(&repo("tests/fixtures/breakup/sky_reference.json"));
+    // The reference propagated these very elements.
+    let (omm, _) = soig::hash::sha256_file(&out.join(soig::population_omm::FILE)).unwrap();
+    assert_eq!(r["omm_sha256"], omm);
+    assert_eq!(r["fragments"], 79);
+    let (mut shown, mut fragments, mut unseen) = (0, 0, 0);
+    for frame in r["frames"].as_array().unwrap() {
+        let stem = frame["image"].as_str().unwrap();
+        let truth = json(&out.join(format!("truth/{stem}.json")));
+        assert_eq!(truth["start_utc"], frame["start_utc"], "{stem}");
+        let by_id: BTreeMap<u64, &Value> = frame["objects"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|o| (o["norad"].as_u64().unwrap(), o))
+            .collect();
+        let mut accounted = std::collections::BTreeSet::new();
+        for o in truth["objects"].as_array().unwrap() {
+            let id = o["norad"].as_u64().unwrap();
+            let p = by_id
+                .get(&id)
+                .unwrap_or_else(|| panic!("{stem}: {id} shown, the reference has it outside"));
+            assert!(p["in_field"].as_bool().unwrap(), "{stem}: {id}");
+            // As the GEO stare's check (tests/catalogue.rs): python-sgp4 and the sgp4 crate
+            // agree to micrometres from the same elements, astropy's TEME -> GCRS differs from
+            // soig's by its polar motion; measured 0.030" at most over the 171 shown objects of
+            // the 8 frames (124 fragments). 1" is the issue's bar.
+            let sep =
+                separation_arcsec(&o["ephemeris"]["debris_radec_mid_deg"], &p["radec_mid_deg"]);
+            assert!(sep < 1.0, "{stem}: {id} {sep}\" from its catalogue place");
+            // 1" is 0.071 px at 14.06"/px; no jitter here, so the first and last trajectory
+            // samples land on the reference's pixels of those instants (measured 0.0021 px).
+            for (mine, theirs) in [
+                ("streak_start_px", "first_sample_px"),
+                ("streak_end_px", "last_sample_px"),
+            ] {
+                let d = |k: usize| f(&o[mine][k]) - f(&p[theirs][k]);
+                let off = d(0).hypot(d(1));
+                assert!(off < 0.071, "{stem}: {id} {mine} {off} px off");
+            }
+            accounted.insert(id);
+            shown += 1;
+            fragments += usize::from(o["source"] == "generated");
+        }
+        for u in truth["unseen"].as_array().unwrap() {
+            assert!(!u["reason"].as_str().unwrap().is_empty());
+            accounted.insert(u["norad"].as_u64().unwrap());
+            unseen += 1;
+        }
+        for (id, p) in &by_id {
+            if p["in_field"].as_bool().unwrap() {
+                assert!(
+                    accounted.contains(id),
+                    "{stem}: {id} is in the field but neither shown nor unseen"
+                );
+            }
+        }
+    }
+    (shown, fragments, unseen)
+}
+
+/// The committed cloud: deterministic across thread counts, verified, each fragment shown
+/// in the state the reference integrated back onto its parent, and every object where
+/// python-sgp4 puts it from its stated elements (`check_sky`).
 #[test]
 fn the_breakup_campaign_runs_and_its_fragments_leave_from_the_parent() {
     let tmp = tempfile::tempdir().unwrap();
     let out = run_on_one_and_two_threads_and_verify(&repo("campaigns/breakup.toml"), tmp.path());
+    // Measured: 171 objects shown over the 8 frames, 124 of them fragments; 431 unseen.
+    assert_eq!(check_sky(&out), (171, 124, 431));
     let reference = json(&repo("tests/fixtures/breakup/cloud_reference.json"));
     // The back-integration (two-body + J2 against SGP4/SDP4's lunisolar terms, an hour) lands
     // every shown fragment within 0.3 km of the parent (measured); 1 km bounds it.

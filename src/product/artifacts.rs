@@ -350,15 +350,20 @@ fn observation_cards(push: &mut Push, p: &Provenance, scene: &Scene, t: &Truth) 
     push("EXPTIME", Card::Real(t.exposure_s), "[s] exposure time");
     // The observer's state as the truth gives it: no FITS standard keyword holds a
     // spacecraft's GCRS state (OBSGEO-* are Earth-fixed).
-    if let Some(e) = &t.ephemeris {
-        for (axis, v) in ["X", "Y", "Z"].iter().zip(e.observer_gcrs_km) {
+    // A catalogue stare has no object of its own: the scene states the observer's.
+    let observer = t
+        .ephemeris
+        .map(|e| (e.observer_gcrs_km, e.observer_gcrs_km_s))
+        .or(scene.observer_gcrs);
+    if let Some((position, velocity)) = observer {
+        for (axis, v) in ["X", "Y", "Z"].iter().zip(position) {
             push(
                 &format!("OBSPOS-{axis}"),
                 Card::Real(v),
                 "[km] observer GCRS position at DATE-AVG",
             );
         }
-        for (axis, v) in ["X", "Y", "Z"].iter().zip(e.observer_gcrs_km_s) {
+        for (axis, v) in ["X", "Y", "Z"].iter().zip(velocity) {
             push(
                 &format!("OBSVEL-{axis}"),
                 Card::Real(v),

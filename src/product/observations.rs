@@ -56,6 +56,8 @@ pub struct FrameSky {
     /// The original image's pixel of a PNG pixel (0-based centres): the inverse of the
     /// `GEOA` cards' `PNG = A (x, y, 1)`.
     pub png_to_image: [[f64; 3]; 2],
+    /// The `GEOA` cards themselves: the PNG pixel (0-based centres) of an original pixel.
+    pub image_to_png: [[f64; 3]; 2],
     /// The original image's size, pixels (`NAXIS1`, `NAXIS2`).
     pub size: [f64; 2],
     /// Electrons per ADU (`GAIN`) and the magnitude of 1 e-/s (`MAGZERO`), where given.
@@ -164,6 +166,7 @@ impl FrameSky {
             start,
             exposure_s,
             png_to_image,
+            image_to_png: a,
             size,
             gain: number("GAIN").ok(),
             zero_point_mag: number("MAGZERO").ok(),
@@ -211,6 +214,25 @@ impl FrameSky {
             || y > self.size[1] - 0.5 - margin
     }
 
+    /// (RA, Dec), degrees, of the original image's pixel `p` at `t_s` seconds after the
+    /// exposure's start: through the WCS at the start, middle and end, interpolated in time by
+    /// the parabola through the three (exact at those instants; a fixed pointing has one WCS).
+    /// The boresight's path over an exposure is a smooth arc of at most a few degrees, so the
+    /// parabola's error near an instant it goes through is of the order of the third derivative
+    /// times the distance in time to it.
+    pub fn radec_image_at(&self, p: [f64; 2], t_s: f64) -> [f64; 2] {
+        match &self.start_end {
+            None => self.radec_image(p, false),
+            Some((s, e)) => {
+                let at = |w: &TanWcs| {
+                    let (ra, dec) = w.sky(p[0], p[1]);
+                    [ra, dec]
+                };
+                super::sky_track::interpolate([at(s), at(&self.mid), at(e)], self.exposure_s, t_s)
+            }
+        }
+    }
+
     /// The exposure's start (`at_end` false) or end.
     pub fn time(&self, at_end: bool) -> Epoch {
         if at_end {
@@ -227,6 +249,23 @@ impl FrameSky {
         let (p, v) = self.observer?;
         let dt = if at_end { 0.5 } else { -0.5 } * self.exposure_s;
         Some([p[0] + v[0] * dt, p[1] + v[1] * dt, p[2] + v[2] * dt])
+    }
+
+    /// The observer's GCRS position, km, `t_s` seconds after the exposure's start (as
+    /// [`FrameSky::observer_at`]).
+    pub fn observer_at_s(&self, t_s: f64) -> Option<[f64; 3]> {
+        let (p, v) = self.observer?;
+        let dt = t_s - 0.5 * self.exposure_s;
+        Some([p[0] + v[0] * dt, p[1] + v[1] * dt, p[2] + v[2] * dt])
+    }
+
+    /// PNG pixel-edge coordinates of the original image's pixel `p` (0-based centres).
+    pub fn png_pixel(&self, p: [f64; 2]) -> [f64; 2] {
+        let a = &self.image_to_png;
+        [
+            a[0][0] * p[0] + a[0][1] * p[1] + a[0][2] + 0.5,
+            a[1][0] * p[0] + a[1][1] * p[1] + a[1][2] + 0.5,
+        ]
     }
 
     /// Original-image pixels per PNG pixel (the frame's mapping's linear scale).
@@ -275,6 +314,9 @@ pub struct Observation {
     /// pairing p: 0 the rule's (first end at the start), 1 the swapped.
     pub radec: [[[f64; 2]; 2]; 2],
     pub times: [Epoch; 2],
+    /// Those instants, seconds after the exposure's start: 0 and `EXPTIME` for a detection;
+    /// the first and last trajectory samples' for the truth's ends (the astrometric report).
+    pub at_s: [f64; 2],
     /// The observer's GCRS position at those instants, km (None from a ground site).
     pub observer_km: Option<[[f64; 3]; 2]>,
     pub snr: Option<f64>,
@@ -346,6 +388,7 @@ pub fn observe(
         cut,
         radec,
         times: [sky.time(false), sky.time(true)],
+        at_s: [0.0, sky.exposure_s],
         observer_km: sky
             .observer_at(false)
             .zip(sky.observer_at(true))
@@ -647,6 +690,7 @@ mod tests {
             start: Epoch::from_gregorian_utc_at_midnight(2022, 1, 1),
             exposure_s,
             png_to_image: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            image_to_png: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             size: [100.0, 80.0],
             gain: Some(2.0),
             zero_point_mag: Some(20.0),

@@ -12,8 +12,10 @@
 //! - Tables: the separation of each end (arcsec) by detector and by the matched object's
 //!   matched-filter SNR (the truth's, so every detector is binned alike; YOLO gives none):
 //!   median, 68th and 95th percentiles (linear interpolation, as numpy's default). A row
-//!   `truth` puts the truth's own streak ends (`streak_start_px`, `streak_end_px`) through the
-//!   same FITS WCS: the floor of the chain (the pointing jitter about the WCS's mean).
+//!   `truth` puts the truth's own streak ends (`streak_start_px`, `streak_end_px`: the first
+//!   and last trajectory samples, half a time slice inside the exposure) through the FITS WCS
+//!   at their own instants (`truth_end_times`) against the ephemeris there: the floor of the
+//!   chain (the pointing jitter about the WCS's mean); they are written as observations too.
 //! - Correlation: each matched detection is given to the object whose truth track (ephemeris
 //!   start and end, better pairing) lies nearest its ends, among every object of the frame
 //!   with an ephemeris; the share given to the object it matches is the correlation's success.
@@ -28,6 +30,7 @@ use serde::Deserialize;
 
 use super::{DetectorRun, TestImage};
 use crate::observations::{FrameSky, Observation, end_at, observe, streak_magnitude};
+use crate::product::sky_track::interpolate;
 use crate::store::fs;
 
 /// The SNR bins' lower edges (matched-filter SNR of the truth).
@@ -35,6 +38,12 @@ const SNR_EDGES: [f64; 6] = [0.0, 10.0, 30.0, 100.0, 300.0, 1000.0];
 
 /// What the astrometry needs of the campaign.
 pub struct Setup<'a> {
+    /// The campaign's `render.trajectory_samples`, the sensor, and whether a ground site's
+    /// seeing sets the PSF instead (per image): what the renderer's slice count
+    /// (`scene::slice_count`) is derived from, for the times of the truth's ends.
+    pub trajectory_samples: usize,
+    pub sensor: crate::sensor::Sensor,
+    pub seeing: bool,
     /// The streak detector's PSF sigma in PNG pixels (the uncertainty model's).
     pub psf_sigma_px: f64,
     /// The observer's name for the files.
@@ -52,13 +61,18 @@ pub struct TruthObject {
     pub norad: u64,
     /// The object's place in the image's label lines; None without a label.
     pub label: Option<usize>,
-    /// (RA, Dec) at the exposure's start and end; None for a placed object.
-    pub ephemeris: Option<[[f64; 2]; 2]>,
+    /// (RA, Dec) at the exposure's start, middle and end; None for a placed object.
+    pub ephemeris: Option<[[f64; 2]; 3]>,
     pub snr: f64,
     /// Its magnitude at mid-exposure (the truth's `magnitude`).
     pub magnitude: f64,
-    /// Its streak's ends in the original image, pixel centres.
+    /// Its streak's ends in the original image, pixel centres: the first and last
+    /// trajectory samples.
     pub ends_px: [[f64; 2]; 2],
+    /// The exposure, seconds (the sidecar's own `exposure_s`, which the renderer sliced).
+    pub exposure_s: f64,
+    /// A ground site's seeing in the image, where the sidecar states it (one-object truth).
+    pub seeing: Option<crate::atmosphere::Seeing>,
 }
 
 #[derive(Deserialize)]
@@ -78,6 +92,7 @@ struct SidecarObject {
 #[derive(Deserialize)]
 struct SidecarEphemeris {
     debris_radec_start_deg: [f64; 2],
+    debris_radec_mid_deg: [f64; 2],
     debris_radec_end_deg: [f64; 2],
 }
 
@@ -86,40 +101,37 @@ struct SidecarEphemeris {
 pub fn truth_objects(path: &Path) -> anyhow::Result<Vec<TruthObject>> {
     #[derive(Deserialize)]
     struct Frame {
+        exposure_s: f64,
         #[serde(default)]
-        objects: Option<Vec<SidecarObject>>,
+        seeing: Option<crate::atmosphere::Seeing>,
     }
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let bad =
-        |e: serde_json::Error| anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display());
-    let frame: Frame = serde_json::from_str(&text).map_err(bad)?;
-    let objects = match frame.objects {
-        Some(o) => o,
-        None => vec![serde_json::from_str(&text).map_err(bad)?],
-    };
+    let sidecar = crate::truth_sidecar::read::<Frame, SidecarObject>(path)?;
+    let frame = sidecar.frame;
     let mut next = 0;
-    Ok(objects
+    Ok(sidecar
+        .objects
         .into_iter()
         .map(|o| {
-            let label = o
-                .label_box_final_px
-                .as_ref()
-                .is_some_and(|b| !b.is_null())
-                .then(|| {
-                    next += 1;
-                    next - 1
-                });
+            let label = crate::truth_sidecar::labelled(&o.label_box_final_px).then(|| {
+                next += 1;
+                next - 1
+            });
             TruthObject {
                 name: o.object,
                 norad: o.norad,
                 label,
-                ephemeris: o
-                    .ephemeris
-                    .map(|e| [e.debris_radec_start_deg, e.debris_radec_end_deg]),
+                ephemeris: o.ephemeris.map(|e| {
+                    [
+                        e.debris_radec_start_deg,
+                        e.debris_radec_mid_deg,
+                        e.debris_radec_end_deg,
+                    ]
+                }),
                 snr: o.snr_matched_filter,
                 magnitude: o.magnitude,
                 ends_px: [o.streak_start_px, o.streak_end_px],
+                exposure_s: frame.exposure_s,
+                seeing: frame.seeing,
             }
         })
         .collect())
@@ -204,7 +216,7 @@ pub fn residual(o: &Observation, truth: &[[f64; 4]], objects: &[TruthObject]) ->
         return None;
     }
     let object = objects.iter().find(|t| t.label == Some(best))?;
-    let track = object.ephemeris?;
+    let track = start_end(object.ephemeris?);
     let (pairing, _) = best_pairing(&o.radec, &track, o.cut)?;
     let end = |k: usize| {
         (!o.cut[end_at(pairing, k)]).then(|| offset_arcsec(track[k], o.radec[pairing][k]))
@@ -212,7 +224,7 @@ pub fn residual(o: &Observation, truth: &[[f64; 4]], objects: &[TruthObject]) ->
     let nearest = objects
         .iter()
         .filter_map(|t| {
-            let e = t.ephemeris?;
+            let e = start_end(t.ephemeris?);
             Some((t.norad, best_pairing(&o.radec, &e, o.cut)?.1))
         })
         .min_by(|a, b| a.1.total_cmp(&b.1))
@@ -234,6 +246,68 @@ pub fn residual(o: &Observation, truth: &[[f64; 4]], objects: &[TruthObject]) ->
     })
 }
 
+/// The ephemeris' places at the exposure's start and end (a detection's instants).
+fn start_end(e: [[f64; 2]; 3]) -> [[f64; 2]; 2] {
+    [e[0], e[2]]
+}
+
+/// The instants of the truth's ends (its first and last trajectory samples), seconds after
+/// the exposure's start: the centres of the first and last of the slices the renderer cut the
+/// exposure into. Their number is the renderer's own (`scene::slice_count`) from the
+/// campaign's samples, the spacing of those samples in the image and the PSF's core; the
+/// spacing is taken as the ends' distance over the samples less one (exact for a uniform
+/// motion; the renderer takes the largest spacing, which a bending track makes larger, and
+/// the two decide alike unless the spacing lies within that difference of a refinement
+/// step). None where the PSF is not known (a ground site's seeing on a frame whose sidecar
+/// does not state it) or the renderer would have refused the draw.
+pub fn truth_end_times(o: &TruthObject, setup: &Setup) -> Option<[f64; 2]> {
+    let psf = match (o.seeing, setup.seeing) {
+        (Some(s), _) => crate::scene::psf_of(&setup.sensor, Some(s)),
+        (None, false) => crate::scene::psf_of(&setup.sensor, None),
+        (None, true) => return None,
+    };
+    let n0 = setup.trajectory_samples;
+    let [a, b] = o.ends_px;
+    let spacing = (b[0] - a[0]).hypot(b[1] - a[1]) / (n0.max(2) - 1) as f64;
+    let n = crate::scene::slice_count(n0, spacing, psf.core_sigma_px()).ok()?;
+    let t = |k| crate::scene::sample_time_s(k, n, o.exposure_s);
+    Some([t(0), t(n - 1)])
+}
+
+/// The truth's ends of object `o` (label `label` of the frame's boxes `boxes`) as an
+/// observation at their own instants `at_s` (`truth_end_times`), through the WCS of those
+/// instants: the `truth` rows of the report and `report/observations/truth.*`.
+fn truth_observation(
+    image: &str,
+    o: &TruthObject,
+    boxes: &[[f64; 4]],
+    at_s: [f64; 2],
+    sky: &FrameSky,
+) -> Observation {
+    let radec = [0, 1].map(|k| sky.radec_image_at(o.ends_px[k], at_s[k]));
+    let label = o.label.unwrap_or_default();
+    Observation {
+        image: image.to_string(),
+        detector: "truth".into(),
+        detection: label,
+        score: 1.0,
+        detection_box: boxes.get(label).copied().unwrap_or([f64::NAN; 4]),
+        ends_px: o.ends_px.map(|p| sky.png_pixel(p)),
+        cut: [false, false],
+        radec: [radec, [radec[1], radec[0]]],
+        times: at_s.map(|t| sky.start + hifitime::Duration::from_seconds(t)),
+        at_s,
+        observer_km: sky
+            .observer_at_s(at_s[0])
+            .zip(sky.observer_at_s(at_s[1]))
+            .map(|(a, b)| [a, b]),
+        snr: None,
+        uncertainty: None,
+        magnitude: None,
+        from_box: false,
+    }
+}
+
 /// The `q`-quantile (0..1) of sorted `v`, linear between ranks (numpy's default).
 pub fn quantile(v: &[f64], q: f64) -> f64 {
     if v.is_empty() {
@@ -252,6 +326,8 @@ pub struct Astrometry {
     pub unmatched: Vec<(String, usize)>,
     /// Labelled objects without an ephemeris (placed).
     pub placed: usize,
+    /// Labelled objects with one whose ends' instants are not known (`truth_end_times`).
+    pub untimed: usize,
 }
 
 /// Observe every confident detection of `runs` on `images` (their FITS under `dir/fits`)
@@ -267,6 +343,7 @@ pub fn measure(
         residuals: Vec::new(),
         unmatched: Vec::new(),
         placed: 0,
+        untimed: 0,
     };
     let mut unmatched = vec![0; runs.len()];
     for (i, img) in images.iter().enumerate() {
@@ -283,13 +360,18 @@ pub fn measure(
             .with_context(|| format!("reading {}", img.png.display()))?
             .to_luma8()
             .into_raw();
-        // The truth's own ends through the same WCS: the floor of the chain.
+        // The truth's own ends through the same WCS, each against the ephemeris at its own
+        // instant: the floor of the chain.
         for o in objects.iter().filter(|o| o.label.is_some()) {
             let Some(track) = o.ephemeris else { continue };
-            let radec = [0, 1].map(|k| {
-                let [x, y] = o.ends_px[k];
-                sky.radec_image([x, y], k == 1)
-            });
+            let Some(at_s) = truth_end_times(o, setup) else {
+                out.untimed += 1;
+                continue;
+            };
+            let obs = truth_observation(&img.stem, o, &img.truth, at_s, &sky);
+            let radec = obs.radec[0];
+            let truth_at = at_s.map(|t| interpolate(track, o.exposure_s, t));
+            out.observations.push(obs);
             out.residuals.push(Residual {
                 detector: "truth".into(),
                 image: img.stem.clone(),
@@ -298,7 +380,7 @@ pub fn measure(
                 norad: o.norad,
                 snr: o.snr,
                 pairing: 0,
-                ends: [0, 1].map(|k| Some(offset_arcsec(track[k], radec[k]))),
+                ends: [0, 1].map(|k| Some(offset_arcsec(truth_at[k], radec[k]))),
                 correlated_norad: o.norad,
                 correlated: true,
                 sigma_arcsec: None,
@@ -376,8 +458,9 @@ pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
          ends, or a YOLO box's diagonal chosen by the light's second moments) through the FITS WCS \
          at the exposure's start and end, against the truth ephemeris of the object its box \
          matches (IoU >= 0.5). Both pairings of the ends with the two instants are tried; the \
-         better is kept. `truth`: the truth's own streak ends through the same WCS (the \
-         chain's floor). Separation per end, arcsec; SNR bins by the object's matched-filter SNR. \
+         better is kept. `truth`: the truth's own streak ends (its first and last trajectory \
+         samples, half a time slice inside the exposure) through the WCS of their own instants, \
+         against the ephemeris at those instants (the chain's floor). Separation per end, arcsec; SNR bins by the object's matched-filter SNR. \
          The last column holds the model's uncertainty (src/product/observations.rs) to the \
          measurement: its median lies between 0.67 and 0.83 where the model holds.\n\n",
     );
@@ -473,6 +556,14 @@ pub fn markdown(a: &Astrometry, setup: &Setup) -> String {
         "\n{} labelled object(s) without an ephemeris (placed `[objects]`) left out.",
         a.placed
     );
+    if a.untimed > 0 {
+        let _ = writeln!(
+            s,
+            "{} labelled object(s) left out of the `truth` rows: the instants of their ends are \
+             not known (a ground site's seeing that their sidecar does not state).",
+            a.untimed
+        );
+    }
     s
 }
 
@@ -537,19 +628,20 @@ pub fn write(
     fs::create(&rdir.join("astrometry.csv"), csv(&a)?)?;
     let odir = rdir.join("observations");
     fs::create_dir_all(&odir)?;
-    for run in runs {
+    let names = std::iter::once("truth").chain(runs.iter().map(|r| r.name.as_str()));
+    for name in names {
         let obs: Vec<&Observation> = a
             .observations
             .iter()
-            .filter(|o| o.detector == run.name)
+            .filter(|o| o.detector == name)
             .collect();
         fs::create(
-            &odir.join(format!("{}.psv", run.name)),
-            crate::export::ades::psv(&obs, setup.observer),
+            &odir.join(format!("{name}.psv")),
+            crate::export::ades::psv(&obs, setup.observer, name == "truth"),
         )?;
         fs::create(
-            &odir.join(format!("{}.tdm", run.name)),
-            crate::export::tdm::detections(&obs, setup.observer, setup.apparent),
+            &odir.join(format!("{name}.tdm")),
+            crate::export::tdm::detections(&obs, setup.observer, setup.apparent, name == "truth"),
         )?;
     }
     Ok(())

@@ -58,27 +58,17 @@ impl ObjectFacts {
         #[derive(Deserialize)]
         struct Image {
             pointing: Pointing,
-            #[serde(default)]
-            objects: Option<Vec<Sidecar>>,
         }
         #[derive(Deserialize)]
         struct Pointing {
             trail_angle_deg: Option<f64>,
         }
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| anyhow::anyhow!("reading {}: {e}", path.display()))?;
-        let bad = |e: serde_json::Error| {
-            anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display())
-        };
-        let image: Image = serde_json::from_str(&text).map_err(bad)?;
-        let objects = match image.objects {
-            Some(objects) => objects,
-            None => vec![serde_json::from_str::<Sidecar>(&text).map_err(bad)?],
-        };
-        let trails = image.pointing.trail_angle_deg;
-        Ok(objects
+        let sidecar = crate::truth_sidecar::read::<Image, Sidecar>(path)?;
+        let trails = sidecar.frame.pointing.trail_angle_deg;
+        Ok(sidecar
+            .objects
             .into_iter()
-            .filter(|s| s.label_box_final_px.as_ref().is_some_and(|b| !b.is_null()))
+            .filter(|s| crate::truth_sidecar::labelled(&s.label_box_final_px))
             .map(|s| {
                 let [x0, y0] = s.streak_start_px;
                 let [x1, y1] = s.streak_end_px;

@@ -63,7 +63,15 @@ pub(crate) fn detect_and_report(
         progress,
     )?;
     if let Some(a) = &plan.detect.astrometry {
+        let x = &plan.experiment;
         let setup = report::astrometry::Setup {
+            trajectory_samples: x.scene.trajectory_samples,
+            seeing: x
+                .scene
+                .ground
+                .as_ref()
+                .is_some_and(|g| g.seeing_zenith.is_some()),
+            sensor: x.sensor.clone(),
             psf_sigma_px: a.psf_sigma_px,
             observer: &a.observer,
             conf: plan.detect.conf,

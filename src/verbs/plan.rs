@@ -18,7 +18,7 @@ use crate::detect::streak::StreakParams;
 use crate::detect::yolo::YoloParams;
 use crate::experiment;
 use crate::geometry::FrameKind;
-use crate::scene::Inputs;
+use crate::scene::{Body, Inputs};
 use crate::simulate::Experiment;
 
 /// A campaign's run, derived once from it.
@@ -75,6 +75,8 @@ pub struct Objects {
     pub listed: bool,
     /// A stare points at no debris object (its objects are the population's, in the truth).
     pub stare: bool,
+    /// The objects of `[population]` (a catalogue's or a breakup cloud's; empty without).
+    pub population: Vec<Body>,
 }
 
 /// What the detect stage runs.
@@ -211,6 +213,7 @@ impl<'c> Plan<'c> {
                     .collect(),
                 listed: c.objects.is_some(),
                 stare: c.pointing.stare.is_some(),
+                population: campaign.population.clone(),
             },
             detect,
             train,

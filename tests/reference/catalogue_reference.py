@@ -80,6 +80,12 @@ def radec(v):
 def main():
     run = pathlib.Path(sys.argv[1])
     population = [s for s in read_tles(POPULATION) if s.satnum != OBSERVER]
+    json.dump({"frames": frames_of(run, population)}, sys.stdout, indent=1)
+    print()
+
+
+def frames_of(run, population):
+    """Per frame of `run`: the objects of `population` (Satrec) in or near its field."""
     observer = [s for s in read_tles(CATALOGUE) if s.satnum == OBSERVER]
     frames = []
     for truth_path in sorted((run / "truth").glob("img_*.json")):
@@ -119,8 +125,7 @@ def main():
             for k in np.flatnonzero(near)
         ]
         frames.append({"image": stem, "start_utc": truth["start_utc"], "objects": objects})
-    json.dump({"frames": frames}, sys.stdout, indent=1)
-    print()
+    return frames
 
 
 if __name__ == "__main__":

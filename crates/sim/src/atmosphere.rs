@@ -31,7 +31,7 @@ pub fn seeing_fwhm_arcsec(zenith_fwhm_arcsec: f64, x: f64) -> f64 {
 /// The seeing of one exposure, as the renderer draws it and the truth records it: a Moffat
 /// of FWHM `fwhm_arcsec` (the zenith value times the boresight's airmass^0.6) and index
 /// `beta`.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Seeing {
     pub fwhm_arcsec: f64,
     pub beta: f64,

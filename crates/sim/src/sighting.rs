@@ -49,6 +49,24 @@ pub struct Sighting<'a> {
     earth_km_s: Option<Vec3>,
 }
 
+/// GCRS position (km) and velocity (km/s) of `body` at `t` through the TEME -> GCRS rotation
+/// `teme_to_gcrs`; None if it cannot be propagated.
+fn gcrs_state(teme_to_gcrs: &Mat3, body: &dyn Viewpoint, t: Epoch) -> Option<(Vec3, Vec3)> {
+    let (r, v) = body.teme_state(t)?;
+    let (r, v) = (mat_vec(teme_to_gcrs, r), mat_vec(teme_to_gcrs, v));
+    r.iter()
+        .chain(v.iter())
+        .all(|x| x.is_finite())
+        .then_some((r, v))
+}
+
+/// The observer's geometric GCRS state at mid-exposure `mid`, as every [`Ephemeris`] of that
+/// exposure states it (`observer_gcrs_km`, `observer_gcrs_km_s`), for a frame with no object
+/// of its own (a stare); None if it cannot be propagated.
+pub fn observer_state_at_mid(observer: &dyn Viewpoint, mid: Epoch) -> Option<(Vec3, Vec3)> {
+    gcrs_state(&teme_to_gcrs_matrix(mid), observer, mid)
+}
+
 impl<'a> Sighting<'a> {
     pub fn new(
         observer: &'a dyn Viewpoint,
@@ -71,15 +89,7 @@ impl<'a> Sighting<'a> {
 
     /// GCRS position (km) and velocity (km/s) of a body; None if it cannot be propagated.
     fn state(&self, body: &dyn Viewpoint, t: Epoch) -> Option<(Vec3, Vec3)> {
-        let (r, v) = body.teme_state(t)?;
-        let (r, v) = (
-            mat_vec(&self.teme_to_gcrs, r),
-            mat_vec(&self.teme_to_gcrs, v),
-        );
-        r.iter()
-            .chain(v.iter())
-            .all(|x| x.is_finite())
-            .then_some((r, v))
+        gcrs_state(&self.teme_to_gcrs, body, t)
     }
 
     /// The axis and rate of a ground telescope's stare (`Viewpoint::stare_axis`).

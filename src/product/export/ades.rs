@@ -42,18 +42,25 @@ fn psv_text(s: &str) -> String {
         .collect()
 }
 
-/// The ADES PSV of `observations`, the observer named `observer`.
-pub fn psv(observations: &[&Observation], observer: &str) -> String {
+/// The ADES PSV of `observations`, the observer named `observer`; `truth`: the truth's own
+/// ends (the astrometric report's `truth` rows), each at its own instant.
+pub fn psv(observations: &[&Observation], observer: &str, truth: bool) -> String {
     let mut s = String::from("# version=2017\n# observatory\n! mpcCode XXX\n");
     s += &format!("! name {}\n", psv_text(observer));
     s += "# submitter\n! name soig\n# measurers\n! name soig\n# telescope\n! design simulated\n! detector CCD\n";
-    s += "# comment\n! line soig simulated images: each detection's two ends, the first (by image x, then y)\n";
-    s +=
-        "! line at the exposure's start, the second at its end; which end is first is not known.\n";
+    if truth {
+        s += "# comment\n! line soig truth: each labelled object's streak ends, its first and last trajectory\n";
+        s += "! line samples, at their own instants (half a time slice inside the exposure).\n";
+    } else {
+        s += "# comment\n! line soig simulated images: each detection's two ends, the first (by image x, then y)\n";
+        s += "! line at the exposure's start, the second at its end; which end is first is not known.\n";
+    }
     let mut header: Vec<&str> = COLUMNS.to_vec();
     header.push(REMARKS);
     s += &header.join("|");
     s.push('\n');
+    // The truth's ends are numbered by the image's label lines.
+    let item = if truth { "label" } else { "detection" };
     for (n, o) in observations.iter().enumerate() {
         let letter = o
             .detector
@@ -103,7 +110,7 @@ pub fn psv(observations: &[&Observation], observer: &str) -> String {
                 o.magnitude.map_or(String::new(), |m| format!("{m:.2}")),
                 (if o.magnitude.is_some() { "V" } else { "" }).to_string(),
                 psv_text(&format!(
-                    "{} {} detection {} end {}",
+                    "{} {} {item} {} end {}",
                     o.detector,
                     o.image,
                     o.detection,

@@ -11,7 +11,6 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
 use serde::Deserialize;
 
 use super::{detected_split, detectors, identity, splits, stems};
@@ -41,21 +40,11 @@ fn read_truth(path: &Path) -> anyhow::Result<Truth> {
     #[derive(Deserialize)]
     struct Image {
         frame: Option<Frame>,
-        #[serde(default)]
-        objects: Option<Vec<Object>>,
     }
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let bad =
-        |e: serde_json::Error| anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display());
-    let image: Image = serde_json::from_str(&text).map_err(bad)?;
-    let objects = match image.objects {
-        Some(objects) => objects,
-        None => vec![serde_json::from_str(&text).map_err(bad)?],
-    };
+    let sidecar = crate::truth_sidecar::read::<Image, Object>(path)?;
     Ok(Truth {
-        objects,
-        frame: image.frame,
+        objects: sidecar.objects,
+        frame: sidecar.frame.frame,
     })
 }
 

@@ -5,7 +5,6 @@
 
 use std::path::Path;
 
-use anyhow::Context;
 use serde::Deserialize;
 
 /// One labelled object: its name, its id (the NORAD number, or a generated object's id) and
@@ -44,24 +43,12 @@ impl Identity {
 
 /// Every object of the sidecar at `path`, labelled or not, with whether it has a label line.
 pub fn objects(path: &Path) -> anyhow::Result<Vec<(Identity, bool)>> {
-    #[derive(Deserialize)]
-    struct Frame {
-        #[serde(default)]
-        objects: Option<Vec<Labelled>>,
-    }
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let bad =
-        |e: serde_json::Error| anyhow::anyhow!("{}: not a soig truth sidecar: {e}", path.display());
-    let frame: Frame = serde_json::from_str(&text).map_err(bad)?;
-    let objects = match frame.objects {
-        Some(objects) => objects,
-        None => vec![serde_json::from_str(&text).map_err(bad)?],
-    };
-    Ok(objects
+    let sidecar = crate::truth_sidecar::read::<serde::de::IgnoredAny, Labelled>(path)?;
+    Ok(sidecar
+        .objects
         .into_iter()
         .map(|o| {
-            let labelled = o.label_box_final_px.as_ref().is_some_and(|b| !b.is_null());
+            let labelled = crate::truth_sidecar::labelled(&o.label_box_final_px);
             let source = o.source.unwrap_or_else(|| ONE_OBJECT_SOURCE.into());
             let identity = Identity {
                 object: o.object,

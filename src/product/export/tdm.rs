@@ -135,6 +135,30 @@ fn kvn_text(s: &str) -> String {
         .collect()
 }
 
+/// A segment's metadata, to its `DATA_START`: angles (RA, Dec on ICRF axes) from `observer`
+/// (participant 1) to `target` (participant 2, already KVN text) between `times`, `comment`
+/// first.
+fn segment_start(comment: &str, times: [&str; 2], observer: &str, target: &str) -> String {
+    format!(
+        "\nMETA_START\n\
+         COMMENT {comment}\n\
+         TIME_SYSTEM = UTC\n\
+         START_TIME = {}\n\
+         STOP_TIME = {}\n\
+         PARTICIPANT_1 = {}\n\
+         PARTICIPANT_2 = {target}\n\
+         MODE = SEQUENTIAL\n\
+         PATH = 2,1\n\
+         ANGLE_TYPE = RADEC\n\
+         REFERENCE_FRAME = ICRF\n\
+         META_STOP\n\
+         DATA_START\n",
+        times[0],
+        times[1],
+        kvn_text(observer),
+    )
+}
+
 /// The TDM of `observations`, the observer named `observer`, apparent or geometric places.
 fn tdm(observer: &str, apparent: bool, observations: &[Observation], skipped: usize) -> String {
     let places = if apparent {
@@ -165,27 +189,11 @@ fn tdm(observer: &str, apparent: bool, observations: &[Observation], skipped: us
                 o.start + hifitime::Duration::from_seconds(o.exposure_s * k as f64 / 2.0),
             )
         };
-        s += &format!(
-            "\nMETA_START\n\
-             COMMENT image {}: SNR {:.3}\n\
-             TIME_SYSTEM = UTC\n\
-             START_TIME = {}\n\
-             STOP_TIME = {}\n\
-             PARTICIPANT_1 = {}\n\
-             PARTICIPANT_2 = {} (NORAD {})\n\
-             MODE = SEQUENTIAL\n\
-             PATH = 2,1\n\
-             ANGLE_TYPE = RADEC\n\
-             REFERENCE_FRAME = ICRF\n\
-             META_STOP\n\
-             DATA_START\n",
-            o.image,
-            o.snr,
-            at(0),
-            at(2),
-            kvn_text(observer),
-            kvn_text(&o.object),
-            o.norad,
+        s += &segment_start(
+            &format!("image {}: SNR {:.3}", o.image, o.snr),
+            [&at(0), &at(2)],
+            observer,
+            &format!("{} (NORAD {})", kvn_text(&o.object), o.norad),
         );
         for (k, [ra, dec]) in o.radec.iter().enumerate() {
             s += &format!(
@@ -211,17 +219,25 @@ pub fn detections(
     observations: &[&crate::observations::Observation],
     observer: &str,
     apparent: bool,
+    truth: bool,
 ) -> String {
     let places = if apparent {
         "apparent (render.apparent_positions)"
     } else {
         "geometric"
     };
+    let what = if truth {
+        "COMMENT soig truth: each labelled object's streak ends (its first and last trajectory samples)\n\
+         COMMENT through the image's FITS WCS, each at its own instant (half a time slice inside the\n\
+         COMMENT exposure). Angles in degrees, on the WCS's ICRS axes"
+    } else {
+        "COMMENT soig detections: each detection's two streak ends through the image's FITS WCS,\n\
+         COMMENT the first (by PNG x, then y) at the exposure's start, the second at its end: which\n\
+         COMMENT end came first is not known. Angles in degrees, on the WCS's ICRS axes"
+    };
     let mut s = format!(
         "CCSDS_TDM_VERS = 2.0\n\
-         COMMENT soig detections: each detection's two streak ends through the image's FITS WCS,\n\
-         COMMENT the first (by PNG x, then y) at the exposure's start, the second at its end: which\n\
-         COMMENT end came first is not known. Angles in degrees, on the WCS's ICRS axes ({places}).\n\
+         {what} ({places}).\n\
          CREATION_DATE = {}\n\
          ORIGINATOR = soig\n",
         observations
@@ -230,6 +246,8 @@ pub fn detections(
                 crate::render::iso_utc(o.times[0])
             }),
     );
+    // The truth's ends are numbered by the image's label lines.
+    let item = if truth { "label" } else { "detection" };
     for o in observations.iter().filter(|o| !(o.cut[0] && o.cut[1])) {
         let [t0, t1] = o.times.map(crate::render::iso_utc);
         let sigma = match o.uncertainty {
@@ -237,30 +255,22 @@ pub fn detections(
                 "one-sigma {:.4}\" along, {:.4}\" across the streak",
                 u.along_arcsec, u.across_arcsec
             ),
+            None if truth => "the truth's place, no uncertainty".to_string(),
             None => "no uncertainty (the detector gives no SNR)".to_string(),
         };
-        s += &format!(
-            "\nMETA_START\n\
-             COMMENT {} {} detection {}: score {:.4}, {sigma}\n\
-             TIME_SYSTEM = UTC\n\
-             START_TIME = {t0}\n\
-             STOP_TIME = {t1}\n\
-             PARTICIPANT_1 = {}\n\
-             PARTICIPANT_2 = {} {} detection {}\n\
-             MODE = SEQUENTIAL\n\
-             PATH = 2,1\n\
-             ANGLE_TYPE = RADEC\n\
-             REFERENCE_FRAME = ICRF\n\
-             META_STOP\n\
-             DATA_START\n",
-            o.detector,
-            o.image,
-            o.detection,
-            o.score,
-            kvn_text(observer),
-            kvn_text(&o.detector),
-            o.image,
-            o.detection,
+        s += &segment_start(
+            &format!(
+                "{} {} {item} {}: score {:.4}, {sigma}",
+                o.detector, o.image, o.detection, o.score
+            ),
+            [&t0, &t1],
+            observer,
+            &format!(
+                "{} {} {item} {}",
+                kvn_text(&o.detector),
+                o.image,
+                o.detection
+            ),
         );
         // An end the image's edge cuts is no observation (observations.rs).
         for ((t, [ra, dec]), _) in [&t0, &t1]

@@ -99,6 +99,10 @@ pub struct Scene {
     /// A generated object of a catalogue scene's population (a breakup fragment).
     #[serde(skip)]
     pub generated: bool,
+    /// The observer's GCRS state (km, km/s) at mid-exposure where the scene has no
+    /// ephemeris of its own to state it (a catalogue stare): the FITS `OBSPOS-*`, `OBSVEL-*`.
+    #[serde(skip)]
+    pub observer_gcrs: Option<(soig_sky::Vec3, soig_sky::Vec3)>,
     /// A ground site's seeing over the exposure (None: the sensor's Gaussian PSF).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub seeing: Option<Seeing>,
@@ -309,6 +313,7 @@ impl Scene {
             placed: None,
             unseen: None,
             generated: false,
+            observer_gcrs: None,
             seeing: exposure.seeing,
             scintillation: None,
             sky_v_mag_per_arcsec2: exposure.sky_v_mag_per_arcsec2,

@@ -324,6 +324,10 @@ pub(super) fn draw_stare(
         let collect_frame = CollectFrame::of(spec, image, collect);
         let mut scene = pointed.accept(attempt, rejections, collect_frame, Some(seen));
         scene.unseen = Some(unseen);
+        // The observer's place for the FITS, as a frame with an object of its own states it
+        // (ADES requires a space-based observer's position).
+        scene.observer_gcrs =
+            crate::sighting::observer_state_at_mid(inputs.observer.viewpoint(), mid);
         return Ok(scene);
     }
     Err(NoScene::named(

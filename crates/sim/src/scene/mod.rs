@@ -28,7 +28,7 @@ mod spec;
 mod trajectory;
 mod visibility;
 
-pub use accepted::{CollectFrame, Geometry, Scene, TrajectorySample, Tumble};
+pub use accepted::{CollectFrame, Geometry, Scene, TrajectorySample, Tumble, psf_of};
 pub use catalogue::Unseen;
 pub use draw::{choose_debris, draw};
 pub use place::object_track_id;
@@ -39,7 +39,8 @@ pub use spec::{
     StarField, TumbleRange, julian_year,
 };
 pub use trajectory::{
-    MAX_SAMPLE_SPACING_PSF_SIGMAS, MAX_TRAJECTORY_SAMPLES, max_sample_spacing_px,
+    MAX_SAMPLE_SPACING_PSF_SIGMAS, MAX_TRAJECTORY_SAMPLES, max_sample_spacing_px, sample_time_s,
+    slice_count,
 };
 pub use visibility::expected_snr;
 

@@ -51,7 +51,7 @@ pub(super) fn trajectory(
         let dt = exposure_s / n as f64;
         let mut trajectory = Vec::with_capacity(n);
         for k in 0..n {
-            let t_s = (k as f64 + 0.5) * dt;
+            let t_s = sample_time_s(k, n, exposure_s);
             let sight = at(t_s);
             let (o, d) = (sight.observer_km, sight.debris_km);
             let los = sub(d, o);
@@ -94,21 +94,37 @@ pub(super) fn trajectory(
     };
     let n = spec.trajectory_samples;
     let mut trajectory = sample(n)?;
-    // Samples farther apart in the image than two PSF sigmas render a row of dots, not a
-    // streak (a 600 s exposure of LEO debris with 2000 samples: one dot per 128 px; 0.7% of the
-    // quickstart draws: 4-8 px). Such a trajectory is sampled again, finer by the factor that
-    // brings the spacing to two sigmas; beyond MAX_TRAJECTORY_SAMPLES the draw is rejected.
-    let psf_px = shot.psf_core_px;
     let spacing = max_sample_spacing_px(sensor, &trajectory);
-    if spacing > MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px {
-        let factor = (spacing / (MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_px)).ceil() as usize;
+    let slices = slice_count(n, spacing, shot.psf_core_px)?;
+    if slices != n {
+        trajectory = sample(slices)?;
+    }
+    Ok(trajectory)
+}
+
+/// The instant of sample `k` of a trajectory cut into `n` equal time slices of an exposure of
+/// `exposure_s`, seconds from its start: the slice's centre. (The first and last samples, the
+/// truth's `streak_start_px` and `streak_end_px`, are half a slice inside the exposure.)
+pub fn sample_time_s(k: usize, n: usize, exposure_s: f64) -> f64 {
+    (k as f64 + 0.5) * (exposure_s / n as f64)
+}
+
+/// The number of slices of a trajectory first cut into `n` whose consecutive samples lie up to
+/// `spacing_px` apart in the image ([`max_sample_spacing_px`]) under a PSF of core sigma
+/// `psf_core_px`. Samples farther apart than two PSF sigmas render a row of dots, not a streak
+/// (a 600 s exposure of LEO debris with 2000 samples: one dot per 128 px; 0.7% of the
+/// quickstart draws: 4-8 px). Such a trajectory is sampled again, finer by the factor that
+/// brings the spacing to two sigmas; beyond MAX_TRAJECTORY_SAMPLES the draw is rejected.
+pub fn slice_count(n: usize, spacing_px: f64, psf_core_px: f64) -> Result<usize, Rejection> {
+    if spacing_px > MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_core_px {
+        let factor = (spacing_px / (MAX_SAMPLE_SPACING_PSF_SIGMAS * psf_core_px)).ceil() as usize;
         let finer = n.saturating_mul(factor);
         if finer > MAX_TRAJECTORY_SAMPLES {
             return Err(Rejection::TooFast);
         }
-        trajectory = sample(finer)?;
+        return Ok(finer);
     }
-    Ok(trajectory)
+    Ok(n)
 }
 
 /// Largest in-image distance between consecutive trajectory samples, in PSF sigmas, before the
@@ -128,4 +144,22 @@ pub fn max_sample_spacing_px(sensor: &Sensor, trajectory: &[TrajectorySample]) -
         .map(|pair| (pair[1].x_px - pair[0].x_px).hypot(pair[1].y_px - pair[0].y_px))
         .filter(|d| d.is_finite())
         .fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Samples within two PSF sigmas keep their count; farther apart, the count grows by the
+    /// factor that brings them to two sigmas; past the limit, the draw is refused. The first
+    /// and last samples sit half a slice inside the exposure.
+    #[test]
+    fn slices_and_their_instants() {
+        assert_eq!(slice_count(2000, 2.0, 1.0), Ok(2000));
+        assert_eq!(slice_count(2000, 2.01, 1.0), Ok(4000));
+        assert_eq!(slice_count(2000, 9.0, 1.5), Ok(6000));
+        assert_eq!(slice_count(2000, 1e4, 1.0), Err(Rejection::TooFast));
+        assert_eq!(sample_time_s(0, 2000, 10.0), 0.0025);
+        assert!((sample_time_s(1999, 2000, 10.0) - 9.9975).abs() < 1e-12);
+    }
 }

@@ -22,7 +22,7 @@ use sgp4::chrono::{Datelike, Timelike};
 
 pub use coarse::{CoarseOrbit, seconds as coarse_seconds};
 pub use fit::{FIT_POSITION_KM, FIT_VELOCITY_KM_S};
-pub use propagate::{OrbitError, OrbitalElements, Propagator, Regime};
+pub use propagate::{MeanElements, OrbitError, OrbitalElements, Propagator, Regime};
 pub use tle::{Tle, TleError, parse_tles};
 // The frame rotation and its matrix helpers were first defined here; their paths still work.
 pub use super::frames::{teme_to_gcrs, teme_to_gcrs_matrix};

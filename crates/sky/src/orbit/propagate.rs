@@ -96,6 +96,27 @@ pub struct Propagator {
     pub(super) mean: sgp4::Orbit,
     /// SGP4's drag term B*, 1/Earth radii.
     drag_term: f64,
+    /// The elements SGP4 was initialised with.
+    elements: MeanElements,
+}
+
+/// The mean elements an SGP4 propagator was initialised with, as a TLE or a CCSDS OMM states
+/// them (Kozai mean motion; angles in degrees; TEME of the epoch): what another SGP4
+/// implementation needs to propagate the same orbit, with [`Propagator::epoch`],
+/// [`Propagator::mean_drag_term`] and [`Propagator::norad_id`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeanElements {
+    pub inclination_deg: f64,
+    pub raan_deg: f64,
+    pub eccentricity: f64,
+    pub arg_perigee_deg: f64,
+    pub mean_anomaly_deg: f64,
+    /// Revolutions per day.
+    pub mean_motion_rev_day: f64,
+    /// The TLE's first and second derivatives of the mean motion (rev/day^2, rev/day^3),
+    /// which SGP4 does not use.
+    pub mean_motion_dot: f64,
+    pub mean_motion_ddot: f64,
 }
 
 /// The resonance integrator states a resonant deep-space orbit has reached, by 720-min step.
@@ -279,6 +300,16 @@ impl Propagator {
             resonance,
             mean: orbit,
             drag_term: elements.drag_term,
+            elements: MeanElements {
+                inclination_deg: elements.inclination,
+                raan_deg: elements.right_ascension,
+                eccentricity: elements.eccentricity,
+                arg_perigee_deg: elements.argument_of_perigee,
+                mean_anomaly_deg: elements.mean_anomaly,
+                mean_motion_rev_day: elements.mean_motion,
+                mean_motion_dot: elements.mean_motion_dot,
+                mean_motion_ddot: elements.mean_motion_ddot,
+            },
         })
     }
 
@@ -298,6 +329,11 @@ impl Propagator {
 
     pub fn norad_id(&self) -> u64 {
         self.norad_id
+    }
+
+    /// The mean elements SGP4 was initialised with (for a fitted orbit, the fit's).
+    pub fn mean_elements(&self) -> MeanElements {
+        self.elements
     }
 
     /// Position in the TEME frame, km, at UTC instant t.
