@@ -21,17 +21,9 @@ fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
-/// Angular distance between two (RA, Dec) in degrees.
+/// Angular distance between two (RA, Dec) in degrees (the astrometric report's haversine).
 fn separation_deg(a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (ra1, d1, ra2, d2) = (
-        a[0].to_radians(),
-        a[1].to_radians(),
-        b[0].to_radians(),
-        b[1].to_radians(),
-    );
-    let h =
-        ((d2 - d1) / 2.0).sin().powi(2) + d1.cos() * d2.cos() * ((ra2 - ra1) / 2.0).sin().powi(2);
-    (2.0 * h.sqrt().asin()).to_degrees()
+    soig::report::astrometry::offset_arcsec(a, b).0 / 3600.0
 }
 
 fn pair(v: &serde_json::Value) -> [f64; 2] {

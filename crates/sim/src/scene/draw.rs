@@ -24,7 +24,7 @@ use super::{
 };
 use crate::background::{BackgroundModel, FrameChoice};
 use crate::sensor::Sensor;
-use crate::sighting::Sighting;
+use crate::sighting::{Sight, Sighting};
 use soig_base::rng::{Purpose, stream};
 use soig_sky::ephemeris::sun_position_km;
 use soig_sky::stars::Star;
@@ -162,16 +162,28 @@ fn judge_later_frames(
             return Err(Rejection::CollectPastWindow);
         }
         let mid = start + Duration::from_seconds(d.exposure_s / 2.0);
-        let sighting = Sighting::new(
-            inputs.observer.viewpoint(),
-            &inputs.debris[debris_index].propagator,
-            mid,
-            spec.apparent_positions,
-        );
-        let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
+        let (_, sight) = sighting_at(spec, inputs, debris_index, mid)?;
         in_sight(spec, &sight, (sun_position_km(mid), mid))?;
     }
     Ok(())
+}
+
+/// How debris object `debris_index` is seen from the observer around `mid`, and where it is
+/// at `mid`.
+fn sighting_at<'a>(
+    spec: &Spec,
+    inputs: &'a Inputs,
+    debris_index: usize,
+    mid: Epoch,
+) -> Result<(Sighting<'a>, Sight), Rejection> {
+    let sighting = Sighting::new(
+        inputs.observer.viewpoint(),
+        &inputs.debris[debris_index].propagator,
+        mid,
+        spec.apparent_positions,
+    );
+    let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
+    Ok((sighting, sight))
 }
 
 /// The random values of one draw attempt, in the scene stream's order.
@@ -271,13 +283,7 @@ fn try_draw(
     let mid = start + Duration::from_seconds(exposure_s / 2.0);
 
     // Visibility at mid-exposure (paper 3.2.2).
-    let sighting = Sighting::new(
-        inputs.observer.viewpoint(),
-        &inputs.debris[debris_index].propagator,
-        mid,
-        spec.apparent_positions,
-    );
-    let sight = sighting.at(mid).ok_or(Rejection::PropagationFailed)?;
+    let (sighting, sight) = sighting_at(spec, inputs, debris_index, mid)?;
     let sun = sun_position_km(mid);
     // A later frame of a collect is not judged (`gated` false); in it the object may have
     // entered the shadow, and then sends no light.
