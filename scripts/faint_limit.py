@@ -118,8 +118,9 @@ def main():
         for p in pred:
             best, at = 0.0, None
             for k, g in enumerate(gt):
-                if not matched[k] and iou(p, g) > best:
-                    best, at = iou(p, g), k
+                overlap = iou(p, g)
+                if not matched[k] and overlap > best:
+                    best, at = overlap, k
             if at is not None and best >= IOU:
                 matched[at] = True
             else:

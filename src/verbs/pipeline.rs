@@ -597,7 +597,7 @@ pub(crate) fn finish(
         }
     }
     // A breakup cloud's fragments: their fitted orbits, for an independent propagation.
-    crate::population_omm::write(dir, &plan.objects.population)?;
+    crate::population_omm::write(dir, plan.population())?;
     if plan.collect_frames > 1 {
         let indices: Vec<u64> = records.iter().map(|r| r.index).collect();
         crate::collect::write_manifests(dir, &indices, |i| plan.subset(i))?;

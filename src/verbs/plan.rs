@@ -75,8 +75,6 @@ pub struct Objects {
     pub listed: bool,
     /// A stare points at no debris object (its objects are the population's, in the truth).
     pub stare: bool,
-    /// The objects of `[population]` (a catalogue's or a breakup cloud's; empty without).
-    pub population: Vec<Body>,
 }
 
 /// What the detect stage runs.
@@ -213,13 +211,18 @@ impl<'c> Plan<'c> {
                     .collect(),
                 listed: c.objects.is_some(),
                 stare: c.pointing.stare.is_some(),
-                population: campaign.population.clone(),
             },
             detect,
             train,
             keep,
             campaign_dir: campaign.base_dir.clone(),
         })
+    }
+
+    /// The objects of `[population]` (a catalogue's or a breakup cloud's; empty without),
+    /// borrowed: a catalogue of tens of thousands is not copied into the plan.
+    pub fn population(&self) -> &'c [Body] {
+        &self.campaign.population
     }
 
     /// The subset of image `i`, where the run splits its images.
