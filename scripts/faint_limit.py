@@ -10,7 +10,7 @@ objects.csv (each object: SNR, magnitude, found) and summary.json (the SNR at 50
 isotonic fit of found against SNR, per object, interpolated linearly between the fit's steps; the
 precision at confidence 0.5, overall and above that SNR). Standard library only.
 
-    python3 scripts/faint_limit.py RUN_OUTPUT OUT_DIR [--detector streak]
+    python3 scripts/faint_limit.py RUN_OUTPUT OUT_DIR [--detector streak] [--predictions DIR]
 """
 import argparse
 import csv
@@ -100,7 +100,13 @@ def main():
     ap.add_argument("run")
     ap.add_argument("out")
     ap.add_argument("--detector", default="streak")
+    ap.add_argument(
+        "--predictions",
+        help="a folder of YOLO prediction files to score instead of the run's own "
+        "(e.g. from `cargo run --example sky_eval`)",
+    )
     a = ap.parse_args()
+    predictions = a.predictions or os.path.join(a.run, "report", "predictions", a.detector)
     objects, false_positives = [], []
     for truth_path in sorted(glob.glob(os.path.join(a.run, "truth", "*.json"))):
         stem = os.path.basename(truth_path)[:-5]
@@ -109,9 +115,7 @@ def main():
         if not labels:
             continue  # not a test image
         gt = boxes(labels[0], False)
-        pred = boxes(
-            os.path.join(a.run, "report", "predictions", a.detector, stem + ".txt"), True
-        )
+        pred = boxes(os.path.join(predictions, stem + ".txt"), True)
         pred = sorted((p for p in pred if p[4] >= CONF), key=lambda p: -p[4])
         matched = [False] * len(gt)
         fps = 0
