@@ -105,6 +105,7 @@ mod fit;
 mod flatten;
 mod fragments;
 mod lines;
+mod lone_line;
 mod maps;
 mod merge;
 mod noise;
@@ -138,6 +139,7 @@ mod unit_noise;
 mod unlisted;
 
 pub use explain::{Dropped, Reason, Seeds};
+use lone_line::{lone, trail_length};
 pub use output::Candidate;
 pub use own_trails::{OwnTrails, TrailModel};
 use own_trails::{from_lines, own_trails};
@@ -266,11 +268,18 @@ fn along_own_trails(
         max_candidates: p.max_candidates.max(ALL_LINES),
         ..p.clone()
     };
-    let second = pass(pixels, w, h, &along, bg, z, Some(trail), Some(&[])).0;
+    let second = pass(pixels, w, h, &along, bg, z.clone(), Some(trail), Some(&[])).0;
     m.settle(&second);
+    // Within a degree of the trails a line is debris where its length and profile say that no
+    // trail, nor two end to end, explains it (`lone_line`).
+    let explained: Vec<&Candidate> = second
+        .iter()
+        .filter(|c| m.explains(c, p.psf_sigma))
+        .collect();
+    let trail_px = trail_length(&explained);
     let debris = second
         .into_iter()
-        .filter(|c| !m.explains(c, p.psf_sigma))
+        .filter(|c| !m.explains(c, p.psf_sigma) || trail_px.is_some_and(|t| lone(c, t, &z, w, h)))
         .collect();
     union(first, debris, trail, p)
 }
