@@ -139,13 +139,14 @@ mod unit_noise;
 mod unlisted;
 
 pub use explain::{Dropped, Reason, Seeds};
-use lone_line::{lone, trail_length};
+use lone_line::{NEAR_DEG, Seams, trail_length};
 pub use output::Candidate;
 pub use own_trails::{OwnTrails, TrailModel};
 use own_trails::{from_lines, own_trails};
 use params::Sanitized;
 pub use params::StreakParams;
 use pass::pass;
+use segment::angle_diff_deg;
 pub use sky::StarTrail;
 use union::union;
 use unit_noise::unit_noise_map;
@@ -271,7 +272,8 @@ fn along_own_trails(
     let second = pass(pixels, w, h, &along, bg, z.clone(), Some(trail), Some(&[])).0;
     m.settle(&second);
     // Within a degree of the trails a line is debris where its length and profile say that no
-    // trail, nor two end to end, explains it (`lone_line`).
+    // trail, nor two end to end, explains it; a few degrees off them, where two trails side by
+    // side do not (`lone_line`).
     let explained: Vec<&Candidate> = second
         .iter()
         .filter(|c| m.explains(c, p.psf_sigma))
@@ -279,7 +281,15 @@ fn along_own_trails(
     let trail_px = trail_length(&explained);
     let debris = second
         .into_iter()
-        .filter(|c| !m.explains(c, p.psf_sigma) || trail_px.is_some_and(|t| lone(c, t, &z, w, h)))
+        .filter(|c| {
+            let seams = trail_px.map(|t| Seams::of(c, t, &z, w, h));
+            if m.explains(c, p.psf_sigma) {
+                seams.is_some_and(|s| s.lone())
+            } else {
+                let d = angle_diff_deg(c.orientation_deg, m.angle_deg);
+                d > NEAR_DEG || !seams.is_some_and(|s| s.pair())
+            }
+        })
         .collect();
     union(first, debris, trail, p)
 }
