@@ -148,7 +148,7 @@ fn profile(c: &Candidate, z: &[f32], w: usize, h: usize) -> Vec<f64> {
 /// The lowest and highest median of the pieces of half a trail's length of `prof`, over
 /// `level` (NaN where the level is not positive).
 fn pieces(prof: &[f64], trail_px: f64, level: f64) -> (f64, f64) {
-    if !(level > 0.0) || prof.is_empty() {
+    if level.is_nan() || level <= 0.0 || prof.is_empty() {
         return (f64::NAN, f64::NAN);
     }
     let k = ((prof.len() as f64 / (0.5 * trail_px)).round() as usize).clamp(2, prof.len());
@@ -209,9 +209,12 @@ fn one_line_gain(prof: &[f64], trail_px: f64) -> f64 {
 mod tests {
     use super::*;
 
-    /// A noise-free map of `w` x `h` with the given segments ((x0, y0), (x1, y1), level), x0
-    /// < x1, 3 px wide (levels add where two overlap).
-    fn map(w: usize, h: usize, segs: &[((usize, f64), (usize, f64), f32)]) -> Vec<f32> {
+    /// A segment from (x0, y0) to (x1, y1), x0 < x1, and its level.
+    type Drawn = ((usize, f64), (usize, f64), f32);
+
+    /// A noise-free map of `w` x `h` with the given segments, 3 px wide (levels add where two
+    /// overlap).
+    fn map(w: usize, h: usize, segs: &[Drawn]) -> Vec<f32> {
         let mut z = vec![0f32; w * h];
         for &((x0, y0), (x1, y1), level) in segs {
             for x in x0..x1 {
@@ -225,7 +228,7 @@ mod tests {
     }
 
     /// A horizontal segment on row `row`, x from `a` to `b`.
-    fn flat(a: usize, b: usize, row: f64, level: f32) -> ((usize, f64), (usize, f64), f32) {
+    fn flat(a: usize, b: usize, row: f64, level: f32) -> Drawn {
         ((a, row), (b, row), level)
     }
 
