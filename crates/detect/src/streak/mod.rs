@@ -207,9 +207,9 @@ pub fn detect_streaks_among_stars(
 /// predicted trails given, the frame's own trails are measured (`own_trails`); where many
 /// share a direction, the first pass runs along it, and the star-aware pass, with no trail
 /// predicted, finds every line along the trails; of those, the lines off the direction that
-/// most of them share (`TrailModel::settle`, `explains`), or along it but no trail's (`lone_line`),
-/// join the first pass's. Where they share none
-/// (point stars), as [`detect_streaks`], unchanged. A direction or trails given: as
+/// most of them share (`TrailModel::settle`, `explains`), or along it but no trail's
+/// (`lone_line`), join the first pass's. Where they share none (point stars), as
+/// [`detect_streaks`], unchanged. A direction or trails given: as
 /// [`detect_streaks_among_stars`], and nothing measured (None).
 pub fn detect_streaks_on_frame(
     pixels: &[u8],
