@@ -7,16 +7,23 @@ to the trails). Checked: the debris lies on its predicted segment, ends included
 angle is measured from +x towards +y, as `soig detect --star-trail-angle-deg` takes it.
 
     python3 -m venv .venv-satsim && .venv-satsim/bin/pip install satsim numpy astropy
-    .venv-satsim/bin/python scripts/independent/satsim_frames.py OUT N SEED [SNR_PX]
+    .venv-satsim/bin/python scripts/independent/satsim_frames.py OUT N SEED [SNR_PX] [--near FRAC]
     soig detect OUT/*.fits --out DET --psf-fwhm-px 3.34
     python3 scripts/independent/score.py DET/detections.csv OUT/truth.json
 
+`--near FRAC` raises the share of debris within 5 deg of the trails (default 0.3) for development
+sets; the random draws are the same as without it, so a seed's default set is unchanged.
 Not in CI (TensorFlow, 3 GB); about 5 s a frame here. The frames are not committed.
 """
 import json, math, os, sys, shutil
 import numpy as np
 from satsim.satsim import image_generator
 from astropy.io import fits as afits
+near_frac = 0.3
+if "--near" in sys.argv:
+    k = sys.argv.index("--near")
+    near_frac = float(sys.argv[k + 1])
+    del sys.argv[k:k + 2]
 out, n, seed = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 os.makedirs(out, exist_ok=True)
 rng = np.random.default_rng(seed)
@@ -26,7 +33,7 @@ truth = []
 for i in range(n):
     trail_deg = float(rng.uniform(0, 180))
     trail_px_s = float(rng.uniform(10, 30))  # trails 50-150 px in 5 s
-    near = rng.random() < 0.3
+    near = rng.random() < near_frac
     off = float(rng.uniform(0.5, 5) * rng.choice([-1, 1])) if near else float(rng.uniform(5, 90) * rng.choice([-1, 1]))
     deb_deg = trail_deg + off
     length = float(rng.uniform(150, 600))

@@ -105,6 +105,7 @@ mod fit;
 mod flatten;
 mod fragments;
 mod lines;
+mod lone_line;
 mod maps;
 mod merge;
 mod noise;
@@ -138,12 +139,14 @@ mod unit_noise;
 mod unlisted;
 
 pub use explain::{Dropped, Reason, Seeds};
+use lone_line::{NEAR_DEG, Seams, trail_length};
 pub use output::Candidate;
 pub use own_trails::{OwnTrails, TrailModel};
 use own_trails::{from_lines, own_trails};
 use params::Sanitized;
 pub use params::StreakParams;
 use pass::pass;
+use segment::angle_diff_deg;
 pub use sky::StarTrail;
 use union::union;
 use unit_noise::unit_noise_map;
@@ -204,8 +207,9 @@ pub fn detect_streaks_among_stars(
 /// predicted trails given, the frame's own trails are measured (`own_trails`); where many
 /// share a direction, the first pass runs along it, and the star-aware pass, with no trail
 /// predicted, finds every line along the trails; of those, the lines off the direction that
-/// most of them share (`TrailModel::settle`, `explains`) join the first pass's. Where they share none
-/// (point stars), as [`detect_streaks`], unchanged. A direction or trails given: as
+/// most of them share (`TrailModel::settle`, `explains`), or along it but no trail's
+/// (`lone_line`), join the first pass's. Where they share none (point stars), as
+/// [`detect_streaks`], unchanged. A direction or trails given: as
 /// [`detect_streaks_among_stars`], and nothing measured (None).
 pub fn detect_streaks_on_frame(
     pixels: &[u8],
@@ -266,11 +270,27 @@ fn along_own_trails(
         max_candidates: p.max_candidates.max(ALL_LINES),
         ..p.clone()
     };
-    let second = pass(pixels, w, h, &along, bg, z, Some(trail), Some(&[])).0;
+    let second = pass(pixels, w, h, &along, bg, z.clone(), Some(trail), Some(&[])).0;
     m.settle(&second);
+    // Within a degree of the trails a line is debris where its length and profile say that no
+    // trail, nor two end to end, explains it; a few degrees off them, where two trails side by
+    // side do not (`lone_line`).
+    let explained: Vec<&Candidate> = second
+        .iter()
+        .filter(|c| m.explains(c, p.psf_sigma))
+        .collect();
+    let trail_px = trail_length(&explained);
     let debris = second
         .into_iter()
-        .filter(|c| !m.explains(c, p.psf_sigma))
+        .filter(|c| {
+            let seams = trail_px.map(|t| Seams::of(c, t, &z, w, h));
+            if m.explains(c, p.psf_sigma) {
+                seams.is_some_and(|s| s.lone())
+            } else {
+                let d = angle_diff_deg(c.orientation_deg, m.angle_deg);
+                d > NEAR_DEG || !seams.is_some_and(|s| s.pair())
+            }
+        })
         .collect();
     union(first, debris, trail, p)
 }

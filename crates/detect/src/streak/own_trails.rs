@@ -294,8 +294,8 @@ impl TrailModel {
     /// keeps 2 of 12 debris streaks 1.5-5 degrees off the trails, with 3 false boxes in 24
     /// frames; 2 psf_sigma: 4 of 12, 7 false boxes; 1 psf_sigma: 4 of 12, 18 (star trails
     /// cut short). The misses are lost before this test: with no trail subtracted, a streak
-    /// a few degrees off crosses the trails along tens of pixels and joins them. Debris a degree or more off the trails is not explained; debris closer to
-    /// them is taken for a star. (Their length is no test here: in soig's survey frames trails
+    /// a few degrees off crosses the trails along tens of pixels and joins them. Debris a degree or more off the trails is not explained; a line closer to
+    /// them is a star's unless its length and profile say otherwise (`lone_line`). (Their length is no test here: in soig's survey frames trails
     /// often run across the whole frame, 1000 px in 1024, and every one is cut by its edge.)
     pub(super) fn explains(&self, c: &Candidate, psf_sigma: f64) -> bool {
         let slack = (4.0 * psf_sigma / c.length_px.max(1.0)).atan().to_degrees();
