@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{ok, repo, soig};
+use common::{arg, ok, repo, soig};
 
 /// Ultralytics' figures (`obb_metrics_reference.py`, ultralytics 8.4.190, torch 2.15.0).
 const PRECISION: f64 = 0.3743705923788247;
@@ -39,9 +39,9 @@ fn oriented_boxes_score_as_ultralytics_obb_validator() {
     let o = ok(soig(&[
         "eval",
         "--labels",
-        fixture.join("labels").to_str().unwrap(),
+        arg(&fixture.join("labels")),
         "--predictions",
-        fixture.join("predictions").to_str().unwrap(),
+        arg(&fixture.join("predictions")),
         "--mode",
         "ultralytics-obb",
         "--image-size",

@@ -12,7 +12,7 @@ use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, differing_files, digest, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, arg, differing_files, digest, tle_object};
 
 /// `images` small images (fixed pointing, the detect stage with the streak detector), written
 /// as `dir/NAME.toml`.
@@ -29,7 +29,7 @@ fn campaign(dir: &Path, name: &str, images: u32) -> PathBuf {
 
 fn command(campaign: &Path, out: &Path) -> Command {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_soig"));
-    cmd.args(["run", campaign.to_str().unwrap(), "--quiet", "--out"])
+    cmd.args(["run", arg(&campaign), "--quiet", "--out"])
         .arg(out)
         .env_remove("SOIG_TEST_ABORT_AT");
     cmd

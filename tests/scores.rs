@@ -13,11 +13,11 @@ mod common;
 
 use std::path::Path;
 
-use common::{json, ok, ort_available, repo, soig};
+use common::{arg, json, ok, ort_available, repo, scratch, soig};
 
 /// `soig eval` of detector `name`'s predictions in `mode`, as JSON.
 fn eval(out: &Path, name: &str, mode: &str) -> serde_json::Value {
-    let at = |p: &str| out.join(p).to_str().unwrap().to_string();
+    let at = |p: &str| arg(&out.join(p)).to_string();
     let o = ok(soig(&[
         "eval",
         "--labels",
@@ -38,17 +38,16 @@ fn report_metrics_are_soig_eval_of_the_runs_own_files() {
     if !ort_available() {
         return;
     }
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("multi");
+    let (tmp, out) = scratch("multi");
     let campaign = repo("campaigns/quickstart-multi.toml");
     ok(soig(&[
         "run",
-        campaign.to_str().unwrap(),
+        arg(&campaign),
         "--set",
         "images=40",
         "--quiet",
         "--out",
-        out.to_str().unwrap(),
+        arg(&out),
     ]));
     let report = json(&out.join("report/report.json"));
     let detectors = report["detectors"].as_array().unwrap();
