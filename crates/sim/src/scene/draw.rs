@@ -322,7 +322,7 @@ fn try_draw(
             area_m2,
             tumble,
             pointing: &pointing,
-            mid_tan: &mid_tan,
+            mid_tan,
             shadowed,
             extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
             psf_core_px: psf_of(sensor, seeing).core_sigma_px(),

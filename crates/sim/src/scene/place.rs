@@ -181,17 +181,7 @@ fn try_place(
         spec,
         sensor,
         &|t_s| turn.apply(track.at(t_s)),
-        &Shot {
-            exposure_s,
-            sun,
-            area_m2,
-            tumble,
-            pointing: &at.pointing,
-            mid_tan: &at.projection(sensor),
-            shadowed,
-            extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
-            psf_core_px: at.psf(sensor).core_sigma_px(),
-        },
+        &Shot::in_frame(spec, sensor, at, (sun, mid), (area_m2, tumble), shadowed),
     )?;
     let snr = gate_snr(
         spec,
