@@ -15,17 +15,11 @@ use soig::experiment;
 use soig::frames::Frame;
 
 mod common;
-use common::{CampaignToml, arg, ok, python_with_astropy, run_quiet, soig, tle_object};
+use common::{CampaignToml, arg, leo_and_geo, ok, python_with_astropy, run_quiet, soig};
 
 /// Images of 512 px (0.7 arcsec/px) in pointing `mode`, rendered only (FITS and truth).
 fn campaign(mode: &str) -> CampaignToml {
-    CampaignToml::new("catalog", 11, 4)
-        .top("stages = [\"render\"]\n")
-        .debris(&tle_object(37476))
-        .debris(&tle_object(40989))
-        .tables(
-            &format!("[pointing]\nmode = \"{mode}\"\n[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n"),
-        )
+    leo_and_geo("catalog", mode, "").top("stages = [\"render\"]\n")
 }
 
 /// The truth of image `index` of the run in `dir/run`.

@@ -16,7 +16,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::{
-    CampaignToml, CocoImage, ELEMENTS_40649, arg, assert_coco_agrees_with_soig_eval,
+    CampaignToml, ELEMENTS_40649, arg, assert_coco_agrees_with_soig_eval,
     assert_coco_bbox_is_label_box, coco_images, digest, export_readers, export_readers_python,
     json, run_quiet, soig, tle_object,
 };
@@ -94,31 +94,25 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
     // the normalised box to 6 decimals: at most 0.5e-6 x 1088 px = 5.4e-4 px per edge, so
     // 1.1e-3 px on a width.
     let mut images = 0;
-    for CocoImage {
-        split,
-        image: im,
-        annotations: mine,
-        stem,
-        labels,
-        truth,
-    } in coco_images(&export, &out)
-    {
+    for im in coco_images(&export, &out) {
         images += 1;
-        let file = im["file_name"].as_str().unwrap();
-        assert!(file.starts_with(&format!("images/{split}/")), "{file}");
+        let (stem, truth) = (&im.stem, &im.truth);
+        let file = im.image["file_name"].as_str().unwrap();
+        assert!(file.starts_with(&format!("images/{}/", im.split)), "{file}");
         let (w, h) = image::image_dimensions(out.join(file)).unwrap();
         assert_eq!(
-            (im["width"].as_u64(), im["height"].as_u64()),
+            (im.image["width"].as_u64(), im.image["height"].as_u64()),
             (Some(w.into()), Some(h.into()))
         );
-        assert_eq!(mine.len(), labels.lines().count(), "{stem}");
-        let got = assert_coco_bbox_is_label_box(&mine[0], &truth["label_box_final_px"], &stem);
+        assert_eq!(im.annotations.len(), im.labels.lines().count(), "{stem}");
+        let ann = &im.annotations[0];
+        let got = assert_coco_bbox_is_label_box(ann, &truth["label_box_final_px"], stem);
         // The annotation names its object (#45): the campaign's debris, its NORAD number.
-        assert_eq!(mine[0]["object_id"], truth["norad"], "{stem}");
-        assert_eq!(mine[0]["object"], truth["object"], "{stem}");
-        assert_eq!(mine[0]["source"], "debris", "{stem}");
+        assert_eq!(ann["object_id"], truth["norad"], "{stem}");
+        assert_eq!(ann["object"], truth["object"], "{stem}");
+        assert_eq!(ann["source"], "debris", "{stem}");
         // serde_json's default float parser may miss the written value by an ulp.
-        let area = mine[0]["area"].as_f64().unwrap();
+        let area = ann["area"].as_f64().unwrap();
         assert!(
             (area - got[2] * got[3]).abs() <= 1e-12 * area,
             "{stem}: area {area}"

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, arg, assert_refused, digest, tle_object};
+use common::{arg, assert_refused, digest, small_detecting_run};
 
 fn soig(args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_soig"));
@@ -33,13 +33,7 @@ fn soig(args: &[&str], env: &[(&str, &str)]) -> Output {
 fn campaign(dir: &Path, name: &str, seed: u64) -> PathBuf {
     let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/yolo/tiny.onnx");
     std::fs::copy(model, dir.join("tiny.onnx")).unwrap();
-    CampaignToml::new(name, seed, 7)
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-        .debris(&tle_object(37476))
-        .debris(ELEMENTS_40649)
-        .tables(
-            "[sensor]\nwidth_px = 128\nheight_px = 128\nfov_radius_deg = 0.0125\n[render]\ntrajectory_samples = 300\n[split]\ntrain = 0.5\nval = 0.2\ntest = 0.3\n[detect]\nmodel = \"tiny.onnx\"\n",
-        )
+    small_detecting_run(name, seed, 7, "[detect]\nmodel = \"tiny.onnx\"\n")
         .write(&dir.join(format!("{name}.toml")))
 }
 

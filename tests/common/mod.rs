@@ -146,6 +146,21 @@ pub fn export_readers_python() -> Option<PathBuf> {
     }
 }
 
+/// `soig eval --labels LABELS --predictions PREDICTIONS ARGS --json`, which must succeed:
+/// what it printed.
+pub fn eval_json(labels: &Path, predictions: &Path, args: &[&str]) -> serde_json::Value {
+    let mut all = vec![
+        "eval",
+        "--labels",
+        arg(labels),
+        "--predictions",
+        arg(predictions),
+    ];
+    all.extend_from_slice(args);
+    all.push("--json");
+    serde_json::from_slice(&ok(soig(&all)).stdout).unwrap()
+}
+
 /// tests/reference/export_readers.py with these arguments: what the libraries read, as JSON.
 pub fn export_readers(py: &Path, args: &[&str]) -> serde_json::Value {
     let out = std::process::Command::new(py)
@@ -179,20 +194,11 @@ pub fn assert_coco_agrees_with_soig_eval(
             arg(&export.join("coco/detections_streak.json")),
         ],
     );
-    let o = soig(&[
-        "eval",
-        "--mode",
-        "coco",
-        "--json",
-        "--labels",
-        arg(&out.join("labels/test")),
-        "--predictions",
-        arg(&out.join("report/predictions/streak")),
-        "--images",
-        arg(&out.join("images/test")),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let soig_eval: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let soig_eval = eval_json(
+        &out.join("labels/test"),
+        &out.join("report/predictions/streak"),
+        &["--mode", "coco", "--images", arg(&out.join("images/test"))],
+    );
     assert!(
         coco["ap50"].as_f64().unwrap() > 0.0,
         "a test set the detector finds nothing in tests nothing: {coco}"
@@ -327,6 +333,30 @@ impl CampaignToml {
         std::fs::write(path, self.text()).unwrap();
         path.to_path_buf()
     }
+}
+
+/// Images of 512 px at the paper's pixel scale (0.7"; field radius 0.05 deg), seed 11, 4
+/// images, of a LEO (NORAD 37476) and a GEO object (40989) in pointing `mode`; `tables` go
+/// between `[pointing]` and `[sensor]`.
+pub fn leo_and_geo(name: &str, mode: &str, tables: &str) -> CampaignToml {
+    CampaignToml::new(name, 11, 4)
+        .debris(&tle_object(37476))
+        .debris(&tle_object(40989))
+        .tables(&format!(
+            "[pointing]\nmode = \"{mode}\"\n{tables}[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n"
+        ))
+}
+
+/// `images` images of 128 px (field radius 0.0125 deg, 300 trajectory samples) of a LEO
+/// (NORAD 37476) and 40649, every stage to detect, split 0.5 / 0.2 / 0.3, with `tables`
+/// after: the small detecting run the resume and shard tests interrupt and merge.
+pub fn small_detecting_run(name: &str, seed: u64, images: u32, tables: &str) -> CampaignToml {
+    CampaignToml::new(name, seed, images)
+        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
+        .debris(&tle_object(37476))
+        .debris(ELEMENTS_40649)
+        .tables("[sensor]\nwidth_px = 128\nheight_px = 128\nfov_radius_deg = 0.0125\n[render]\ntrajectory_samples = 300\n[split]\ntrain = 0.5\nval = 0.2\ntest = 0.3\n")
+        .tables(tables)
 }
 
 /// The digest a `soig` command that must succeed printed.
