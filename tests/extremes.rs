@@ -907,15 +907,10 @@ fn streak_leaving_the_image() {
     let (w, fov) = (128u32, 0.0125);
     let c = campaign(ELEMENTS_40649, &sensor(w, fov));
     let sigma = sensor_of(&c).background_sigma_adu(2.0, None);
+    // A magnitude-11 streak between two pixel places, no star, over 2 s.
+    let streak = |ends| fixed_scene(&c, (10.0, 20.0), vec![], 11.0, ends, 2.0);
     // From the centre out through the right edge: half the streak is in the image.
-    let s = fixed_scene(
-        &c,
-        (10.0, 20.0),
-        vec![],
-        11.0,
-        ((64.0, 64.0), (320.0, 64.0)),
-        2.0,
-    );
+    let s = streak(((64.0, 64.0), (320.0, 64.0)));
     let e = render_scene(&c, &s, 7);
     all_finite(&e);
     let b = e.truth.label_box_px.expect("debris in the image");
@@ -942,14 +937,7 @@ fn streak_leaving_the_image() {
             && (full - scene::expected_snr(&sensor_of(&c), &inside, sigma)).abs() < 1e-12 * full
     );
     // Wholly outside: SNR 0, below any gate; rendered anyway, no label.
-    let out = fixed_scene(
-        &c,
-        (10.0, 20.0),
-        vec![],
-        11.0,
-        ((200.0, 64.0), (400.0, 64.0)),
-        2.0,
-    );
+    let out = streak(((200.0, 64.0), (400.0, 64.0)));
     assert_eq!(
         scene::expected_snr(&sensor_of(&c), &out.trajectory, sigma),
         0.0
