@@ -25,7 +25,7 @@ fn render(campaign: &str, sets: &[&str], out: &Path) {
     for s in sets {
         args.extend(["--set", s]);
     }
-    args.extend(["--out", arg(&out)]);
+    args.extend(["--out", arg(out)]);
     ok(soig(&args));
 }
 
@@ -125,7 +125,7 @@ fn png_edge(matrix: &serde_json::Value, p: &serde_json::Value) -> [f64; 2] {
 /// 4 px of the WCS's scale at each end. Quickstart images: fixed pointing, one WCS.
 #[test]
 fn residuals_of_known_detections() {
-    let (tmp, out) = scratch("run");
+    let (_tmp, out) = scratch("run");
     ok(run_quickstart(
         &[
             "--set",
@@ -248,7 +248,7 @@ fn astrometry_needs_the_detect_stage() {
 /// (the light curve's `utc`), not the exposure's start and end.
 #[test]
 fn geo_stare_truth_ends_at_their_own_instants() {
-    let (tmp, out) = scratch("run");
+    let (_tmp, out) = scratch("run");
     render(
         "campaigns/geo-stare.toml",
         &[

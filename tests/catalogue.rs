@@ -100,7 +100,7 @@ fn geo_stare_shows_every_object_where_its_orbit_puts_it() {
 /// unseen with that reason, and still none of the reference's is missing.
 #[test]
 fn a_fainter_object_in_the_field_is_listed_unseen() {
-    let (tmp, out) = scratch("faint");
+    let (_tmp, out) = scratch("faint");
     let c = repo("campaigns/geo-stare.toml");
     let o = soig(&[
         "run",

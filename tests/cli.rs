@@ -64,7 +64,7 @@ fn digest_of(out: &Output) -> String {
 /// `soig run CAMPAIGN --quiet --out OUT`, which must succeed; returns its digest.
 /// `soig run CAMPAIGN --quiet --out OUT` on `threads` threads.
 fn run(campaign: &Path, out: &Path, threads: Option<usize>) -> Output {
-    let args = ["run", arg(&campaign), "--quiet", "--out", arg(&out)];
+    let args = ["run", arg(campaign), "--quiet", "--out", arg(out)];
     soig(&args, threads)
 }
 
@@ -248,7 +248,7 @@ fn extends_and_set_run_like_one_file() {
     let flat = small_with(8, 3).write(&tmp.path().join("flat.toml"));
     let run = |campaign: &Path, out: &str, sets: &[&str]| {
         let out = tmp.path().join(out);
-        let mut args = vec!["run", arg(&campaign), "--quiet", "--out", arg(&out)];
+        let mut args = vec!["run", arg(campaign), "--quiet", "--out", arg(&out)];
         for s in sets {
             args.extend(["--set", s]);
         }
@@ -274,7 +274,7 @@ fn extends_and_set_run_like_one_file() {
 #[test]
 fn verify_rejects_a_directory_without_manifest() {
     let tmp = tempfile::tempdir().unwrap();
-    let o = soig(&["verify", arg(&tmp.path())], None);
+    let o = soig(&["verify", arg(tmp.path())], None);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("manifest.json"));
 }

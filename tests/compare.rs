@@ -20,7 +20,7 @@ fn stdout(o: &Output) -> String {
 
 /// `soig compare BASELINE RUN [extra...]`, which must not fail (exit 2): exit code and stdout.
 fn compare(baseline: &Path, run: &Path, extra: &[&str]) -> (i32, String) {
-    let mut args = vec!["compare", arg(&baseline), arg(&run)];
+    let mut args = vec!["compare", arg(baseline), arg(run)];
     args.extend(extra);
     let o = soig(&args);
     let code = o.status.code().expect("exit code");
@@ -245,10 +245,10 @@ fn metric_drop_within_and_beyond_tolerance_and_a_results_row() {
 #[test]
 fn errors_exit_2() {
     let (tmp, missing) = scratch("missing");
-    let o = soig(&["compare", arg(&missing), arg(&tmp.path())]);
+    let o = soig(&["compare", arg(&missing), arg(tmp.path())]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("no such folder"));
-    let o = soig(&["compare", arg(&tmp.path()), arg(&tmp.path())]);
+    let o = soig(&["compare", arg(tmp.path()), arg(tmp.path())]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("is not a soig output"));
     let row = Path::new(env!("CARGO_MANIFEST_DIR")).join("results/ci-quickstart");

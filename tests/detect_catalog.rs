@@ -229,7 +229,7 @@ fn bad_catalogue_inputs_fail_naming_the_file() {
     let fails = |extra: &[&str], catalog: &Path, frame: &Path, expect: &[&str]| {
         let mut args = vec!["detect"];
         args.extend(extra);
-        args.extend(["--catalog", arg(&catalog), "--out", arg(&out), arg(&frame)]);
+        args.extend(["--catalog", arg(catalog), "--out", arg(&out), arg(frame)]);
         let o = soig(&args);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{args:?} succeeded");
@@ -459,7 +459,7 @@ fn an_incomplete_or_misplaced_catalogue_adds_no_false_box() {
                 "--out",
                 arg(&out),
                 "--catalog",
-                arg(&cat),
+                arg(cat),
                 arg(&fits),
             ]));
             let found: serde_json::Value = serde_json::from_str(

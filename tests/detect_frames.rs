@@ -195,7 +195,7 @@ fn finds_a_rendered_streak_on_the_pixel_grid_and_the_sky() {
 #[test]
 fn finds_the_bright_streak_of_the_raw_neossat_frame() {
     let frame = repo("tests/fixtures/neossat/NEOSSAT_240__30_2026025124741.fits");
-    let (tmp, out) = scratch("det");
+    let (_tmp, out) = scratch("det");
     ok(soig(&["detect", arg(&frame), "--out", arg(&out)]));
     let found = json(&out.join("detections.json"));
     let confident = found["frames"][0]["detections"]

@@ -106,7 +106,7 @@ fn bad_inputs_fail_cleanly_and_leave_the_inputs_alone() {
     ] {
         let mut a = vec!["enhance"];
         a.extend(args);
-        a.extend(["--out", arg(&to)]);
+        a.extend(["--out", arg(to)]);
         let o = soig(&a);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{a:?}: {err}");

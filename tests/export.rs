@@ -77,7 +77,7 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
     exported.retain(|(p, _)| p != Path::new("manifest.json"));
     assert_eq!(tree(&export), exported);
     for dir in [&out, &again] {
-        let o = soig(&["verify", arg(&dir)]);
+        let o = soig(&["verify", arg(dir)]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
     // Exporting again into its own earlier export replaces it (#43: refused before).

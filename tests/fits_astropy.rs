@@ -60,7 +60,7 @@ fn astropy_parses_every_card_and_unit_of_both_fits() {
     let Some(python) = python_with_astropy() else {
         return;
     };
-    let (dir, out) = scratch("run");
+    let (_dir, out) = scratch("run");
     let o = run_quickstart(
         &[
             "--quiet",

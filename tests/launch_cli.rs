@@ -18,7 +18,7 @@ fn slurm(args: &[&str], scripts: &Path) -> Output {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut all = vec!["slurm", QUICKSTART, "--shards", "2"];
     all.extend_from_slice(args);
-    all.extend(["--scripts", arg(&scripts)]);
+    all.extend(["--scripts", arg(scripts)]);
     soig_in(root, &all)
 }
 
@@ -70,7 +70,7 @@ fn slurm_resources_reach_every_job() {
 
 #[test]
 fn a_malformed_slurm_time_is_refused_before_writing() {
-    let (dir, scripts) = scratch("jobs");
+    let (_dir, scripts) = scratch("jobs");
     let o = slurm(&["--time", "2h"], &scripts);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
@@ -81,7 +81,7 @@ fn a_malformed_slurm_time_is_refused_before_writing() {
 #[test]
 fn k8s_warns_of_paths_outside_the_volume() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let (dir, jobs) = scratch("jobs");
+    let (_dir, jobs) = scratch("jobs");
     // Relative paths within the volume's root (here the repository): no warning.
     let o = k8s(root, QUICKSTART, &["--out", "runs/q"], &jobs);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

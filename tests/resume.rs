@@ -28,7 +28,7 @@ fn campaign(dir: &Path, name: &str, images: u32) -> PathBuf {
 
 fn command(campaign: &Path, out: &Path) -> Command {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_soig"));
-    cmd.args(["run", arg(&campaign), "--quiet", "--out"])
+    cmd.args(["run", arg(campaign), "--quiet", "--out"])
         .arg(out)
         .env_remove("SOIG_TEST_ABORT_AT");
     cmd

@@ -40,14 +40,14 @@ fn campaign(dir: &Path, name: &str, seed: u64) -> PathBuf {
 /// Run shard `k` of `n` of `campaign` into `out`.
 fn shard(campaign: &Path, k: u64, n: u64, out: &Path) -> Output {
     let spec = format!("{k}/{n}");
-    let args = ["run", arg(&campaign), "--quiet", "--shard", &spec];
-    let out_args = ["--out", arg(&out)];
+    let args = ["run", arg(campaign), "--quiet", "--shard", &spec];
+    let out_args = ["--out", arg(out)];
     soig(&[&args[..], &out_args[..]].concat(), &[])
 }
 
 fn merge(shards: &[&PathBuf], out: &Path) -> Output {
-    let mut args = vec!["merge", "--quiet", "--out", arg(&out)];
-    args.extend(shards.iter().map(|s| arg(&s)));
+    let mut args = vec!["merge", "--quiet", "--out", arg(out)];
+    args.extend(shards.iter().map(|s| arg(s)));
     soig(&args, &[])
 }
 

@@ -215,7 +215,7 @@ fn detections_tdm_and_ades_psv() {
     if !ort_available() {
         return;
     }
-    let (tmp, out) = scratch("run");
+    let (_tmp, out) = scratch("run");
     ok(run_quickstart(
         &["--set", "artifacts.astrometry=true", "--quiet"],
         &out,
@@ -307,7 +307,7 @@ fn detections_tdm_and_ades_psv() {
 /// an ephemeris, in the sidecars' order, each with that object's angles.
 #[test]
 fn catalogue_scene_tdm_has_every_object() {
-    let (tmp, out) = scratch("run");
+    let (_tmp, out) = scratch("run");
     let campaign = common::repo("campaigns/geo-stare.toml");
     ok(soig(&[
         "run",

@@ -73,7 +73,7 @@ pub fn assert_refused(o: &Output, expect: &str) {
 
 /// `soig run CAMPAIGN --quiet --out OUT`.
 pub fn run_quiet(campaign: &Path, out: &Path) -> Output {
-    soig(&["run", arg(&campaign), "--quiet", "--out", arg(&out)])
+    soig(&["run", arg(campaign), "--quiet", "--out", arg(out)])
 }
 
 /// `soig run campaigns/quickstart.toml ARGS --out OUT`.
@@ -81,7 +81,7 @@ pub fn run_quickstart(args: &[&str], out: &Path) -> Output {
     let campaign = repo("campaigns/quickstart.toml");
     let mut all = vec!["run", arg(&campaign)];
     all.extend(args);
-    all.extend(["--out", arg(&out)]);
+    all.extend(["--out", arg(out)]);
     soig(&all)
 }
 
@@ -90,7 +90,7 @@ pub fn run_quickstart(args: &[&str], out: &Path) -> Output {
 pub fn run_on_threads(campaign: &Path, out: &Path, threads: &str) -> String {
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
         .env("RAYON_NUM_THREADS", threads)
-        .args(["run", arg(&campaign), "--out", arg(&out), "--quiet"])
+        .args(["run", arg(campaign), "--out", arg(out), "--quiet"])
         .output()
         .expect("soig runs");
     digest(&o)
