@@ -203,17 +203,14 @@ fn sight_object(
         Err(reason) => return Some(Err(reason)),
     };
     let exposure = Exposure::of_frame(at);
-    let object = Object {
-        debris_index: index,
-        debris_name: body.name.clone(),
-        norad: body.norad,
-        area_m2,
-        tumble,
+    let object = Object::of_body(
+        (index, body),
+        (area_m2, tumble),
         geometry,
-        ephemeris: sighting.ephemeris(start, exposure_s),
+        sighting.ephemeris(start, exposure_s),
         trajectory,
         snr,
-    };
+    );
     // Across a collect's frames an object keeps its NORAD number as its track id.
     let collect = CollectFrame::of(spec, at.image_index, body.norad);
     let mut scene = Scene::assemble(exposure, object).accept(1, BTreeMap::new(), collect, None);

@@ -191,19 +191,15 @@ fn try_place(
         inputs.frame(at.background),
         gated,
     )?;
-    let debris = &inputs.debris[debris_index];
     let exposure = Exposure::of_frame(at);
-    let object = Object {
-        debris_index,
-        debris_name: debris.name.clone(),
-        norad: debris.norad,
-        area_m2,
-        tumble,
+    let object = Object::of_body(
+        (debris_index, &inputs.debris[debris_index]),
+        (area_m2, tumble),
         geometry,
         // The object's own ephemeris is not where the image shows it.
-        ephemeris: None,
+        None,
         trajectory,
         snr,
-    };
+    );
     Ok(Scene::assemble(exposure, object))
 }
