@@ -6,6 +6,17 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+/// The colours of the figures' series, in order: red, blue, green, then purple and orange
+/// for the study's longer lists. A figure with at most three series cycles the first three
+/// (`&PALETTE[..3]`), as it always has.
+pub const PALETTE: [RGBColor; 5] = [
+    RGBColor(200, 30, 30),
+    RGBColor(30, 90, 200),
+    RGBColor(30, 150, 60),
+    RGBColor(150, 60, 180),
+    RGBColor(220, 130, 0),
+];
+
 /// The embedded sans-serif font of every plot (plotters has no system fonts here).
 pub fn register_font() {
     static FONT: std::sync::Once = std::sync::Once::new();

@@ -14,7 +14,7 @@ use soig::sky::apparent::{C_KM_S, earth_velocity_km_s};
 use soig::sky::{angle_deg, dot, radec_unit, scale, sub, unit};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, rendered, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, arg, rendered, tle_object};
 
 fn campaign(render: &str) -> Campaign {
     CampaignToml::new("apparent", 5, 3)
@@ -94,7 +94,7 @@ fn date_obs_has_microseconds_and_truth_the_ephemeris() {
         .write(&dir.path().join("stamps.toml"));
     let out = dir.path().join("out");
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
-        .args(["run", toml.to_str().unwrap(), "--quiet", "--out"])
+        .args(["run", arg(&toml), "--quiet", "--out"])
         .arg(&out)
         .output()
         .unwrap();

@@ -13,7 +13,7 @@ mod common;
 use std::io::Write as _;
 use std::path::Path;
 
-use common::{json, ok, python_with_astropy, repo, run_quickstart, soig};
+use common::{arg, json, ok, python_with_astropy, repo, run_quickstart, scratch, soig};
 use soig::detect::Detection;
 use soig::observations::{FrameSky, Line, observe};
 use soig::report::astrometry::{TruthObject, offset_arcsec, residual};
@@ -21,11 +21,11 @@ use soig::report::astrometry::{TruthObject, offset_arcsec, residual};
 /// Render `campaign` with `sets` (no detect stage) into `out`.
 fn render(campaign: &str, sets: &[&str], out: &Path) {
     let campaign = repo(campaign);
-    let mut args = vec!["run", campaign.to_str().unwrap(), "--quiet"];
+    let mut args = vec!["run", arg(&campaign), "--quiet"];
     for s in sets {
         args.extend(["--set", s]);
     }
-    args.extend(["--out", out.to_str().unwrap()]);
+    args.extend(["--out", arg(out)]);
     ok(soig(&args));
 }
 
@@ -39,8 +39,7 @@ fn pixel_to_sky_agrees_with_astropy() {
     let Some(python) = python_with_astropy() else {
         return;
     };
-    let tmp = tempfile::tempdir().unwrap();
-    let survey = tmp.path().join("survey");
+    let (tmp, survey) = scratch("survey");
     render(
         "campaigns/survey-quickstart.toml",
         &["images=2", "stages=[\"render\", \"enhance\"]"],
@@ -126,8 +125,7 @@ fn png_edge(matrix: &serde_json::Value, p: &serde_json::Value) -> [f64; 2] {
 /// 4 px of the WCS's scale at each end. Quickstart images: fixed pointing, one WCS.
 #[test]
 fn residuals_of_known_detections() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("run");
+    let (_tmp, out) = scratch("run");
     ok(run_quickstart(
         &[
             "--set",
@@ -250,8 +248,7 @@ fn astrometry_needs_the_detect_stage() {
 /// (the light curve's `utc`), not the exposure's start and end.
 #[test]
 fn geo_stare_truth_ends_at_their_own_instants() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("run");
+    let (_tmp, out) = scratch("run");
     render(
         "campaigns/geo-stare.toml",
         &[

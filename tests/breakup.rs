@@ -18,7 +18,10 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use common::{assert_refused, json, repo, run_on_one_and_two_threads_and_verify, soig};
+use common::{
+    account_for_the_field, arg, assert_refused, json, reference_objects, repo,
+    run_on_one_and_two_threads_and_verify, separation_arcsec, soig,
+};
 use serde_json::Value;
 use soig::rng::{Purpose, stream};
 use soig::sky::breakup::{Event, ParentKind, area_to_mass_law, draw, moments};
@@ -104,14 +107,6 @@ fn sbm_laws_match_the_independent_implementation() {
     }
 }
 
-/// Arcseconds between two (RA, Dec) in degrees.
-fn separation_arcsec(a: &Value, b: &Value) -> f64 {
-    let (ra1, de1) = (f(&a[0]), f(&a[1]));
-    let (ra2, de2) = (f(&b[0]), f(&b[1]));
-    let dra = ((ra1 - ra2 + 540.0) % 360.0 - 180.0) * de1.to_radians().cos();
-    dra.hypot(de1 - de2) * 3600.0
-}
-
 /// The run `out` of campaigns/breakup.toml against python-sgp4 + astropy from the catalogue
 /// entries the run states (sky_reference.json): every object shown within 1" of its place, and
 /// every object the reference puts in the field shown or listed unseen with a reason. Returns
@@ -127,12 +122,7 @@ fn check_sky(out: &std::path::Path) -> (usize, usize, usize) {
         let stem = frame["image"].as_str().unwrap();
         let truth = json(&out.join(format!("truth/{stem}.json")));
         assert_eq!(truth["start_utc"], frame["start_utc"], "{stem}");
-        let by_id: BTreeMap<u64, &Value> = frame["objects"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|o| (o["norad"].as_u64().unwrap(), o))
-            .collect();
+        let by_id = reference_objects(frame);
         let mut accounted = std::collections::BTreeSet::new();
         for o in truth["objects"].as_array().unwrap() {
             let id = o["norad"].as_u64().unwrap();
@@ -161,19 +151,7 @@ fn check_sky(out: &std::path::Path) -> (usize, usize, usize) {
             shown += 1;
             fragments += usize::from(o["source"] == "generated");
         }
-        for u in truth["unseen"].as_array().unwrap() {
-            assert!(!u["reason"].as_str().unwrap().is_empty());
-            accounted.insert(u["norad"].as_u64().unwrap());
-            unseen += 1;
-        }
-        for (id, p) in &by_id {
-            if p["in_field"].as_bool().unwrap() {
-                assert!(
-                    accounted.contains(id),
-                    "{stem}: {id} is in the field but neither shown nor unseen"
-                );
-            }
-        }
+        unseen += account_for_the_field(&truth, &by_id, accounted, stem);
     }
     (shown, fragments, unseen)
 }
@@ -327,14 +305,7 @@ fn refused_with(set: &str, expect: &str) {
     let tmp = tempfile::tempdir().unwrap();
     let c = repo("campaigns/breakup.toml");
     let out = tmp.path().join("o");
-    let o = soig(&[
-        "run",
-        c.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--set",
-        set,
-    ]);
+    let o = soig(&["run", arg(&c), "--out", arg(&out), "--set", set]);
     assert_refused(&o, expect);
     assert!(!out.exists(), "a refused run wrote {}", out.display());
 }

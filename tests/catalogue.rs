@@ -13,21 +13,11 @@ mod common;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-use common::{assert_refused, json, repo, run_on_one_and_two_threads_and_verify, soig};
+use common::{
+    account_for_the_field, arg, assert_refused, json, px_off, reference_objects, repo,
+    run_on_one_and_two_threads_and_verify, scratch, separation_arcsec, soig,
+};
 use serde_json::Value;
-
-/// Arcseconds between two (RA, Dec) in degrees.
-fn separation_arcsec(a: &Value, b: &Value) -> f64 {
-    let (ra1, de1) = (a[0].as_f64().unwrap(), a[1].as_f64().unwrap());
-    let (ra2, de2) = (b[0].as_f64().unwrap(), b[1].as_f64().unwrap());
-    let dra = ((ra1 - ra2 + 540.0) % 360.0 - 180.0) * de1.to_radians().cos();
-    dra.hypot(de1 - de2) * 3600.0
-}
-
-fn px_off(a: &Value, b: &Value) -> f64 {
-    let d = |k: usize| a[k].as_f64().unwrap() - b[k].as_f64().unwrap();
-    d(0).hypot(d(1))
-}
 
 /// The reference's frames, by image stem.
 fn reference() -> BTreeMap<String, Value> {
@@ -48,12 +38,7 @@ fn check_against_reference(out: &Path) -> (usize, usize) {
         let truth = json(&out.join("truth").join(format!("{stem}.json")));
         // The reference was computed for these very frame times.
         assert_eq!(truth["start_utc"], frame["start_utc"], "{stem}");
-        let by_norad: BTreeMap<u64, &Value> = frame["objects"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|o| (o["norad"].as_u64().unwrap(), o))
-            .collect();
+        let by_norad = reference_objects(frame);
         let mut accounted = BTreeSet::new();
         for o in truth["objects"].as_array().unwrap() {
             let norad = o["norad"].as_u64().unwrap();
@@ -86,19 +71,7 @@ fn check_against_reference(out: &Path) -> (usize, usize) {
             accounted.insert(norad);
             shown_total += 1;
         }
-        for u in truth["unseen"].as_array().unwrap() {
-            assert!(!u["reason"].as_str().unwrap().is_empty());
-            accounted.insert(u["norad"].as_u64().unwrap());
-            unseen_total += 1;
-        }
-        for (norad, r) in &by_norad {
-            if r["in_field"].as_bool().unwrap() {
-                assert!(
-                    accounted.contains(norad),
-                    "{stem}: NORAD {norad} is in the field but neither shown nor unseen"
-                );
-            }
-        }
+        unseen_total += account_for_the_field(&truth, &by_norad, accounted, stem);
     }
     (shown_total, unseen_total)
 }
@@ -127,16 +100,15 @@ fn geo_stare_shows_every_object_where_its_orbit_puts_it() {
 /// unseen with that reason, and still none of the reference's is missing.
 #[test]
 fn a_fainter_object_in_the_field_is_listed_unseen() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("faint");
+    let (_tmp, out) = scratch("faint");
     let c = repo("campaigns/geo-stare.toml");
     let o = soig(&[
         "run",
-        c.to_str().unwrap(),
+        arg(&c),
         "--set",
         "sensor.mag_limit=12.8",
         "--out",
-        out.to_str().unwrap(),
+        arg(&out),
         "--quiet",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -152,7 +124,7 @@ fn refused_with(extra: &[&str], expect: &str) {
     let tmp = tempfile::tempdir().unwrap();
     let c = repo("campaigns/geo-stare.toml");
     let out = tmp.path().join("o");
-    let mut args = vec!["run", c.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    let mut args = vec!["run", arg(&c), "--out", arg(&out)];
     for e in extra {
         args.extend(["--set", e]);
     }
@@ -217,13 +189,7 @@ fn track_mode_follows_its_object_and_shows_the_population_around_it() {
     let c = tmp.path().join("track.toml");
     std::fs::write(&c, text).unwrap();
     let out = tmp.path().join("out");
-    let o = soig(&[
-        "run",
-        c.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = soig(&["run", arg(&c), "--out", arg(&out), "--quiet"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for k in 0..2 {
         let t = json(&out.join(format!("truth/img_00000{k}.json")));

@@ -18,7 +18,8 @@ fn soig(args: &[&str], threads: Option<usize>) -> Output {
 
 mod common;
 use common::{
-    CampaignToml, ELEMENTS_40649, assert_refused, json, ort_available, tle_file, tle_object,
+    CampaignToml, ELEMENTS_40649, arg, assert_refused, json, ort_available, scratch, tle_file,
+    tle_object,
 };
 
 /// A small, fast campaign: 256 px images, few samples.
@@ -63,13 +64,7 @@ fn digest_of(out: &Output) -> String {
 /// `soig run CAMPAIGN --quiet --out OUT`, which must succeed; returns its digest.
 /// `soig run CAMPAIGN --quiet --out OUT` on `threads` threads.
 fn run(campaign: &Path, out: &Path, threads: Option<usize>) -> Output {
-    let args = [
-        "run",
-        campaign.to_str().unwrap(),
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ];
+    let args = ["run", arg(campaign), "--quiet", "--out", arg(out)];
     soig(&args, threads)
 }
 
@@ -81,6 +76,14 @@ fn run_ok(campaign: &Path, out: &Path, threads: Option<usize>) -> String {
         String::from_utf8_lossy(&o.stderr)
     );
     digest_of(&o)
+}
+
+/// `run_ok` into `out`, then `soig verify out`, which must accept it; the run's digest.
+fn run_and_verify(campaign: &Path, out: &Path, threads: Option<usize>) -> String {
+    let digest = run_ok(campaign, out, threads);
+    let v = soig(&["verify", arg(out)], None);
+    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+    digest
 }
 
 #[test]
@@ -96,7 +99,7 @@ fn same_digest_on_any_thread_count_and_verify_catches_one_byte() {
     assert_eq!(digests[0], digests[2]);
 
     let out = tmp.path().join("out0");
-    let v = soig(&["verify", out.to_str().unwrap()], None);
+    let v = soig(&["verify", arg(&out)], None);
     assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
 
     // The dataset is in the Ultralytics layout.
@@ -122,7 +125,7 @@ fn same_digest_on_any_thread_count_and_verify_catches_one_byte() {
     let last = bytes.len() - 20;
     bytes[last] ^= 0x01;
     std::fs::write(victim, bytes).unwrap();
-    let v = soig(&["verify", out.to_str().unwrap()], None);
+    let v = soig(&["verify", arg(&out)], None);
     assert!(!v.status.success());
     let err = String::from_utf8_lossy(&v.stderr);
     let name = victim.file_name().unwrap().to_str().unwrap();
@@ -153,8 +156,7 @@ fn assert_clean_failure(campaign: &Path, out: &Path, expect: &[&str]) {
 
 #[test]
 fn bad_campaigns_fail_with_a_clear_message_and_no_output() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("out");
+    let (tmp, out) = scratch("out");
     // Unknown field: named, with its line.
     let c = small_campaign(tmp.path(), "[exposure]\nmin_s = 2.0\nmaximum_s = 3.0\n");
     assert_clean_failure(&c, &out, &["small.toml:", "maximum_s", "min_s"]);
@@ -246,13 +248,7 @@ fn extends_and_set_run_like_one_file() {
     let flat = small_with(8, 3).write(&tmp.path().join("flat.toml"));
     let run = |campaign: &Path, out: &str, sets: &[&str]| {
         let out = tmp.path().join(out);
-        let mut args = vec![
-            "run",
-            campaign.to_str().unwrap(),
-            "--quiet",
-            "--out",
-            out.to_str().unwrap(),
-        ];
+        let mut args = vec!["run", arg(campaign), "--quiet", "--out", arg(&out)];
         for s in sets {
             args.extend(["--set", s]);
         }
@@ -278,7 +274,7 @@ fn extends_and_set_run_like_one_file() {
 #[test]
 fn verify_rejects_a_directory_without_manifest() {
     let tmp = tempfile::tempdir().unwrap();
-    let o = soig(&["verify", tmp.path().to_str().unwrap()], None);
+    let o = soig(&["verify", arg(tmp.path())], None);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("manifest.json"));
 }
@@ -293,9 +289,7 @@ fn survey_rotated_campaign_is_deterministic_and_verifiable() {
     let mut digests = Vec::new();
     for threads in [1, 2] {
         let out = tmp.path().join(format!("survey{threads}"));
-        digests.push(run_ok(&campaign, &out, Some(threads)));
-        let v = soig(&["verify", out.to_str().unwrap()], None);
-        assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+        digests.push(run_and_verify(&campaign, &out, Some(threads)));
     }
     assert_eq!(digests[0], digests[1]);
     // The PNGs are the rotated, expanded frame: 256 px -> 384 px (diagonal, multiple of 32).
@@ -341,9 +335,7 @@ fn detect_stage_writes_a_reproducible_report_with_both_detectors() {
     let mut digests = Vec::new();
     for threads in [1, 2] {
         let out = tmp.path().join(format!("det{threads}"));
-        digests.push(run_ok(&c, &out, Some(threads)));
-        let v = soig(&["verify", out.to_str().unwrap()], None);
-        assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+        digests.push(run_and_verify(&c, &out, Some(threads)));
         let report = json(&out.join("report/report.json"));
         let names: Vec<&str> = report["detectors"]
             .as_array()
@@ -371,8 +363,7 @@ fn detect_stage_writes_a_reproducible_report_with_both_detectors() {
 
 #[test]
 fn bad_models_fail_cleanly() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("out");
+    let (tmp, out) = scratch("out");
     for (model, expect) in [
         ("/nonexistent/model.onnx", "/nonexistent/model.onnx"),
         (fixture("not_onnx.onnx").as_str(), "not_onnx.onnx"),
@@ -428,11 +419,11 @@ fn train_stage_without_ultralytics_fails_cleanly() {
     let r = soig(
         &[
             "run",
-            c.to_str().unwrap(),
+            arg(&c),
             "--out",
-            out.to_str().unwrap(),
+            arg(&out),
             "--python",
-            missing.to_str().unwrap(),
+            arg(&missing),
             "-q",
         ],
         None,
@@ -459,12 +450,12 @@ fn study_writes_a_sane_table_plot_and_manifest() {
     let out = tmp.path().join("study");
     let args = [
         "study",
-        c.to_str().unwrap(),
+        arg(&c),
         "--quick",
         "--seeds",
         "3",
         "--out",
-        out.to_str().unwrap(),
+        arg(&out),
     ];
     let o = soig(&args, None);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -504,7 +495,7 @@ fn study_writes_a_sane_table_plot_and_manifest() {
     assert!((get("merge_factor", "1", "variance_ratio") - 1.0).abs() < 0.3);
     assert!((get("method", "expected", "variance_ratio") - 1.0).abs() < 0.3);
     assert!(get("merge_threshold", "1000", "variance_ratio") > 2.0);
-    let v = soig(&["verify", out.to_str().unwrap()], None);
+    let v = soig(&["verify", arg(&out)], None);
     assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
 
     // Bad input: a clear error and exit 2, never a panic.
@@ -513,9 +504,9 @@ fn study_writes_a_sane_table_plot_and_manifest() {
         (vec!["--seeds", "1"], "--seeds"),
         (vec!["--image", "99"], "--image"),
     ] {
-        let mut a = vec!["study", c.to_str().unwrap()];
+        let mut a = vec!["study", arg(&c)];
         a.extend(bad);
-        a.extend(["--out", bad_out.to_str().unwrap()]);
+        a.extend(["--out", arg(&bad_out)]);
         let o = soig(&a, None);
         let err = String::from_utf8_lossy(&o.stderr).into_owned();
         assert_eq!(o.status.code(), Some(2), "{err}");
@@ -555,7 +546,7 @@ fn a_users_files_are_never_replaced() {
             .debris(ELEMENTS_40649)
             .tables("[sensor]\nwidth_px = 64\nheight_px = 64\nfov_radius_deg = 0.00625\n")
             .write(&tmp.path().join(file));
-        let o = soig(&["run", c.to_str().unwrap(), "--quiet"], None);
+        let o = soig(&["run", arg(&c), "--quiet"], None);
         assert_refused(&o, field);
         assert!(
             c.is_file() && campaign.is_file(),
@@ -566,16 +557,12 @@ fn a_users_files_are_never_replaced() {
     let out = tmp.path().join("out");
     run_ok(&campaign, &out, None);
     let o = Command::new(env!("CARGO_BIN_EXE_soig"))
-        .args(["run", campaign.to_str().unwrap(), "--quiet", "--out", "."])
+        .args(["run", arg(&campaign), "--quiet", "--out", "."])
         .current_dir(&out)
         .output()
         .unwrap();
     assert_refused(&o, "the current directory");
-    assert!(
-        soig(&["verify", out.to_str().unwrap()], None)
-            .status
-            .success()
-    );
+    assert!(soig(&["verify", arg(&out)], None).status.success());
 }
 
 #[test]
@@ -609,7 +596,7 @@ fn verify_against_a_pinned_digest_catches_a_consistent_forgery() {
     let campaign = small_campaign(tmp.path(), "");
     let out = tmp.path().join("out");
     let digest = run_ok(&campaign, &out, None);
-    let pinned = |d: &str| soig(&["verify", out.to_str().unwrap(), "--digest", d], None);
+    let pinned = |d: &str| soig(&["verify", arg(&out), "--digest", d], None);
     assert!(pinned(&digest).status.success());
     // Forge: change a label, then rewrite the manifest with hashes that agree with it.
     let label = std::fs::read_dir(out.join("labels/train"))
@@ -624,11 +611,7 @@ fn verify_against_a_pinned_digest_catches_a_consistent_forgery() {
         soig::Manifest::build(&out, &old.campaign_hash, old.campaign, &old.volatile).unwrap();
     forged.seal();
     forged.write(&out).unwrap();
-    assert!(
-        soig(&["verify", out.to_str().unwrap()], None)
-            .status
-            .success()
-    );
+    assert!(soig(&["verify", arg(&out)], None).status.success());
     let o = pinned(&digest);
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("is not the pinned"));

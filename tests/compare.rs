@@ -10,7 +10,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, json, ort_available, run_quiet, soig, tle_object};
+use common::{
+    CampaignToml, ELEMENTS_40649, arg, json, ort_available, run_quiet, scratch, soig, tle_object,
+};
 
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
@@ -18,7 +20,7 @@ fn stdout(o: &Output) -> String {
 
 /// `soig compare BASELINE RUN [extra...]`, which must not fail (exit 2): exit code and stdout.
 fn compare(baseline: &Path, run: &Path, extra: &[&str]) -> (i32, String) {
-    let mut args = vec!["compare", baseline.to_str().unwrap(), run.to_str().unwrap()];
+    let mut args = vec!["compare", arg(baseline), arg(run)];
     args.extend(extra);
     let o = soig(&args);
     let code = o.status.code().expect("exit code");
@@ -94,12 +96,7 @@ fn identical_rerun_changed_seed_and_tampered_artifact() {
     ] {
         assert!(text.contains(expect), "{expect} not in\n{text}");
     }
-    let o = soig(&[
-        "compare",
-        a.to_str().unwrap(),
-        seed.to_str().unwrap(),
-        "--json",
-    ]);
+    let o = soig(&["compare", arg(&a), arg(&seed), "--json"]);
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(json["verdict"], "regression");
     let changed = json["artifacts"]["changed"].as_array().unwrap();
@@ -231,12 +228,7 @@ fn metric_drop_within_and_beyond_tolerance_and_a_results_row() {
 
     // The run's tables: one Table 3 row per detector, in Markdown and CSV.
     let out = tmp.path().join("tables");
-    let o = soig(&[
-        "tables",
-        base.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = soig(&["tables", arg(&base), "--out", arg(&out)]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let md = stdout(&o);
     assert!(md.contains("### Table 3 (fixed pointing)"), "{md}");
@@ -252,24 +244,15 @@ fn metric_drop_within_and_beyond_tolerance_and_a_results_row() {
 
 #[test]
 fn errors_exit_2() {
-    let tmp = tempfile::tempdir().unwrap();
-    let missing = tmp.path().join("missing");
-    let o = soig(&[
-        "compare",
-        missing.to_str().unwrap(),
-        tmp.path().to_str().unwrap(),
-    ]);
+    let (tmp, missing) = scratch("missing");
+    let o = soig(&["compare", arg(&missing), arg(tmp.path())]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("no such folder"));
-    let o = soig(&[
-        "compare",
-        tmp.path().to_str().unwrap(),
-        tmp.path().to_str().unwrap(),
-    ]);
+    let o = soig(&["compare", arg(tmp.path()), arg(tmp.path())]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("is not a soig output"));
     let row = Path::new(env!("CARGO_MANIFEST_DIR")).join("results/ci-quickstart");
-    let row = row.to_str().unwrap();
+    let row = arg(&row);
     let o = soig(&["compare", row, row, "--tolerance", "map=1"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown metric `map`"));

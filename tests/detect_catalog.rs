@@ -15,17 +15,26 @@ use soig::experiment;
 use soig::frames::Frame;
 
 mod common;
-use common::{CampaignToml, ok, python_with_astropy, run_quiet, soig, tle_object};
+use common::{CampaignToml, arg, leo_and_geo, ok, python_with_astropy, run_quiet, soig};
 
 /// Images of 512 px (0.7 arcsec/px) in pointing `mode`, rendered only (FITS and truth).
 fn campaign(mode: &str) -> CampaignToml {
-    CampaignToml::new("catalog", 11, 4)
-        .top("stages = [\"render\"]\n")
-        .debris(&tle_object(37476))
-        .debris(&tle_object(40989))
-        .tables(
-            &format!("[pointing]\nmode = \"{mode}\"\n[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n"),
-        )
+    leo_and_geo("catalog", mode, "").top("stages = [\"render\"]\n")
+}
+
+/// The truth of image `index` of the run in `dir/run`.
+fn truth_of(dir: &Path, index: u64) -> serde_json::Value {
+    serde_json::from_str(
+        &std::fs::read_to_string(dir.join(format!("run/truth/img_{index:06}.json"))).unwrap(),
+    )
+    .unwrap()
+}
+
+/// The streak's two ends in a truth, as pixel edges: truth ends are pixel centres at
+/// integers; soig detect reports pixel edges.
+fn streak_ends(truth: &serde_json::Value) -> ([f64; 2], [f64; 2]) {
+    let p = |k: &str| [0, 1].map(|i| truth[k][i].as_f64().unwrap() + 0.5);
+    (p("streak_start_px"), p("streak_end_px"))
 }
 
 /// Render the campaign into `dir`/run; returns the campaign file and the loaded campaign.
@@ -220,13 +229,7 @@ fn bad_catalogue_inputs_fail_naming_the_file() {
     let fails = |extra: &[&str], catalog: &Path, frame: &Path, expect: &[&str]| {
         let mut args = vec!["detect"];
         args.extend(extra);
-        args.extend([
-            "--catalog",
-            catalog.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            frame.to_str().unwrap(),
-        ]);
+        args.extend(["--catalog", arg(catalog), "--out", arg(&out), arg(frame)]);
         let o = soig(&args);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{args:?} succeeded");
@@ -306,26 +309,20 @@ fn star_aware_detection_on_soig_fits_keeps_the_debris_and_drops_the_trails() {
         let cat = tmp.path().join(format!("stars{index}.csv"));
         write_catalog(&c, index, &cat);
         let fits = tmp.path().join(format!("run/fits/img_{index:06}.fits"));
-        let truth: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(tmp.path().join(format!("run/truth/img_{index:06}.json")))
-                .unwrap(),
-        )
-        .unwrap();
-        // Truth ends are pixel centres at integers; soig detect reports pixel edges.
-        let p = |k: &str| [0, 1].map(|i| truth[k][i].as_f64().unwrap() + 0.5);
-        let (t0, t1) = (p("streak_start_px"), p("streak_end_px"));
+        let truth = truth_of(tmp.path(), index);
+        let (t0, t1) = streak_ends(&truth);
         for with in [false, true] {
             let out = tmp.path().join(format!("det{index}{with}"));
             let mut args = vec![
                 "detect",
                 "--campaign",
-                toml.to_str().unwrap(),
+                arg(&toml),
                 "--out",
-                out.to_str().unwrap(),
-                fits.to_str().unwrap(),
+                arg(&out),
+                arg(&fits),
             ];
             if with {
-                args.extend(["--catalog", cat.to_str().unwrap()]);
+                args.extend(["--catalog", arg(&cat)]);
             }
             ok(soig(&args));
             let found: serde_json::Value = serde_json::from_str(
@@ -438,13 +435,8 @@ fn an_incomplete_or_misplaced_catalogue_adds_no_false_box() {
         ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
     };
     for index in 0..4u64 {
-        let truth: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(tmp.path().join(format!("run/truth/img_{index:06}.json")))
-                .unwrap(),
-        )
-        .unwrap();
-        let p = |k: &str| [0, 1].map(|i| truth[k][i].as_f64().unwrap() + 0.5);
-        let (t0, t1) = (p("streak_start_px"), p("streak_end_px"));
+        let truth = truth_of(tmp.path(), index);
+        let (t0, t1) = streak_ends(&truth);
         let missing = tmp.path().join(format!("missing{index}.csv"));
         write_catalog_as(&c, index, &missing, |k, ra, dec| {
             (k % 10 != 3).then_some((ra, dec))
@@ -463,12 +455,12 @@ fn an_incomplete_or_misplaced_catalogue_adds_no_false_box() {
             ok(soig(&[
                 "detect",
                 "--campaign",
-                toml.to_str().unwrap(),
+                arg(&toml),
                 "--out",
-                out.to_str().unwrap(),
+                arg(&out),
                 "--catalog",
-                cat.to_str().unwrap(),
-                fits.to_str().unwrap(),
+                arg(cat),
+                arg(&fits),
             ]));
             let found: serde_json::Value = serde_json::from_str(
                 &std::fs::read_to_string(out.join("detections.json")).unwrap(),

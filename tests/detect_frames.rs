@@ -9,7 +9,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{ok, soig};
+use common::{arg, ok, scratch, soig};
 
 use soig::sky::projection::Tan;
 
@@ -41,14 +41,13 @@ fn pair(v: &serde_json::Value) -> [f64; 2] {
 /// pixel ends, to 0.001 px (the header's 12 significant digits allow 1e-9 deg, about 5e-6 px).
 #[test]
 fn finds_a_rendered_streak_on_the_pixel_grid_and_the_sky() {
-    let tmp = tempfile::tempdir().unwrap();
-    let run = tmp.path().join("qs");
+    let (tmp, run) = scratch("qs");
     ok(soig(&[
         "run",
         repo("campaigns/quickstart.toml").to_str().unwrap(),
         "--quiet",
         "--out",
-        run.to_str().unwrap(),
+        arg(&run),
         "--set",
         "images=4",
         "--set",
@@ -64,7 +63,7 @@ fn finds_a_rendered_streak_on_the_pixel_grid_and_the_sky() {
                 .to_string()
         })
         .collect();
-    let mut args = vec!["detect", "--out", out.to_str().unwrap()];
+    let mut args = vec!["detect", "--out", arg(&out)];
     args.extend(inputs.iter().map(String::as_str));
     ok(soig(&args));
     let sensor = soig::campaign::Sensor::default();
@@ -185,7 +184,7 @@ fn finds_a_rendered_streak_on_the_pixel_grid_and_the_sky() {
         cols[1..5].iter().all(|v| (0.0..=1.0).contains(v)),
         "{cols:?}"
     );
-    ok(soig(&["verify", out.to_str().unwrap()]));
+    ok(soig(&["verify", arg(&out)]));
 }
 
 /// The raw NEOSSat frame of 2026-01-25 (uint16 with BZERO, prescan and overscan cut by TRIMSEC,
@@ -196,14 +195,8 @@ fn finds_a_rendered_streak_on_the_pixel_grid_and_the_sky() {
 #[test]
 fn finds_the_bright_streak_of_the_raw_neossat_frame() {
     let frame = repo("tests/fixtures/neossat/NEOSSAT_240__30_2026025124741.fits");
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("det");
-    ok(soig(&[
-        "detect",
-        frame.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]));
+    let (_tmp, out) = scratch("det");
+    ok(soig(&["detect", arg(&frame), "--out", arg(&out)]));
     let found = json(&out.join("detections.json"));
     let confident = found["frames"][0]["detections"]
         .as_array()
@@ -245,14 +238,13 @@ fn finds_the_bright_streak_of_the_raw_neossat_frame() {
 #[test]
 fn the_raw_dark_frame_gives_no_confident_box_and_explains_what_it_dropped() {
     let frame = repo("tests/fixtures/neossat/NEOSSAT_240__30_2020214095318.fits");
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("det");
+    let (tmp, out) = scratch("det");
     let o = ok(soig(&[
         "detect",
-        frame.to_str().unwrap(),
+        arg(&frame),
         "--explain",
         "--out",
-        out.to_str().unwrap(),
+        arg(&out),
     ]));
     let found = json(&out.join("detections.json"));
     let f = &found["frames"][0];
@@ -307,12 +299,7 @@ fn the_raw_dark_frame_gives_no_confident_box_and_explains_what_it_dropped() {
     );
     // Without --explain, detections.json has no `dropped`.
     let out2 = tmp.path().join("det2");
-    ok(soig(&[
-        "detect",
-        frame.to_str().unwrap(),
-        "--out",
-        out2.to_str().unwrap(),
-    ]));
+    ok(soig(&["detect", arg(&frame), "--out", arg(&out2)]));
     assert!(json(&out2.join("detections.json"))["frames"][0]["dropped"].is_null());
 }
 
@@ -328,15 +315,14 @@ fn assert_fails(args: &[&str], out: &Path, expect: &[&str]) {
 
 #[test]
 fn bad_inputs_fail_naming_the_file_and_leave_no_output() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("det");
-    let o = out.to_str().unwrap();
+    let (tmp, out) = scratch("det");
+    let o = arg(&out);
     let text = tmp.path().join("notes.fits");
     std::fs::write(&text, "these are notes, not an image").unwrap();
     let broken_png = tmp.path().join("broken.png");
     std::fs::write(&broken_png, b"\x89PNG\r\n\x1a\nnot really a png").unwrap();
     let good = repo("tests/fixtures/neossat/NEOS_SCI_2024239174545_cord.fits");
-    let good = good.to_str().unwrap();
+    let good = arg(&good);
     let bad_model = repo("tests/fixtures/yolo/not_onnx.onnx");
     let bad_streak = tmp.path().join("streak.toml");
     std::fs::write(&bad_streak, "threshold_sigma = 3.0\nn_angles = 2\n").unwrap();
@@ -347,32 +333,29 @@ fn bad_inputs_fail_naming_the_file_and_leave_no_output() {
             vec!["/nonexistent/frame.fits"],
             vec!["/nonexistent/frame.fits", "cannot open"],
         ),
+        (vec![arg(&text)], vec!["notes.fits", "neither a FITS file"]),
         (
-            vec![text.to_str().unwrap()],
-            vec!["notes.fits", "neither a FITS file"],
-        ),
-        (
-            vec![broken_png.to_str().unwrap()],
+            vec![arg(&broken_png)],
             vec!["broken.png", "not a readable PNG"],
         ),
         // A good frame is detected and its files written into the staged output before the
         // bad one is read: the staged output goes, none is left.
         (
-            vec![good, text.to_str().unwrap()],
+            vec![good, arg(&text)],
             vec!["notes.fits", "neither a FITS file"],
         ),
         (
-            vec![good, "--model", bad_model.to_str().unwrap()],
+            vec![good, "--model", arg(&bad_model)],
             vec!["not_onnx.onnx"],
         ),
         (vec![good, "--detector", "yolo"], vec!["--model"]),
         (vec![good, "--psf-fwhm-px", "0"], vec!["--psf-fwhm-px"]),
         (
-            vec![good, "--streak", bad_streak.to_str().unwrap()],
+            vec![good, "--streak", arg(&bad_streak)],
             vec!["streak.toml:2", "n_angles"],
         ),
         (
-            vec![good, "--streak", unknown_streak.to_str().unwrap()],
+            vec![good, "--streak", arg(&unknown_streak)],
             vec!["unknown.toml", "thresold_sigma"],
         ),
     ];

@@ -7,7 +7,7 @@
 use std::path::Path;
 
 mod common;
-use common::run_quickstart;
+use common::{run_quickstart, scratch};
 
 /// The quickstart's stages without its detect stage.
 const STAGES: &str = "stages=[\"render\", \"enhance\", \"dataset\"]";
@@ -28,8 +28,7 @@ fn bytes_under(dir: &Path) -> u64 {
 
 #[test]
 fn a_run_too_big_for_its_disk_is_refused_with_both_figures_before_writing() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("run");
+    let (dir, out) = scratch("run");
     // 1e7 images (the most a campaign may ask) of 1024 x 1024 with both FITS: about 100 TB,
     // more than any machine this runs on has free. (--force: their work, over 30 days of one
     // core, is refused first otherwise; tests/hostile/runaway.toml checks that.)
@@ -58,8 +57,7 @@ fn a_run_too_big_for_its_disk_is_refused_with_both_figures_before_writing() {
 
 #[test]
 fn the_planned_size_is_said_and_bounds_what_the_run_writes() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("run");
+    let (_dir, out) = scratch("run");
     let o = run_quickstart(&["--set", "images=3", "--set", STAGES], &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);

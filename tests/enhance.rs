@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, run_quiet, soig, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, arg, run_quiet, soig, tle_object};
 
 /// A run of 4 small fixed-pointing images (FITS and PNG); returns its folder.
 fn small_run(dir: &Path) -> (PathBuf, PathBuf) {
@@ -47,9 +47,9 @@ fn a_soig_fits_converts_to_the_png_the_run_wrote() {
         })
         .collect();
     let out = tmp.path().join("enhanced");
-    let mut args = vec!["enhance", "--campaign", campaign.to_str().unwrap()];
+    let mut args = vec!["enhance", "--campaign", arg(&campaign)];
     args.extend(fits.iter().map(String::as_str));
-    args.extend(["--out", out.to_str().unwrap()]);
+    args.extend(["--out", arg(&out)]);
     let o = soig(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for i in 0..4 {
@@ -61,18 +61,18 @@ fn a_soig_fits_converts_to_the_png_the_run_wrote() {
         );
     }
     // The manifest verifies, and a flag that changes the enhancement changes the PNG.
-    let v = soig(&["verify", out.to_str().unwrap()]);
+    let v = soig(&["verify", arg(&out)]);
     assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stdout));
     let other = tmp.path().join("gamma");
     let o = soig(&[
         "enhance",
         "--campaign",
-        campaign.to_str().unwrap(),
+        arg(&campaign),
         &fits[0],
         "--gamma",
         "1.0",
         "--out",
-        other.to_str().unwrap(),
+        arg(&other),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_ne!(
@@ -87,17 +87,13 @@ fn bad_inputs_fail_cleanly_and_leave_the_inputs_alone() {
     let (_, run) = small_run(tmp.path());
     let fits_dir = run.join("fits");
     let fits = fits_dir.join("img_000000.fits");
-    let fits = fits.to_str().unwrap();
+    let fits = arg(&fits);
     let png = find(&run, "img_000000.png");
     let before = std::fs::read_dir(&fits_dir).unwrap().count();
     let out = tmp.path().join("out");
     // The inputs and options, the output folder, and what the error says.
     for (args, to, expect) in [
-        (
-            vec![png.to_str().unwrap()],
-            &out,
-            "already an 8-bit enhanced image",
-        ),
+        (vec![arg(&png)], &out, "already an 8-bit enhanced image"),
         (vec!["/nonexistent/x.fits"], &out, "/nonexistent/x.fits"),
         (vec![fits], &fits_dir, "refusing to write"),
         (
@@ -110,7 +106,7 @@ fn bad_inputs_fail_cleanly_and_leave_the_inputs_alone() {
     ] {
         let mut a = vec!["enhance"];
         a.extend(args);
-        a.extend(["--out", to.to_str().unwrap()]);
+        a.extend(["--out", arg(to)]);
         let o = soig(&a);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{a:?}: {err}");

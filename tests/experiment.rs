@@ -42,13 +42,16 @@ fn experiment(dir: &Path, file: &str, axes: &str) -> String {
     path.to_str().unwrap().to_string()
 }
 
-fn digests(out: &Path) -> Vec<(String, String)> {
+/// The points of the experiment's manifest `out/experiment.json`.
+fn points(out: &Path) -> Vec<serde_json::Value> {
     let m: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("experiment.json")).unwrap())
             .unwrap();
-    m["points"]
-        .as_array()
-        .unwrap()
+    m["points"].as_array().unwrap().clone()
+}
+
+fn digests(out: &Path) -> Vec<(String, String)> {
+    points(out)
         .iter()
         .map(|p| {
             (
@@ -61,12 +64,7 @@ fn digests(out: &Path) -> Vec<(String, String)> {
 
 /// The folder of the point named `name` (in the experiment's manifest).
 fn folder_of(out: &Path, name: &str) -> String {
-    let m: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("experiment.json")).unwrap())
-            .unwrap();
-    m["points"]
-        .as_array()
-        .unwrap()
+    points(out)
         .iter()
         .find(|p| p["name"] == name)
         .unwrap_or_else(|| panic!("no point {name}"))["folder"]

@@ -16,8 +16,9 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::{
-    CampaignToml, ELEMENTS_40649, assert_coco_agrees_with_soig_eval, assert_coco_bbox_is_label_box,
-    digest, export_readers, export_readers_python, json, run_quiet, soig, tle_object,
+    CampaignToml, ELEMENTS_40649, arg, assert_coco_agrees_with_soig_eval,
+    assert_coco_bbox_is_label_box, coco_images, digest, export_readers, export_readers_python,
+    json, run_quiet, soig, tle_object,
 };
 use serde_json::Value;
 
@@ -69,28 +70,18 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
 
     // `soig export` of the finished output: the same files, byte for byte, and it verifies.
     let again = tmp.path().join("again");
-    let o = soig(&[
-        "export",
-        out.to_str().unwrap(),
-        "--out",
-        again.to_str().unwrap(),
-    ]);
+    let o = soig(&["export", arg(&out), "--out", arg(&again)]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // The same files, and the export's own manifest, which marks the folder as soig's export.
     let mut exported = tree(&again);
     exported.retain(|(p, _)| p != Path::new("manifest.json"));
     assert_eq!(tree(&export), exported);
     for dir in [&out, &again] {
-        let o = soig(&["verify", dir.to_str().unwrap()]);
+        let o = soig(&["verify", arg(dir)]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
     // Exporting again into its own earlier export replaces it (#43: refused before).
-    let o = soig(&[
-        "export",
-        out.to_str().unwrap(),
-        "--out",
-        again.to_str().unwrap(),
-    ]);
+    let o = soig(&["export", arg(&out), "--out", arg(&again)]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(tree(&export), {
         let mut t = tree(&again);
@@ -103,37 +94,29 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
     // the normalised box to 6 decimals: at most 0.5e-6 x 1088 px = 5.4e-4 px per edge, so
     // 1.1e-3 px on a width.
     let mut images = 0;
-    for split in ["train", "val", "test"] {
-        let coco = json(&export.join(format!("coco/{split}.json")));
-        let anns = coco["annotations"].as_array().unwrap();
-        for im in coco["images"].as_array().unwrap() {
-            images += 1;
-            let file = im["file_name"].as_str().unwrap();
-            assert!(file.starts_with(&format!("images/{split}/")), "{file}");
-            let (w, h) = image::image_dimensions(out.join(file)).unwrap();
-            assert_eq!(
-                (im["width"].as_u64(), im["height"].as_u64()),
-                (Some(w.into()), Some(h.into()))
-            );
-            let id = im["id"].as_u64().unwrap();
-            let stem = format!("img_{id:06}");
-            let labels =
-                std::fs::read_to_string(out.join(format!("labels/{split}/{stem}.txt"))).unwrap();
-            let mine: Vec<&Value> = anns.iter().filter(|a| a["image_id"] == id).collect();
-            assert_eq!(mine.len(), labels.lines().count(), "{stem}");
-            let truth = json(&out.join(format!("truth/{stem}.json")));
-            let got = assert_coco_bbox_is_label_box(mine[0], &truth["label_box_final_px"], &stem);
-            // The annotation names its object (#45): the campaign's debris, its NORAD number.
-            assert_eq!(mine[0]["object_id"], truth["norad"], "{stem}");
-            assert_eq!(mine[0]["object"], truth["object"], "{stem}");
-            assert_eq!(mine[0]["source"], "debris", "{stem}");
-            // serde_json's default float parser may miss the written value by an ulp.
-            let area = mine[0]["area"].as_f64().unwrap();
-            assert!(
-                (area - got[2] * got[3]).abs() <= 1e-12 * area,
-                "{stem}: area {area}"
-            );
-        }
+    for im in coco_images(&export, &out) {
+        images += 1;
+        let (stem, truth) = (&im.stem, &im.truth);
+        let file = im.image["file_name"].as_str().unwrap();
+        assert!(file.starts_with(&format!("images/{}/", im.split)), "{file}");
+        let (w, h) = image::image_dimensions(out.join(file)).unwrap();
+        assert_eq!(
+            (im.image["width"].as_u64(), im.image["height"].as_u64()),
+            (Some(w.into()), Some(h.into()))
+        );
+        assert_eq!(im.annotations.len(), im.labels.lines().count(), "{stem}");
+        let ann = &im.annotations[0];
+        let got = assert_coco_bbox_is_label_box(ann, &truth["label_box_final_px"], stem);
+        // The annotation names its object (#45): the campaign's debris, its NORAD number.
+        assert_eq!(ann["object_id"], truth["norad"], "{stem}");
+        assert_eq!(ann["object"], truth["object"], "{stem}");
+        assert_eq!(ann["source"], "debris", "{stem}");
+        // serde_json's default float parser may miss the written value by an ulp.
+        let area = ann["area"].as_f64().unwrap();
+        assert!(
+            (area - got[2] * got[3]).abs() <= 1e-12 * area,
+            "{stem}: area {area}"
+        );
     }
     assert_eq!(images, 16);
 
@@ -244,12 +227,7 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
 fn export_refuses_an_output_that_does_not_verify_and_a_folder_inside_it() {
     let tmp = tempfile::tempdir().unwrap();
     let out = run(tmp.path());
-    let o = soig(&[
-        "export",
-        out.to_str().unwrap(),
-        "--out",
-        out.join("x").to_str().unwrap(),
-    ]);
+    let o = soig(&["export", arg(&out), "--out", arg(&out.join("x"))]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("lies inside the output"));
     assert!(!out.join("x").exists());
@@ -258,12 +236,7 @@ fn export_refuses_an_output_that_does_not_verify_and_a_folder_inside_it() {
     let mine = tmp.path().join("mine");
     std::fs::create_dir_all(mine.join("coco")).unwrap();
     std::fs::write(mine.join("coco/test.json"), "the user's").unwrap();
-    let o = soig(&[
-        "export",
-        out.to_str().unwrap(),
-        "--out",
-        mine.to_str().unwrap(),
-    ]);
+    let o = soig(&["export", arg(&out), "--out", arg(&mine)]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("refusing to overwrite it"));
     assert_eq!(
@@ -278,12 +251,7 @@ fn export_refuses_an_output_that_does_not_verify_and_a_folder_inside_it() {
         .unwrap()
         .write(&other)
         .unwrap();
-    let o = soig(&[
-        "export",
-        out.to_str().unwrap(),
-        "--out",
-        other.to_str().unwrap(),
-    ]);
+    let o = soig(&["export", arg(&out), "--out", arg(&other)]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
         String::from_utf8_lossy(&o.stderr).contains("not an export"),
@@ -295,12 +263,7 @@ fn export_refuses_an_output_that_does_not_verify_and_a_folder_inside_it() {
         "soig's"
     );
     std::fs::write(out.join("labels/test/extra.txt"), "0 0.5 0.5 0.1 0.1\n").unwrap();
-    let o = soig(&[
-        "export",
-        out.to_str().unwrap(),
-        "--out",
-        tmp.path().join("e").to_str().unwrap(),
-    ]);
+    let o = soig(&["export", arg(&out), "--out", arg(&tmp.path().join("e"))]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
         String::from_utf8_lossy(&o.stderr).contains("does not verify"),

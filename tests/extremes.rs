@@ -20,7 +20,7 @@ use soig::sky::projection::Tan;
 use soig::sky::stars::{ProceduralSky, Star, cumulative_density_per_deg2, equatorial_to_galactic};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, tle_file, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, arg, scratch, tle_file, tle_object};
 
 /// A small campaign (128 px at the paper's pixel scale unless `extra` says otherwise) observed
 /// from SENTINEL-3A; `debris` is the body of one `[[debris]]` table.
@@ -429,7 +429,7 @@ fn decayed_tle_is_refused_naming_file_and_line() {
     let path = dir.path().join("decay.toml");
     std::fs::write(&path, campaign_text(&inline, window)).unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
-        .args(["run", path.to_str().unwrap(), "--quiet", "--out"])
+        .args(["run", arg(&path), "--quiet", "--out"])
         .arg(dir.path().join("out"))
         .output()
         .unwrap();
@@ -531,8 +531,7 @@ fn orbits_below_the_surface_are_refused_naming_file_and_line() {
     );
 
     // The same TLE in a file, third of two sets: its line 5 and the file are named.
-    let dir = tempfile::tempdir().unwrap();
-    let tles = dir.path().join("low.tle");
+    let (_dir, tles) = scratch("low.tle");
     let catalogue = std::fs::read_to_string(tle_file()).unwrap();
     let first: Vec<&str> = catalogue.lines().take(3).collect();
     let text = format!("{}\nLOW\n{}\n{l2}\n", first.join("\n"), DECAYING_TLE[0]);
@@ -821,8 +820,7 @@ fn magnitudes_from_minus_1_to_25() {
         t,
     );
     let e = render_scene(&c, &s, 5);
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("bright.fits");
+    let (_dir, path) = scratch("bright.fits");
     soig::fits::write_image(
         &path,
         e.width,
@@ -836,21 +834,31 @@ fn magnitudes_from_minus_1_to_25() {
     assert_eq!(back, e.adu);
 }
 
+/// The campaign of `w` x `w` px over `fov` degrees (the debris 40649) and a star of magnitude
+/// `mag` at the centre pixel of a field centred on (10, 20) degrees.
+fn star_at_the_centre(w: u32, fov: f64, mag: f64) -> (Campaign, Star) {
+    let c = campaign(ELEMENTS_40649, &sensor(w, fov));
+    let tan = Tan::new(10.0, 20.0, sensor_of(&c).pixel_scale_deg(), w, w);
+    let centre = f64::from(w / 2);
+    let (ra_deg, dec_deg) = tan.sky(centre, centre);
+    (
+        c,
+        Star {
+            ra_deg,
+            dec_deg,
+            mag,
+        },
+    )
+}
+
 /// A magnitude-6 star in the field (the brightest the visibility rules admit, paper 3.2.3) over
 /// the paper's 5 s: 1.6e7 photo-electrons, traced in 5-photon packets; no full-well
 /// saturation is modelled, so its core holds ~1e6 e- per pixel, exact in u32 and in the
 /// float32 FITS. The enhanced PNG stays valid, with the star at the top of the range.
 #[test]
 fn magnitude_6_star_in_the_field() {
-    let (w, fov) = (128u32, 0.0125);
-    let c = campaign(ELEMENTS_40649, &sensor(w, fov));
-    let tan = Tan::new(10.0, 20.0, sensor_of(&c).pixel_scale_deg(), w, w);
-    let (ra, dec) = tan.sky(64.0, 64.0);
-    let star = Star {
-        ra_deg: ra,
-        dec_deg: dec,
-        mag: 6.0,
-    };
+    let w = 128u32;
+    let (c, star) = star_at_the_centre(w, 0.0125, 6.0);
     let s = fixed_scene(
         &c,
         (10.0, 20.0),
@@ -899,15 +907,10 @@ fn streak_leaving_the_image() {
     let (w, fov) = (128u32, 0.0125);
     let c = campaign(ELEMENTS_40649, &sensor(w, fov));
     let sigma = sensor_of(&c).background_sigma_adu(2.0, None);
+    // A magnitude-11 streak between two pixel places, no star, over 2 s.
+    let streak = |ends| fixed_scene(&c, (10.0, 20.0), vec![], 11.0, ends, 2.0);
     // From the centre out through the right edge: half the streak is in the image.
-    let s = fixed_scene(
-        &c,
-        (10.0, 20.0),
-        vec![],
-        11.0,
-        ((64.0, 64.0), (320.0, 64.0)),
-        2.0,
-    );
+    let s = streak(((64.0, 64.0), (320.0, 64.0)));
     let e = render_scene(&c, &s, 7);
     all_finite(&e);
     let b = e.truth.label_box_px.expect("debris in the image");
@@ -934,14 +937,7 @@ fn streak_leaving_the_image() {
             && (full - scene::expected_snr(&sensor_of(&c), &inside, sigma)).abs() < 1e-12 * full
     );
     // Wholly outside: SNR 0, below any gate; rendered anyway, no label.
-    let out = fixed_scene(
-        &c,
-        (10.0, 20.0),
-        vec![],
-        11.0,
-        ((200.0, 64.0), (400.0, 64.0)),
-        2.0,
-    );
+    let out = streak(((200.0, 64.0), (400.0, 64.0)));
     assert_eq!(
         scene::expected_snr(&sensor_of(&c), &out.trajectory, sigma),
         0.0
@@ -974,14 +970,7 @@ fn huge_poisson_mean() {
     // A magnitude -30 star for 0.01 s: 1.3e19 expected photo-electrons. Before the renderer
     // clamped its count this traced ~1e11 single photons (a hang).
     let (w, fov) = (64u32, 0.00625);
-    let c = campaign(ELEMENTS_40649, &sensor(w, fov));
-    let tan = Tan::new(10.0, 20.0, sensor_of(&c).pixel_scale_deg(), w, w);
-    let (ra, dec) = tan.sky(32.0, 32.0);
-    let star = Star {
-        ra_deg: ra,
-        dec_deg: dec,
-        mag: -30.0,
-    };
+    let (c, star) = star_at_the_centre(w, fov, -30.0);
     let s = fixed_scene(
         &c,
         (10.0, 20.0),

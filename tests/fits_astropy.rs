@@ -13,7 +13,7 @@
 use std::process::Command;
 
 mod common;
-use common::{python_with_astropy, run_quickstart};
+use common::{python_with_astropy, run_quickstart, scratch};
 
 const CHECK: &str = r#"
 import sys, warnings
@@ -60,8 +60,7 @@ fn astropy_parses_every_card_and_unit_of_both_fits() {
     let Some(python) = python_with_astropy() else {
         return;
     };
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("run");
+    let (_dir, out) = scratch("run");
     let o = run_quickstart(
         &[
             "--quiet",

@@ -10,15 +10,11 @@ use soig::geometry::{self, Fill, Frame, FrameKind, LABEL_SHARE};
 use soig::scene::Pointing;
 
 mod common;
-use common::{CampaignToml, neossat_frame, rendered, tle_object};
+use common::{CampaignToml, leo_and_geo, neossat_frame, rendered, tle_object};
 
 fn campaign(mode: &str) -> Campaign {
-    CampaignToml::new("geom", 11, 4)
-        .debris(&tle_object(37476))
-        .debris(&tle_object(40989))
-        .tables(&format!(
-            "[pointing]\nmode = \"{mode}\"\n[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n[render]\ntrajectory_samples = 800\n"
-        ))
+    leo_and_geo("geom", mode, "")
+        .tables("[render]\ntrajectory_samples = 800\n")
         .load("geom.toml")
 }
 

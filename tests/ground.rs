@@ -12,7 +12,7 @@
 use std::path::Path;
 
 mod common;
-use common::{json, python_with_astropy, repo, run_on_one_and_two_threads_and_verify};
+use common::{arg, json, python_with_astropy, repo, run_on_one_and_two_threads_and_verify};
 
 /// Every truth file of an output: (streak length px, star drift over the exposure, deg).
 fn streaks(out: &Path) -> Vec<(f64, f64)> {
@@ -135,15 +135,9 @@ fn extinction_dims_by_k_times_airmass() {
     let run = |name: &str, k: f64| {
         let out = dir.path().join(name);
         let set = format!("observer.site.extinction_mag_per_airmass={k}");
-        let args = ["run", campaign.to_str().unwrap(), "--quiet", "--out"];
+        let args = ["run", arg(&campaign), "--quiet", "--out"];
         let mut all: Vec<&str> = args.to_vec();
-        all.extend([
-            out.to_str().unwrap(),
-            "--set",
-            "stages=[\"render\"]",
-            "--set",
-            &set,
-        ]);
+        all.extend([arg(&out), "--set", "stages=[\"render\"]", "--set", &set]);
         common::ok(common::soig(&all));
         out
     };

@@ -12,6 +12,7 @@
 use soig::atmosphere::scintillation_variance;
 use soig::campaign::Campaign;
 use soig::experiment;
+use soig_sim::observer::GroundGate;
 
 mod common;
 use common::{CampaignToml, assert_refused, rendered, run_quiet, tle_object};
@@ -80,19 +81,24 @@ const MOON_REFERENCE: [(&str, f64, f64, f64, f64, f64, f64); 4] = [
     ),
 ];
 
-#[test]
-fn the_sky_models_moon_and_sun_are_astropys() {
-    let c = campaign_toml(
-        ", extinction_mag_per_airmass = 0.15, sky = { zenith_v_mag_per_arcsec2 = 21.7 }",
-        1,
-    )
-    .tables(PHYSICAL)
-    .load("ground-air.toml");
+/// The campaign of `images` with a physical sky (extinction 0.15 mag per airmass, zenith sky
+/// V 21.7 mag/arcsec^2, `PHYSICAL`'s tables) and its ground gate.
+fn physical_sky(images: u32) -> (Campaign, GroundGate) {
+    let sky = ", extinction_mag_per_airmass = 0.15, sky = { zenith_v_mag_per_arcsec2 = 21.7 }";
+    let c = campaign_toml(sky, images)
+        .tables(PHYSICAL)
+        .load("ground-air.toml");
     let gate = experiment::of(&c)
         .scene
         .ground
         .clone()
         .expect("a ground gate");
+    (c, gate)
+}
+
+#[test]
+fn the_sky_models_moon_and_sun_are_astropys() {
+    let (_, gate) = physical_sky(1);
     for (utc, ra, dec, moon_z, sun_alt, sep, phase) in MOON_REFERENCE {
         let t: hifitime::Epoch = format!("{utc} UTC").parse().unwrap();
         let (_, g) = gate.sky(t, soig::sky::radec_unit(ra, dec)).unwrap();
@@ -116,15 +122,7 @@ fn the_sky_models_moon_and_sun_are_astropys() {
 
 #[test]
 fn the_sky_of_each_image_is_the_sites_toward_its_boresight() {
-    let sky = ", extinction_mag_per_airmass = 0.15, sky = { zenith_v_mag_per_arcsec2 = 21.7 }";
-    let c = campaign_toml(sky, 3)
-        .tables(PHYSICAL)
-        .load("ground-air.toml");
-    let gate = experiment::of(&c)
-        .scene
-        .ground
-        .clone()
-        .expect("a ground gate");
+    let (c, gate) = physical_sky(3);
     let sensor = experiment::of(&c).sensor;
     for image in rendered(&c, 3) {
         let t = &image.exposure.truth;

@@ -10,22 +10,32 @@ use std::path::Path;
 use std::process::Output;
 
 mod common;
-use common::soig_in;
+use common::{arg, scratch, soig_in};
 
 /// `soig slurm campaigns/quickstart.toml --shards 2 ARGS --scripts SCRIPTS` from the
 /// repository root.
 fn slurm(args: &[&str], scripts: &Path) -> Output {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut all = vec!["slurm", "campaigns/quickstart.toml", "--shards", "2"];
+    let mut all = vec!["slurm", QUICKSTART, "--shards", "2"];
     all.extend_from_slice(args);
-    all.extend(["--scripts", scripts.to_str().unwrap()]);
+    all.extend(["--scripts", arg(scripts)]);
     soig_in(root, &all)
+}
+
+/// The campaign the cluster scripts are written for, from the repository root.
+const QUICKSTART: &str = "campaigns/quickstart.toml";
+
+/// `soig k8s CAMPAIGN --shards 2 ARGS --scripts JOBS` from folder `cwd`.
+fn k8s(cwd: &Path, campaign: &str, args: &[&str], jobs: &Path) -> Output {
+    let mut all = vec!["k8s", campaign, "--shards", "2"];
+    all.extend_from_slice(args);
+    all.extend(["--scripts", arg(jobs)]);
+    soig_in(cwd, &all)
 }
 
 #[test]
 fn slurm_resources_reach_every_job() {
-    let dir = tempfile::tempdir().unwrap();
-    let scripts = dir.path().join("jobs");
+    let (dir, scripts) = scratch("jobs");
     let out = dir.path().join("out");
     let o = slurm(
         &[
@@ -41,7 +51,7 @@ fn slurm_resources_reach_every_job() {
             "4",
             "--sbatch=--qos=high",
             "--out",
-            out.to_str().unwrap(),
+            arg(&out),
         ],
         &scripts,
     );
@@ -60,8 +70,7 @@ fn slurm_resources_reach_every_job() {
 
 #[test]
 fn a_malformed_slurm_time_is_refused_before_writing() {
-    let dir = tempfile::tempdir().unwrap();
-    let scripts = dir.path().join("jobs");
+    let (_dir, scripts) = scratch("jobs");
     let o = slurm(&["--time", "2h"], &scripts);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
@@ -72,37 +81,16 @@ fn a_malformed_slurm_time_is_refused_before_writing() {
 #[test]
 fn k8s_warns_of_paths_outside_the_volume() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dir = tempfile::tempdir().unwrap();
-    let jobs = dir.path().join("jobs");
-    let jobs = jobs.to_str().unwrap();
+    let (_dir, jobs) = scratch("jobs");
     // Relative paths within the volume's root (here the repository): no warning.
-    let o = soig_in(
-        root,
-        &[
-            "k8s",
-            "campaigns/quickstart.toml",
-            "--shards",
-            "2",
-            "--out",
-            "runs/q",
-            "--scripts",
-            jobs,
-        ],
-    );
+    let o = k8s(root, QUICKSTART, &["--out", "runs/q"], &jobs);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
-    let o = soig_in(
+    let o = k8s(
         &root.join("campaigns"),
-        &[
-            "k8s",
-            "quickstart.toml",
-            "--shards",
-            "2",
-            "--out",
-            "/scratch/q",
-            "--scripts",
-            jobs,
-        ],
+        "quickstart.toml",
+        &["--out", "/scratch/q"],
+        &jobs,
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);
@@ -110,19 +98,7 @@ fn k8s_warns_of_paths_outside_the_volume() {
         err.contains("warning: the output path /scratch/q is absolute"),
         "{err}"
     );
-    let o = soig_in(
-        root,
-        &[
-            "k8s",
-            "campaigns/quickstart.toml",
-            "--shards",
-            "2",
-            "--out",
-            "../q",
-            "--scripts",
-            jobs,
-        ],
-    );
+    let o = k8s(root, QUICKSTART, &["--out", "../q"], &jobs);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -190,23 +166,9 @@ fn submit_against(jobs: &Path, pods: &str, env: &[(&str, &str)]) -> (Option<i32>
 #[test]
 fn k8s_submit_gives_up_after_its_deadline() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dir = tempfile::tempdir().unwrap();
-    let jobs = dir.path().join("jobs");
-    let o = soig_in(
-        root,
-        &[
-            "k8s",
-            "campaigns/quickstart.toml",
-            "--shards",
-            "2",
-            "--out",
-            "runs/q",
-            "--deadline",
-            "3s",
-            "--scripts",
-            jobs.to_str().unwrap(),
-        ],
-    );
+    let (dir, jobs) = scratch("jobs");
+    let with_deadline = ["--out", "runs/q", "--deadline", "3s"];
+    let o = k8s(root, QUICKSTART, &with_deadline, &jobs);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for f in ["shards.yaml", "merge.yaml"] {
         let text = std::fs::read_to_string(jobs.join(f)).unwrap();
@@ -219,21 +181,8 @@ fn k8s_submit_gives_up_after_its_deadline() {
     assert!(err.contains("soig-quick-start-0-abc Pending"), "{err}");
 
     // An image the cluster cannot pull: given up after the grace, long before the deadline.
-    let o = soig_in(
-        root,
-        &[
-            "k8s",
-            "campaigns/quickstart.toml",
-            "--shards",
-            "2",
-            "--out",
-            "runs/q",
-            "--image",
-            "reg.example/none:1",
-            "--scripts",
-            jobs.to_str().unwrap(),
-        ],
-    );
+    let unpullable = ["--out", "runs/q", "--image", "reg.example/none:1"];
+    let o = k8s(root, QUICKSTART, &unpullable, &jobs);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (code, err) = submit_against(
         &jobs,
@@ -246,20 +195,9 @@ fn k8s_submit_gives_up_after_its_deadline() {
         "{err}"
     );
     // A deadline that is no duration is refused before anything is written.
-    let o = soig_in(
-        root,
-        &[
-            "k8s",
-            "campaigns/quickstart.toml",
-            "--shards",
-            "2",
-            "--deadline",
-            "soon",
-            "--scripts",
-            dir.path().join("none").to_str().unwrap(),
-        ],
-    );
+    let none = dir.path().join("none");
+    let o = k8s(root, QUICKSTART, &["--deadline", "soon"], &none);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--deadline \"soon\""));
-    assert!(!dir.path().join("none").exists());
+    assert!(!none.exists());
 }

@@ -13,8 +13,9 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::{
-    CampaignToml, ELEMENTS_40649, assert_coco_agrees_with_soig_eval, assert_coco_bbox_is_label_box,
-    digest, export_readers_python, json, run_on_threads, soig, tle_object,
+    CampaignToml, CocoImage, ELEMENTS_40649, arg, assert_coco_agrees_with_soig_eval,
+    assert_coco_bbox_is_label_box, coco_images, digest, export_readers_python, json,
+    run_on_threads, soig, tle_object,
 };
 use serde_json::Value;
 
@@ -43,7 +44,7 @@ fn several_objects_or_none_per_frame_agree_everywhere() {
     let one = run_on_threads(&c, &out, "1");
     let two = run_on_threads(&c, &tmp.path().join("two"), "2");
     assert_eq!(one, two, "the digest depends on the thread count");
-    let o = soig(&["verify", out.to_str().unwrap()]);
+    let o = soig(&["verify", arg(&out)]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // A run killed after 5 images resumes them (their light curves among their files) and
     // ends with the same digest.
@@ -51,23 +52,12 @@ fn several_objects_or_none_per_frame_agree_everywhere() {
     let killed = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
         .env("RAYON_NUM_THREADS", "1")
         .env("SOIG_TEST_ABORT_AT", "render:5")
-        .args([
-            "run",
-            c.to_str().unwrap(),
-            "--out",
-            resumed.to_str().unwrap(),
-            "--quiet",
-        ])
+        .args(["run", arg(&c), "--out", arg(&resumed), "--quiet"])
         .output()
         .unwrap();
     assert!(!killed.status.success());
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
-        .args([
-            "run",
-            c.to_str().unwrap(),
-            "--out",
-            resumed.to_str().unwrap(),
-        ])
+        .args(["run", arg(&c), "--out", arg(&resumed)])
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&o.stdout);
@@ -80,78 +70,74 @@ fn several_objects_or_none_per_frame_agree_everywhere() {
     let export = out.join("export");
     let (mut images, mut empty, mut most, mut objects) = (0, 0, 0, 0);
     let mut shown = std::collections::BTreeMap::<u64, usize>::new();
-    for split in ["train", "val", "test"] {
-        let coco = json(&export.join(format!("coco/{split}.json")));
-        let anns = coco["annotations"].as_array().unwrap();
-        for im in coco["images"].as_array().unwrap() {
-            images += 1;
-            let id = im["id"].as_u64().unwrap();
-            let stem = format!("img_{id:06}");
-            let labels =
-                std::fs::read_to_string(out.join(format!("labels/{split}/{stem}.txt"))).unwrap();
-            let truth = json(&out.join(format!("truth/{stem}.json")));
-            assert!(truth.get("object").is_none(), "{stem}: a one-object truth");
-            let listed = truth["objects"].as_array().unwrap();
-            for o in listed {
-                // Turned into the field, not where its orbit puts it: marked so (#45).
-                assert_eq!(o["source"], "placed", "{stem}");
-                *shown.entry(o["norad"].as_u64().unwrap()).or_default() += 1;
-            }
-            let labelled: Vec<&Value> = listed
-                .iter()
-                .filter(|o| !o["label_box_final_px"].is_null())
-                .collect();
-            let mine: Vec<&Value> = anns.iter().filter(|a| a["image_id"] == id).collect();
-            assert_eq!(labels.lines().count(), labelled.len(), "{stem}");
-            assert_eq!(mine.len(), labelled.len(), "{stem}");
-            objects += listed.len();
-            most = most.max(listed.len());
-            if listed.is_empty() {
-                empty += 1;
-                assert_eq!(labels, "", "{stem}: an empty frame's label file is empty");
-            }
-            for (o, a) in labelled.iter().zip(&mine) {
-                assert_coco_bbox_is_label_box(a, &o["label_box_final_px"], &stem);
-                // Each annotation names its object: id and source as in the truth (#45).
-                assert_eq!(a["object_id"], o["norad"], "{stem}");
-                assert_eq!(a["source"], "placed", "{stem}");
-                assert_eq!(a["object"], o["object"], "{stem}");
-            }
-            // One streak line per object in the DS9 truth regions, in the truth's order, each
-            // labelled with its name and NORAD number.
-            let reg =
-                std::fs::read_to_string(export.join(format!("ds9/truth/{stem}.reg"))).unwrap();
-            let lines: Vec<&str> = reg.lines().filter(|l| l.starts_with("line(")).collect();
-            assert_eq!(lines.len(), listed.len(), "{stem}: {reg}");
-            for (line, o) in lines.iter().zip(listed) {
-                let text = format!(
-                    "# text={{{} (NORAD {})}}",
-                    o["object"].as_str().unwrap(),
-                    o["norad"]
-                );
-                assert!(line.ends_with(&text), "{stem}: {line}");
-            }
-            // The light curve: each object's rows in turn, as many as its trajectory samples
-            // (at least render.trajectory_samples, 2000).
-            let rows: Vec<csv::StringRecord> =
-                csv::Reader::from_path(out.join(format!("truth/{stem}_light_curve.csv")))
-                    .unwrap()
-                    .into_records()
-                    .map(|r| r.unwrap())
-                    .collect();
-            let mut at = 0;
-            for o in listed {
-                assert_eq!(&rows[at][1], o["object"].as_str().unwrap(), "{stem}");
-                assert_eq!(&rows[at][3], "0", "{stem}");
-                let n = rows[at + 1..]
-                    .iter()
-                    .position(|r| &r[3] == "0")
-                    .map_or(rows.len() - at, |p| p + 1);
-                assert!(n >= 2000, "{stem}: {n} samples");
-                at += n;
-            }
-            assert_eq!(at, rows.len(), "{stem}: rows beyond its objects");
+    for CocoImage {
+        annotations: mine,
+        stem,
+        labels,
+        truth,
+        ..
+    } in coco_images(&export, &out)
+    {
+        images += 1;
+        assert!(truth.get("object").is_none(), "{stem}: a one-object truth");
+        let listed = truth["objects"].as_array().unwrap();
+        for o in listed {
+            // Turned into the field, not where its orbit puts it: marked so (#45).
+            assert_eq!(o["source"], "placed", "{stem}");
+            *shown.entry(o["norad"].as_u64().unwrap()).or_default() += 1;
         }
+        let labelled: Vec<&Value> = listed
+            .iter()
+            .filter(|o| !o["label_box_final_px"].is_null())
+            .collect();
+        assert_eq!(labels.lines().count(), labelled.len(), "{stem}");
+        assert_eq!(mine.len(), labelled.len(), "{stem}");
+        objects += listed.len();
+        most = most.max(listed.len());
+        if listed.is_empty() {
+            empty += 1;
+            assert_eq!(labels, "", "{stem}: an empty frame's label file is empty");
+        }
+        for (o, a) in labelled.iter().zip(&mine) {
+            assert_coco_bbox_is_label_box(a, &o["label_box_final_px"], &stem);
+            // Each annotation names its object: id and source as in the truth (#45).
+            assert_eq!(a["object_id"], o["norad"], "{stem}");
+            assert_eq!(a["source"], "placed", "{stem}");
+            assert_eq!(a["object"], o["object"], "{stem}");
+        }
+        // One streak line per object in the DS9 truth regions, in the truth's order, each
+        // labelled with its name and NORAD number.
+        let reg = std::fs::read_to_string(export.join(format!("ds9/truth/{stem}.reg"))).unwrap();
+        let lines: Vec<&str> = reg.lines().filter(|l| l.starts_with("line(")).collect();
+        assert_eq!(lines.len(), listed.len(), "{stem}: {reg}");
+        for (line, o) in lines.iter().zip(listed) {
+            let text = format!(
+                "# text={{{} (NORAD {})}}",
+                o["object"].as_str().unwrap(),
+                o["norad"]
+            );
+            assert!(line.ends_with(&text), "{stem}: {line}");
+        }
+        // The light curve: each object's rows in turn, as many as its trajectory samples
+        // (at least render.trajectory_samples, 2000).
+        let rows: Vec<csv::StringRecord> =
+            csv::Reader::from_path(out.join(format!("truth/{stem}_light_curve.csv")))
+                .unwrap()
+                .into_records()
+                .map(|r| r.unwrap())
+                .collect();
+        let mut at = 0;
+        for o in listed {
+            assert_eq!(&rows[at][1], o["object"].as_str().unwrap(), "{stem}");
+            assert_eq!(&rows[at][3], "0", "{stem}");
+            let n = rows[at + 1..]
+                .iter()
+                .position(|r| &r[3] == "0")
+                .map_or(rows.len() - at, |p| p + 1);
+            assert!(n >= 2000, "{stem}: {n} samples");
+            at += n;
+        }
+        assert_eq!(at, rows.len(), "{stem}: rows beyond its objects");
     }
     assert_eq!(images, 30);
     // Seed 11 gives frames of every kind: some empty, some with three objects.

@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{ok, repo, soig};
+use common::{eval_json, repo};
 
 /// Ultralytics' figures (`obb_metrics_reference.py`, ultralytics 8.4.190, torch 2.15.0).
 const PRECISION: f64 = 0.3743705923788247;
@@ -36,19 +36,11 @@ const PROBIOU: [(&str, &[&[f64]]); 3] = [
 #[test]
 fn oriented_boxes_score_as_ultralytics_obb_validator() {
     let fixture = repo("tests/fixtures/obb");
-    let o = ok(soig(&[
-        "eval",
-        "--labels",
-        fixture.join("labels").to_str().unwrap(),
-        "--predictions",
-        fixture.join("predictions").to_str().unwrap(),
-        "--mode",
-        "ultralytics-obb",
-        "--image-size",
-        "1024",
-        "--json",
-    ]));
-    let got: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let got = eval_json(
+        &fixture.join("labels"),
+        &fixture.join("predictions"),
+        &["--mode", "ultralytics-obb", "--image-size", "1024"],
+    );
     assert_eq!(got["mode"], "ultralytics-obb");
     assert_eq!(
         (got["images"].as_u64(), got["objects"].as_u64()),

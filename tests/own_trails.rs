@@ -19,6 +19,14 @@ const SENSOR: Sensor = Sensor {
     read_noise: 8.0,
 };
 
+/// The streak detector's defaults with the test sensor's PSF.
+fn params() -> StreakParams {
+    StreakParams {
+        psf_sigma_px: SENSOR.psf_sigma,
+        ..StreakParams::default()
+    }
+}
+
 /// A survey frame: `stars` trails along `trail_deg`, all `trail_len` px long, peak SNR
 /// log-uniform in 0.5-20 per pixel, centred anywhere (cut by the frame's edge), and one debris
 /// streak `off_deg` from them, 80-300 px, peak SNR 1.5-6 per pixel, inside the frame.
@@ -78,10 +86,7 @@ fn is_debris(ends: &[[f64; 2]; 2], d: &Segment) -> bool {
 /// star-aware pass would need the trails subtracted, as the catalogue's are).
 #[test]
 fn trails_measured_and_debris_off_them_found() {
-    let params = StreakParams {
-        psf_sigma_px: SENSOR.psf_sigma,
-        ..StreakParams::default()
-    };
+    let params = params();
     let mut rng = Rng::new(44);
     let (mut within, mut beyond, mut false_boxes) = ((0, 0), (0, 0), 0);
     for k in 0..24 {
@@ -131,10 +136,7 @@ fn trails_measured_and_debris_off_them_found() {
 /// detections are exactly those of the detector told nothing (the frame is left as it was).
 #[test]
 fn point_stars_leave_the_frame_as_it_was() {
-    let params = StreakParams {
-        psf_sigma_px: SENSOR.psf_sigma,
-        ..StreakParams::default()
-    };
+    let params = params();
     let mut rng = Rng::new(45);
     for k in 0..6 {
         let mut segs: Vec<Segment> = (0..150)

@@ -12,24 +12,23 @@ use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, differing_files, digest, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, arg, differing_files, digest, small_detecting_run};
 
 /// `images` small images (fixed pointing, the detect stage with the streak detector), written
 /// as `dir/NAME.toml`.
 fn campaign(dir: &Path, name: &str, images: u32) -> PathBuf {
-    CampaignToml::new("resume", 21, images)
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-        .debris(&tle_object(37476))
-        .debris(ELEMENTS_40649)
-        .tables(
-            "[sensor]\nwidth_px = 128\nheight_px = 128\nfov_radius_deg = 0.0125\n[render]\ntrajectory_samples = 300\n[split]\ntrain = 0.5\nval = 0.2\ntest = 0.3\n[artifacts]\nnoise_free_fits = true\n",
-        )
-        .write(&dir.join(format!("{name}.toml")))
+    small_detecting_run(
+        "resume",
+        21,
+        images,
+        "[artifacts]\nnoise_free_fits = true\n",
+    )
+    .write(&dir.join(format!("{name}.toml")))
 }
 
 fn command(campaign: &Path, out: &Path) -> Command {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_soig"));
-    cmd.args(["run", campaign.to_str().unwrap(), "--quiet", "--out"])
+    cmd.args(["run", arg(campaign), "--quiet", "--out"])
         .arg(out)
         .env_remove("SOIG_TEST_ABORT_AT");
     cmd
@@ -42,6 +41,12 @@ fn leftovers(out: &Path) -> Vec<String> {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .filter(|n| n.starts_with('.'))
         .collect()
+}
+
+/// Nothing hidden is left beside `out`: no staging directory, no lock.
+fn assert_no_leftovers(out: &Path) {
+    let left = leftovers(out);
+    assert!(left.is_empty(), "{left:?}");
 }
 
 /// Lines in the journal of the staging directory of process `pid` writing `out`.
@@ -99,7 +104,7 @@ fn killed_at_any_phase_a_run_resumes_to_the_same_digest() {
         said.contains("resumed)") && !said.starts_with("150 images"),
         "{said}"
     );
-    assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
+    assert_no_leftovers(&out);
 
     let c = campaign(t, "short", 24);
     let reference = digest(&command(&c, &t.join("reference")).output().unwrap());
@@ -128,7 +133,7 @@ fn killed_at_any_phase_a_run_resumes_to_the_same_digest() {
         .unwrap();
     assert_eq!(o.status.code(), None);
     assert_eq!(digest(&command(&c, &out).output().unwrap()), reference);
-    assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
+    assert_no_leftovers(&out);
 
     // Another campaign does not resume this one's work: it removes it and starts afresh.
     let o = command(&c, &out)
@@ -143,7 +148,7 @@ fn killed_at_any_phase_a_run_resumes_to_the_same_digest() {
     let o = command(&other, &out).output().unwrap();
     digest(&o);
     assert!(String::from_utf8_lossy(&o.stdout).starts_with("4 images rendered in"));
-    assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
+    assert_no_leftovers(&out);
 }
 
 #[test]
@@ -175,7 +180,7 @@ fn sigterm_keeps_the_work_and_the_same_command_resumes_it() {
         "files that differ: {:?}",
         differing_files(&out, &t.join("reference"))
     );
-    assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
+    assert_no_leftovers(&out);
 }
 
 /// Issue #31: soig as PID 1 of its own PID namespace (a Kubernetes pod), killed with SIGKILL,
@@ -248,5 +253,5 @@ fn a_killed_pid_1_in_its_own_namespace_resumes_on_retry() {
     assert!(verify.status.success(), "{verify:?}");
     let reference = digest(&command(&c, &t.join("reference")).output().unwrap());
     assert_eq!(digest(&retry), reference);
-    assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
+    assert_no_leftovers(&out);
 }

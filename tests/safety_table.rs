@@ -280,7 +280,12 @@ fn changes(
 
 /// Staging folders, locks, set-aside outputs and temporary files under `dir`.
 fn strays(dir: &Path) -> Vec<String> {
-    snapshot(dir)
+    strays_in(&snapshot(dir))
+}
+
+/// The staging folders, locks, set-aside outputs and temporary files of a `snapshot`.
+fn strays_in(snapshot: &BTreeMap<PathBuf, String>) -> Vec<String> {
+    snapshot
         .keys()
         .filter(|p| {
             let n = p.file_name().unwrap().to_string_lossy();
@@ -459,19 +464,7 @@ fn attack(row: &Row, fixture: &Path, root: &Path) -> Vec<String> {
             }
             let touched = [vol.clone(), vol.join("out")];
             check("full-disk", changes(&before, &after, &touched));
-            let left: Vec<String> = after
-                .keys()
-                .filter(|p| {
-                    let n = p.file_name().unwrap().to_string_lossy();
-                    n.starts_with('.')
-                        && (n.contains(".partial-")
-                            || n.ends_with(".lock")
-                            || n.contains(".tmp-")
-                            || n.contains(".old-"))
-                })
-                .map(|p| p.display().to_string())
-                .collect();
-            check("full-disk", left);
+            check("full-disk", strays_in(&after));
         } else {
             eprintln!("{}: full-disk skipped: cannot mount a tmpfs", row.verb);
         }

@@ -13,24 +13,15 @@ mod common;
 
 use std::path::Path;
 
-use common::{json, ok, ort_available, repo, soig};
+use common::{arg, eval_json, json, ok, ort_available, repo, scratch, soig};
 
 /// `soig eval` of detector `name`'s predictions in `mode`, as JSON.
 fn eval(out: &Path, name: &str, mode: &str) -> serde_json::Value {
-    let at = |p: &str| out.join(p).to_str().unwrap().to_string();
-    let o = ok(soig(&[
-        "eval",
-        "--labels",
-        &at("labels/test"),
-        "--predictions",
-        &at(&format!("report/predictions/{name}")),
-        "--images",
-        &at("images/test"),
-        "--mode",
-        mode,
-        "--json",
-    ]));
-    serde_json::from_slice(&o.stdout).unwrap()
+    eval_json(
+        &out.join("labels/test"),
+        &out.join(format!("report/predictions/{name}")),
+        &["--images", arg(&out.join("images/test")), "--mode", mode],
+    )
 }
 
 #[test]
@@ -38,17 +29,16 @@ fn report_metrics_are_soig_eval_of_the_runs_own_files() {
     if !ort_available() {
         return;
     }
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("multi");
+    let (_tmp, out) = scratch("multi");
     let campaign = repo("campaigns/quickstart-multi.toml");
     ok(soig(&[
         "run",
-        campaign.to_str().unwrap(),
+        arg(&campaign),
         "--set",
         "images=40",
         "--quiet",
         "--out",
-        out.to_str().unwrap(),
+        arg(&out),
     ]));
     let report = json(&out.join("report/report.json"));
     let detectors = report["detectors"].as_array().unwrap();

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, assert_refused, digest, tle_object};
+use common::{arg, assert_refused, digest, small_detecting_run};
 
 fn soig(args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_soig"));
@@ -33,33 +33,21 @@ fn soig(args: &[&str], env: &[(&str, &str)]) -> Output {
 fn campaign(dir: &Path, name: &str, seed: u64) -> PathBuf {
     let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/yolo/tiny.onnx");
     std::fs::copy(model, dir.join("tiny.onnx")).unwrap();
-    CampaignToml::new(name, seed, 7)
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-        .debris(&tle_object(37476))
-        .debris(ELEMENTS_40649)
-        .tables(
-            "[sensor]\nwidth_px = 128\nheight_px = 128\nfov_radius_deg = 0.0125\n[render]\ntrajectory_samples = 300\n[split]\ntrain = 0.5\nval = 0.2\ntest = 0.3\n[detect]\nmodel = \"tiny.onnx\"\n",
-        )
+    small_detecting_run(name, seed, 7, "[detect]\nmodel = \"tiny.onnx\"\n")
         .write(&dir.join(format!("{name}.toml")))
 }
 
 /// Run shard `k` of `n` of `campaign` into `out`.
 fn shard(campaign: &Path, k: u64, n: u64, out: &Path) -> Output {
     let spec = format!("{k}/{n}");
-    let args = [
-        "run",
-        campaign.to_str().unwrap(),
-        "--quiet",
-        "--shard",
-        &spec,
-    ];
-    let out_args = ["--out", out.to_str().unwrap()];
+    let args = ["run", arg(campaign), "--quiet", "--shard", &spec];
+    let out_args = ["--out", arg(out)];
     soig(&[&args[..], &out_args[..]].concat(), &[])
 }
 
 fn merge(shards: &[&PathBuf], out: &Path) -> Output {
-    let mut args = vec!["merge", "--quiet", "--out", out.to_str().unwrap()];
-    args.extend(shards.iter().map(|s| s.to_str().unwrap()));
+    let mut args = vec!["merge", "--quiet", "--out", arg(out)];
+    args.extend(shards.iter().map(|s| arg(s)));
     soig(&args, &[])
 }
 
@@ -69,13 +57,7 @@ fn any_split_in_any_order_merges_to_the_single_run_digest() {
     let t = tmp.path();
     let c = campaign(t, "split", 11);
     let single = digest(&soig(
-        &[
-            "run",
-            c.to_str().unwrap(),
-            "--quiet",
-            "--out",
-            t.join("single").to_str().unwrap(),
-        ],
+        &["run", arg(&c), "--quiet", "--out", arg(&t.join("single"))],
         &[],
     ));
     for n in [1u64, 3, 7] {
@@ -87,14 +69,14 @@ fn any_split_in_any_order_merges_to_the_single_run_digest() {
         let out = t.join(format!("merged{n}"));
         let refs: Vec<&PathBuf> = dirs.iter().rev().collect();
         assert_eq!(digest(&merge(&refs, &out)), single, "{n} shards");
-        let v = soig(&["verify", out.to_str().unwrap()], &[]);
+        let v = soig(&["verify", arg(&out)], &[]);
         assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
         assert!(out.join("report/report.json").is_file());
     }
     // The shard taken from a Slurm array task and from a Kubernetes Indexed Job, into the
     // default output `runs/<name>-shard-K-of-N`, are the same shards.
     let slurm = soig(
-        &["run", c.to_str().unwrap(), "--quiet", "--shard", "auto"],
+        &["run", arg(&c), "--quiet", "--shard", "auto"],
         &[
             ("SLURM_ARRAY_TASK_ID", "2"),
             ("SLURM_ARRAY_TASK_MIN", "1"),
@@ -102,7 +84,7 @@ fn any_split_in_any_order_merges_to_the_single_run_digest() {
         ],
     );
     let k8s = soig(
-        &["run", c.to_str().unwrap(), "--quiet", "--shard", "auto/3"],
+        &["run", arg(&c), "--quiet", "--shard", "auto/3"],
         &[("JOB_COMPLETION_INDEX", "2")],
     );
     assert_eq!(digest(&slurm), digest(&shard(&c, 1, 3, &t.join("again-1"))));
@@ -141,13 +123,7 @@ fn a_set_of_shards_that_is_not_one_whole_campaign_is_refused() {
     assert_refused(&merge(&[&s[2], &s[0]], &out), "of 3 missing");
     let whole = t.join("whole");
     digest(&soig(
-        &[
-            "run",
-            c.to_str().unwrap(),
-            "--quiet",
-            "--out",
-            whole.to_str().unwrap(),
-        ],
+        &["run", arg(&c), "--quiet", "--out", arg(&whole)],
         &[],
     ));
     assert_refused(&merge(&[&whole], &out), "is not a shard");
@@ -164,10 +140,7 @@ fn a_set_of_shards_that_is_not_one_whole_campaign_is_refused() {
         ("1/8", "8 shards for the campaign's 7 images"),
         ("auto", "neither"),
     ] {
-        let o = soig(
-            &["run", c.to_str().unwrap(), "--quiet", "--shard", spec],
-            &[],
-        );
+        let o = soig(&["run", arg(&c), "--quiet", "--shard", spec], &[]);
         assert_refused(&o, says);
     }
 }

@@ -12,7 +12,7 @@ mod common;
 use std::os::unix::fs::MetadataExt;
 use std::path::Path;
 
-use common::{CampaignToml, ELEMENTS_40649, digest, ok, run_quiet, soig, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, arg, digest, ok, run_quiet, soig, tle_object};
 use soig::experiment;
 use soig::simulate;
 
@@ -133,7 +133,7 @@ fn label_sets_pair_with_the_boxes_and_verify() {
     let c = campaign().write(&tmp.path().join("streaks.toml"));
     let out = tmp.path().join("out");
     digest(&run_quiet(&c, &out));
-    ok(soig(&["verify", out.to_str().unwrap()]));
+    ok(soig(&["verify", arg(&out)]));
     let mut objects = 0;
     for subset in ["train", "val", "test"] {
         for png in std::fs::read_dir(out.join("images").join(subset)).unwrap() {

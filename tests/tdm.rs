@@ -15,7 +15,7 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use common::{json, ok, ort_available, run_quickstart, soig};
+use common::{arg, json, ok, ort_available, run_quickstart, scratch, soig};
 
 /// Header keywords of a TDM (503.0-B-2, 3.2).
 const HEADER: [&str; 5] = [
@@ -173,8 +173,7 @@ fn check(out: &Path, tdm: &Path) -> usize {
 
 #[test]
 fn truth_tdm_follows_the_standard_and_the_truth() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("run");
+    let (tmp, out) = scratch("run");
     ok(run_quickstart(
         &[
             "--set",
@@ -188,16 +187,10 @@ fn truth_tdm_follows_the_standard_and_the_truth() {
         &out,
     ));
     assert_eq!(check(&out, &out.join("export/tdm/truth.tdm")), 5);
-    ok(soig(&["verify", out.to_str().unwrap()]));
+    ok(soig(&["verify", arg(&out)]));
     // `soig export --tdm` of the output writes the same file.
     let dest = tmp.path().join("export");
-    ok(soig(&[
-        "export",
-        out.to_str().unwrap(),
-        "--tdm",
-        "--out",
-        dest.to_str().unwrap(),
-    ]));
+    ok(soig(&["export", arg(&out), "--tdm", "--out", arg(&dest)]));
     assert_eq!(
         std::fs::read(dest.join("tdm/truth.tdm")).unwrap(),
         std::fs::read(out.join("export/tdm/truth.tdm")).unwrap()
@@ -222,13 +215,12 @@ fn detections_tdm_and_ades_psv() {
     if !ort_available() {
         return;
     }
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("run");
+    let (_tmp, out) = scratch("run");
     ok(run_quickstart(
         &["--set", "artifacts.astrometry=true", "--quiet"],
         &out,
     ));
-    ok(soig(&["verify", out.to_str().unwrap()]));
+    ok(soig(&["verify", arg(&out)]));
     let (mut records, mut mags) = (0, 0);
     for det in ["streak", "yolo"] {
         let dir = out.join("report/observations");
@@ -315,12 +307,11 @@ fn detections_tdm_and_ades_psv() {
 /// an ephemeris, in the sidecars' order, each with that object's angles.
 #[test]
 fn catalogue_scene_tdm_has_every_object() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("run");
+    let (_tmp, out) = scratch("run");
     let campaign = common::repo("campaigns/geo-stare.toml");
     ok(soig(&[
         "run",
-        campaign.to_str().unwrap(),
+        arg(&campaign),
         "--set",
         "images=2",
         "--set",
@@ -333,7 +324,7 @@ fn catalogue_scene_tdm_has_every_object() {
         "artifacts.tdm=true",
         "--quiet",
         "--out",
-        out.to_str().unwrap(),
+        arg(&out),
     ]));
     let (_, segments) = parse(&std::fs::read_to_string(out.join("export/tdm/truth.tdm")).unwrap());
     let mut want = Vec::new();

@@ -11,19 +11,14 @@ use soig::sky::{angle_deg, radec_unit};
 
 mod common;
 use common::{
-    CampaignToml, assert_coco_agrees_with_labels_and_truth, digest, rendered,
+    CampaignToml, assert_coco_agrees_with_labels_and_truth, digest, leo_and_geo, rendered,
     run_on_one_and_two_threads_and_verify, run_quiet, tle_object,
 };
 
 /// Track images of 512 px at the paper's pixel scale (0.7"), a LEO and a GEO object;
 /// `extra` adds tables.
 fn track(extra: &str) -> CampaignToml {
-    CampaignToml::new("track", 11, 4)
-        .debris(&tle_object(37476))
-        .debris(&tle_object(40989))
-        .tables(&format!(
-            "[pointing]\nmode = \"track\"\n{extra}[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n[render]\ntrajectory_samples = 800\n"
-        ))
+    leo_and_geo("track", "track", extra).tables("[render]\ntrajectory_samples = 800\n")
 }
 
 fn load(extra: &str) -> Campaign {

@@ -467,6 +467,7 @@ fn detect_files<'py>(
     conf: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     use soig::detect_frames::{Options, Which};
+    use soig::verbs::plan::Plan;
     // As the CLI: the streak detector alone unless a model is given.
     let which = match (detector, &model) {
         (Some("streak"), _) | (None, None) => Which::Streak,
@@ -479,7 +480,8 @@ fn detect_files<'py>(
         }
     };
     let c = campaign.map(|c| c.campaign.clone());
-    let mut opts = Options::new(c.as_deref(), which, model);
+    let plan = c.as_deref().map(Plan::new).transpose().map_err(run_err)?;
+    let mut opts = Options::new(plan.as_ref(), which, model);
     opts.optics.psf_fwhm_px = psf_fwhm_px;
     opts.star_trail_angle_deg = star_trail_angle_deg;
     if let Some(c) = conf {

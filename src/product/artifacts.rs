@@ -324,29 +324,20 @@ fn observation_cards(push: &mut Push, p: &Provenance, scene: &Scene, t: &Truth) 
         Card::Real(scene.start.to_mjd_utc_days()),
         "[d] UTC start of exposure",
     );
-    let after = |s: f64| iso_utc(scene.start + hifitime::Duration::from_seconds(s));
-    push(
-        "DATE-AVG",
-        Card::Str(after(t.exposure_s / 2.0)),
-        "UTC mid-exposure",
-    );
-    push(
-        "DATE-END",
-        Card::Str(after(t.exposure_s)),
-        "UTC end of exposure",
-    );
+    // Mid-exposure and end: seconds after the start, and what each is.
+    let instants = [
+        ("AVG", t.exposure_s / 2.0, "UTC mid-exposure"),
+        ("END", t.exposure_s, "UTC end of exposure"),
+    ];
+    let after = |s: f64| scene.start + hifitime::Duration::from_seconds(s);
+    for (k, s, what) in instants {
+        push(&format!("DATE-{k}"), Card::Str(iso_utc(after(s))), what);
+    }
     // wcslib derives MJD-* from DATE-* when they are missing (astropy warns): both written.
-    let mjd = |s: f64| (scene.start + hifitime::Duration::from_seconds(s)).to_mjd_utc_days();
-    push(
-        "MJD-AVG",
-        Card::Real(mjd(t.exposure_s / 2.0)),
-        "[d] UTC mid-exposure",
-    );
-    push(
-        "MJD-END",
-        Card::Real(mjd(t.exposure_s)),
-        "[d] UTC end of exposure",
-    );
+    for (k, s, what) in instants {
+        let mjd = Card::Real(after(s).to_mjd_utc_days());
+        push(&format!("MJD-{k}"), mjd, &format!("[d] {what}"));
+    }
     push("EXPTIME", Card::Real(t.exposure_s), "[s] exposure time");
     // The observer's state as the truth gives it: no FITS standard keyword holds a
     // spacecraft's GCRS state (OBSGEO-* are Earth-fixed).

@@ -398,11 +398,7 @@ pub fn write_csv(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
 /// per quantity; SNR and length on log axes.
 pub fn plot(path: &Path, all: &[Efficiency]) -> anyhow::Result<()> {
     use plotters::prelude::*;
-    let colors = [
-        RGBColor(200, 30, 30),
-        RGBColor(30, 90, 200),
-        RGBColor(30, 150, 60),
-    ];
+    let colors = &crate::plot::PALETTE[..3];
     crate::plot::png(path, (2500, 460), |root| {
         let panels = root.split_evenly((1, Quantity::ALL.len()));
         for (panel, q) in panels.iter().zip(Quantity::ALL) {

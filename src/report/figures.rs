@@ -27,11 +27,7 @@ pub(super) fn pr_plot(
             .x_desc("recall")
             .y_desc("precision")
             .draw()?;
-        let colors = [
-            RGBColor(200, 30, 30),
-            RGBColor(30, 90, 200),
-            RGBColor(30, 150, 60),
-        ];
+        let colors = &crate::plot::PALETTE[..3];
         for (k, (name, px, py, map50)) in curves.iter().enumerate() {
             let c = colors[k % colors.len()];
             chart

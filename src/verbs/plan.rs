@@ -11,11 +11,13 @@ use std::path::{Path, PathBuf};
 
 use crate::artifacts::Provenance;
 use crate::campaign::{
-    Artifacts, Background, Campaign, CampaignError, PointingMode, Render, Stage, StarHint, Train,
+    Artifacts, Background, Campaign, CampaignError, Detect, PointingMode, Render, Stage, StarHint,
+    Train,
 };
 use crate::dataset::{self, Subset};
 use crate::detect::streak::StreakParams;
 use crate::detect::yolo::YoloParams;
+use crate::enhance;
 use crate::experiment;
 use crate::geometry::FrameKind;
 use crate::scene::{Body, Inputs};
@@ -45,6 +47,8 @@ pub struct Plan<'c> {
     pub effective: serde_json::Value,
     /// The frame the PNGs are drawn in.
     pub frame: FrameKind,
+    /// The enhancement of the PNGs, which `soig detect` also applies to the frames it is given.
+    pub enhance: enhance::Settings,
     /// The campaign's `[render]` as written (`soig study` states it).
     pub render: Render,
     pub objects: Objects,
@@ -54,6 +58,8 @@ pub struct Plan<'c> {
     pub keep: Vec<PathBuf>,
     /// The campaign's folder, against which its relative paths resolve.
     pub campaign_dir: PathBuf,
+    /// The campaign file, for the record of where settings came from.
+    pub source: PathBuf,
 }
 
 /// Which of the stages after `render` a run has (the campaign's list is a prefix of them in
@@ -81,6 +87,9 @@ pub struct Objects {
 pub struct DetectPlan {
     /// The classical streak detector, with its parameters.
     pub streak: Option<StreakParams>,
+    /// The campaign's `[detect.streak]` whether or not its run has the classical detector:
+    /// what `soig detect` runs with the campaign.
+    pub streak_params: StreakParams,
     /// The streak detector is told of the stars (`stars = "catalogue"`); otherwise it measures
     /// the trails on each frame.
     pub told: bool,
@@ -161,12 +170,8 @@ impl<'c> Plan<'c> {
             streak: d.classical.then(|| d.streak.clone()),
             told,
             star_trails: told && c.pointing.mode == PointingMode::Survey,
-            yolo: YoloParams {
-                conf: d.conf,
-                iou: d.iou,
-                max_det: d.max_det as usize,
-                ..YoloParams::default()
-            },
+            streak_params: d.streak.clone(),
+            yolo: yolo_params(d),
             model: d.model.as_ref().map(|m| campaign.base_dir.join(m)),
             model_name: d.model.clone(),
             model_sha256: d.model_sha256.clone(),
@@ -202,6 +207,7 @@ impl<'c> Plan<'c> {
             resolved: serde_json::to_value(c)?,
             effective,
             frame: c.enhance.geometry,
+            enhance: experiment::enhance_settings(Some(campaign)),
             render: c.render.clone(),
             objects: Objects {
                 debris: campaign
@@ -216,6 +222,7 @@ impl<'c> Plan<'c> {
             train,
             keep,
             campaign_dir: campaign.base_dir.clone(),
+            source: campaign.source.clone(),
         })
     }
 
@@ -269,6 +276,16 @@ impl<'c> Plan<'c> {
             c.sensor.gain_e_per_adu,
             c.background
         )
+    }
+}
+
+/// The YOLO detector's settings of a `[detect]` table.
+pub fn yolo_params(d: &Detect) -> YoloParams {
+    YoloParams {
+        conf: d.conf,
+        iou: d.iou,
+        max_det: d.max_det as usize,
+        ..YoloParams::default()
     }
 }
 

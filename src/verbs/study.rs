@@ -547,13 +547,7 @@ fn plot(path: &Path, rows: &[Row]) -> anyhow::Result<()> {
             .x_desc("render + scene time per image, ms")
             .y_desc("RMS error / Poisson noise (1 = exact)")
             .draw()?;
-        let colors = [
-            RGBColor(200, 30, 30),
-            RGBColor(30, 90, 200),
-            RGBColor(30, 150, 60),
-            RGBColor(150, 60, 180),
-            RGBColor(220, 130, 0),
-        ];
+        let colors = crate::plot::PALETTE;
         let mut knobs: Vec<&str> = Vec::new();
         for r in rows {
             if !knobs.contains(&r.knob.as_str()) {

@@ -32,6 +32,28 @@ pub fn ok(o: Output) -> Output {
     o
 }
 
+/// A path as a command-line argument (the tests' paths are UTF-8).
+pub fn arg(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A fresh temporary folder and the path `name` inside it (not yet made): where a test's run
+/// writes. Keep the folder alive as long as the path is used.
+pub fn scratch(name: &str) -> (tempfile::TempDir, PathBuf) {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join(name);
+    (tmp, out)
+}
+
+/// The numbers of a JSON array (a bbox, a point), in order; panics if it is not one.
+pub fn f64s(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap_or_else(|| panic!("not an array: {v}"))
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
 /// Run the `soig` binary under test from directory `cwd`.
 pub fn soig_in(cwd: &Path, args: &[&str]) -> Output {
     std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
@@ -51,21 +73,15 @@ pub fn assert_refused(o: &Output, expect: &str) {
 
 /// `soig run CAMPAIGN --quiet --out OUT`.
 pub fn run_quiet(campaign: &Path, out: &Path) -> Output {
-    soig(&[
-        "run",
-        campaign.to_str().unwrap(),
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ])
+    soig(&["run", arg(campaign), "--quiet", "--out", arg(out)])
 }
 
 /// `soig run campaigns/quickstart.toml ARGS --out OUT`.
 pub fn run_quickstart(args: &[&str], out: &Path) -> Output {
     let campaign = repo("campaigns/quickstart.toml");
-    let mut all = vec!["run", campaign.to_str().unwrap()];
+    let mut all = vec!["run", arg(&campaign)];
     all.extend(args);
-    all.extend(["--out", out.to_str().unwrap()]);
+    all.extend(["--out", arg(out)]);
     soig(&all)
 }
 
@@ -74,13 +90,7 @@ pub fn run_quickstart(args: &[&str], out: &Path) -> Output {
 pub fn run_on_threads(campaign: &Path, out: &Path, threads: &str) -> String {
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_soig"))
         .env("RAYON_NUM_THREADS", threads)
-        .args([
-            "run",
-            campaign.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ])
+        .args(["run", arg(campaign), "--out", arg(out), "--quiet"])
         .output()
         .expect("soig runs");
     digest(&o)
@@ -95,7 +105,7 @@ pub fn run_on_one_and_two_threads_and_verify(campaign: &Path, dir: &Path) -> Pat
         run_on_threads(campaign, &two, "2"),
         "the digest depends on the thread count"
     );
-    let v = soig(&["verify", one.to_str().unwrap()]);
+    let v = soig(&["verify", arg(&one)]);
     assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
     one
 }
@@ -136,6 +146,21 @@ pub fn export_readers_python() -> Option<PathBuf> {
     }
 }
 
+/// `soig eval --labels LABELS --predictions PREDICTIONS ARGS --json`, which must succeed:
+/// what it printed.
+pub fn eval_json(labels: &Path, predictions: &Path, args: &[&str]) -> serde_json::Value {
+    let mut all = vec![
+        "eval",
+        "--labels",
+        arg(labels),
+        "--predictions",
+        arg(predictions),
+    ];
+    all.extend_from_slice(args);
+    all.push("--json");
+    serde_json::from_slice(&ok(soig(&all)).stdout).unwrap()
+}
+
 /// tests/reference/export_readers.py with these arguments: what the libraries read, as JSON.
 pub fn export_readers(py: &Path, args: &[&str]) -> serde_json::Value {
     let out = std::process::Command::new(py)
@@ -165,24 +190,15 @@ pub fn assert_coco_agrees_with_soig_eval(
         py,
         &[
             "coco",
-            export.join("coco/test.json").to_str().unwrap(),
-            export.join("coco/detections_streak.json").to_str().unwrap(),
+            arg(&export.join("coco/test.json")),
+            arg(&export.join("coco/detections_streak.json")),
         ],
     );
-    let o = soig(&[
-        "eval",
-        "--mode",
-        "coco",
-        "--json",
-        "--labels",
-        out.join("labels/test").to_str().unwrap(),
-        "--predictions",
-        out.join("report/predictions/streak").to_str().unwrap(),
-        "--images",
-        out.join("images/test").to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let soig_eval: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let soig_eval = eval_json(
+        &out.join("labels/test"),
+        &out.join("report/predictions/streak"),
+        &["--mode", "coco", "--images", arg(&out.join("images/test"))],
+    );
     assert!(
         coco["ap50"].as_f64().unwrap() > 0.0,
         "a test set the detector finds nothing in tests nothing: {coco}"
@@ -319,6 +335,30 @@ impl CampaignToml {
     }
 }
 
+/// Images of 512 px at the paper's pixel scale (0.7"; field radius 0.05 deg), seed 11, 4
+/// images, of a LEO (NORAD 37476) and a GEO object (40989) in pointing `mode`; `tables` go
+/// between `[pointing]` and `[sensor]`.
+pub fn leo_and_geo(name: &str, mode: &str, tables: &str) -> CampaignToml {
+    CampaignToml::new(name, 11, 4)
+        .debris(&tle_object(37476))
+        .debris(&tle_object(40989))
+        .tables(&format!(
+            "[pointing]\nmode = \"{mode}\"\n{tables}[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n"
+        ))
+}
+
+/// `images` images of 128 px (field radius 0.0125 deg, 300 trajectory samples) of a LEO
+/// (NORAD 37476) and 40649, every stage to detect, split 0.5 / 0.2 / 0.3, with `tables`
+/// after: the small detecting run the resume and shard tests interrupt and merge.
+pub fn small_detecting_run(name: &str, seed: u64, images: u32, tables: &str) -> CampaignToml {
+    CampaignToml::new(name, seed, images)
+        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
+        .debris(&tle_object(37476))
+        .debris(ELEMENTS_40649)
+        .tables("[sensor]\nwidth_px = 128\nheight_px = 128\nfov_radius_deg = 0.0125\n[render]\ntrajectory_samples = 300\n[split]\ntrain = 0.5\nval = 0.2\ntest = 0.3\n")
+        .tables(tables)
+}
+
 /// The digest a `soig` command that must succeed printed.
 pub fn digest(o: &Output) -> String {
     let stdout = String::from_utf8_lossy(&o.stdout);
@@ -399,12 +439,7 @@ pub fn assert_coco_bbox_is_label_box(
         edge("x_max") - edge("x_min"),
         edge("y_max") - edge("y_min"),
     ];
-    let got: Vec<f64> = annotation["bbox"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let got = f64s(&annotation["bbox"]);
     for k in 0..4 {
         assert!(
             (got[k] - want[k]).abs() < 1.1e-3,
@@ -420,8 +455,41 @@ pub fn assert_coco_bbox_is_label_box(
 /// box (`assert_coco_bbox_is_label_box`). Returns the number of annotations.
 pub fn assert_coco_agrees_with_labels_and_truth(out: &Path) -> usize {
     let mut annotations = 0;
+    for im in coco_images(&out.join("export"), out) {
+        let (truth, stem) = (&im.truth, &im.stem);
+        let boxes: Vec<&serde_json::Value> = match truth["objects"].as_array() {
+            Some(objects) => objects.iter().map(|o| &o["label_box_final_px"]).collect(),
+            None => vec![&truth["label_box_final_px"]],
+        };
+        let boxes: Vec<_> = boxes.into_iter().filter(|b| !b.is_null()).collect();
+        assert_eq!(im.labels.lines().count(), boxes.len(), "{stem}");
+        assert_eq!(im.annotations.len(), boxes.len(), "{stem}");
+        for (a, b) in im.annotations.iter().zip(boxes) {
+            assert_coco_bbox_is_label_box(a, b, stem);
+        }
+        annotations += im.annotations.len();
+    }
+    annotations
+}
+
+/// One image of a run's COCO export, beside what the run wrote for it.
+pub struct CocoImage {
+    pub split: &'static str,
+    /// Its COCO `images` entry and its annotations, in the file's order.
+    pub image: serde_json::Value,
+    pub annotations: Vec<serde_json::Value>,
+    /// `img_NNNNNN`, the text of its label file and its truth sidecar.
+    pub stem: String,
+    pub labels: String,
+    pub truth: serde_json::Value,
+}
+
+/// Every image of the COCO export in `export` (`coco/{split}.json` of each split that has
+/// one) of the run in `out`, split by split.
+pub fn coco_images(export: &Path, out: &Path) -> Vec<CocoImage> {
+    let mut images = Vec::new();
     for split in ["train", "val", "test"] {
-        let path = out.join(format!("export/coco/{split}.json"));
+        let path = export.join(format!("coco/{split}.json"));
         if !path.exists() {
             continue;
         }
@@ -430,23 +498,73 @@ pub fn assert_coco_agrees_with_labels_and_truth(out: &Path) -> usize {
         for im in coco["images"].as_array().unwrap() {
             let id = im["id"].as_u64().unwrap();
             let stem = format!("img_{id:06}");
-            let labels =
-                std::fs::read_to_string(out.join(format!("labels/{split}/{stem}.txt"))).unwrap();
-            let truth = json(&out.join(format!("truth/{stem}.json")));
-            let boxes: Vec<&serde_json::Value> = match truth["objects"].as_array() {
-                Some(objects) => objects.iter().map(|o| &o["label_box_final_px"]).collect(),
-                None => vec![&truth["label_box_final_px"]],
-            };
-            let boxes: Vec<_> = boxes.into_iter().filter(|b| !b.is_null()).collect();
-            let mine: Vec<&serde_json::Value> =
-                anns.iter().filter(|a| a["image_id"] == id).collect();
-            assert_eq!(labels.lines().count(), boxes.len(), "{stem}");
-            assert_eq!(mine.len(), boxes.len(), "{stem}");
-            for (a, b) in mine.iter().zip(boxes) {
-                assert_coco_bbox_is_label_box(a, b, &stem);
-            }
-            annotations += mine.len();
+            let labels_file = out.join(format!("labels/{split}/{stem}.txt"));
+            images.push(CocoImage {
+                split,
+                image: im.clone(),
+                annotations: anns
+                    .iter()
+                    .filter(|a| a["image_id"] == id)
+                    .cloned()
+                    .collect(),
+                labels: std::fs::read_to_string(&labels_file)
+                    .unwrap_or_else(|e| panic!("{}: {e}", labels_file.display())),
+                truth: json(&out.join(format!("truth/{stem}.json"))),
+                stem,
+            });
         }
     }
-    annotations
+    images
+}
+
+/// Arcseconds between two (RA, Dec) in degrees, given as JSON pairs (a small-angle form: the
+/// catalogue checks compare places under 1" apart).
+pub fn separation_arcsec(a: &serde_json::Value, b: &serde_json::Value) -> f64 {
+    let (ra1, de1) = (a[0].as_f64().unwrap(), a[1].as_f64().unwrap());
+    let (ra2, de2) = (b[0].as_f64().unwrap(), b[1].as_f64().unwrap());
+    let dra = ((ra1 - ra2 + 540.0) % 360.0 - 180.0) * de1.to_radians().cos();
+    dra.hypot(de1 - de2) * 3600.0
+}
+
+/// Pixels between two pixel positions given as JSON pairs.
+pub fn px_off(a: &serde_json::Value, b: &serde_json::Value) -> f64 {
+    let d = |k: usize| a[k].as_f64().unwrap() - b[k].as_f64().unwrap();
+    d(0).hypot(d(1))
+}
+
+/// A reference frame's objects (python-sgp4 + astropy, tests/reference/), by NORAD number.
+pub fn reference_objects(
+    frame: &serde_json::Value,
+) -> std::collections::BTreeMap<u64, &serde_json::Value> {
+    frame["objects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| (o["norad"].as_u64().unwrap(), o))
+        .collect()
+}
+
+/// The truth's unseen objects, each with a reason, join the `accounted` (shown) ones; then
+/// every object the reference puts in the field must be one of them. Returns how many were
+/// unseen.
+pub fn account_for_the_field(
+    truth: &serde_json::Value,
+    reference: &std::collections::BTreeMap<u64, &serde_json::Value>,
+    mut accounted: std::collections::BTreeSet<u64>,
+    stem: &str,
+) -> usize {
+    let unseen = truth["unseen"].as_array().unwrap();
+    for u in unseen {
+        assert!(!u["reason"].as_str().unwrap().is_empty());
+        accounted.insert(u["norad"].as_u64().unwrap());
+    }
+    for (norad, r) in reference {
+        if r["in_field"].as_bool().unwrap() {
+            assert!(
+                accounted.contains(norad),
+                "{stem}: NORAD {norad} is in the field but neither shown nor unseen"
+            );
+        }
+    }
+    unseen.len()
 }

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use soig::campaign::Campaign;
+use soig::verbs::plan::Plan;
 
 use crate::args::*;
 
@@ -401,7 +402,8 @@ pub fn detect(a: DetectArgs) -> ExitCode {
             (Some(DetectorChoice::Yolo), _) => Which::Yolo,
             (Some(DetectorChoice::All), _) | (None, Some(_)) => Which::All,
         };
-        let mut opts = Options::new(campaign.as_ref(), which, model);
+        let plan = campaign.as_ref().map(Plan::new).transpose()?;
+        let mut opts = Options::new(plan.as_ref(), which, model);
         opts.optics = Optics {
             psf_fwhm_px,
             psf_fwhm_arcsec,

@@ -64,6 +64,15 @@ pub struct BoxMove {
     pub unit: &'static str,
 }
 
+/// The files manifest `a` lists and `b` does not, in `a`'s order.
+fn only_in(a: &Manifest, b: &Manifest) -> Vec<String> {
+    a.files
+        .keys()
+        .filter(|k| !b.files.contains_key(*k))
+        .cloned()
+        .collect()
+}
+
 /// Compare the manifests' file lists and look into the changed images and labels.
 pub fn diff(
     bdir: &Path,
@@ -71,18 +80,8 @@ pub fn diff(
     rdir: &Path,
     run: &Manifest,
 ) -> anyhow::Result<Artifacts> {
-    let added = run
-        .files
-        .keys()
-        .filter(|k| !baseline.files.contains_key(*k))
-        .cloned()
-        .collect();
-    let removed = baseline
-        .files
-        .keys()
-        .filter(|k| !run.files.contains_key(*k))
-        .cloned()
-        .collect();
+    let added = only_in(run, baseline);
+    let removed = only_in(baseline, run);
     let changed_paths: Vec<&String> = baseline
         .files
         .iter()

@@ -18,13 +18,14 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 
-use crate::campaign::{Campaign, Detect};
+use crate::campaign::Detect;
 use crate::detect::detector::Frame as DetectorFrame;
 use crate::detect::streak::{Dropped, OwnTrails, StreakParams, detect_streaks_explained};
 use crate::detect::yolo::{YoloDetector, YoloParams};
 use crate::detect::{Detection, Detector, Stars, StreakDetector};
 use crate::enhance::{self, Gray8};
 use crate::frames::{Frame, RegionPixels};
+use crate::verbs::plan::{Plan, yolo_params};
 
 /// Epoch of Gaia DR3's positions, the default of `--catalog-epoch`.
 pub const GAIA_DR3_EPOCH: f64 = 2016.0;
@@ -89,23 +90,31 @@ pub struct Options {
 }
 
 impl Options {
-    /// The campaign's enhancement and detector settings, or soig's defaults without one.
-    pub fn new(campaign: Option<&Campaign>, which: Which, model: Option<PathBuf>) -> Options {
-        let d = campaign.map_or_else(Detect::default, |c| c.resolved.detect.clone());
+    /// The plan's enhancement and detector settings (its campaign's), or soig's defaults
+    /// without one.
+    pub fn new(plan: Option<&Plan>, which: Which, model: Option<PathBuf>) -> Options {
+        let default = Detect::default();
+        let (enhance, streak, yolo) = match plan {
+            Some(p) => (
+                p.enhance.clone(),
+                p.detect.streak_params.clone(),
+                p.detect.yolo,
+            ),
+            None => (
+                crate::experiment::enhance_settings(None),
+                default.streak.clone(),
+                yolo_params(&default),
+            ),
+        };
         Options {
             which,
             model,
-            enhance: crate::experiment::enhance_settings(campaign),
-            streak: d.streak.clone(),
-            yolo: YoloParams {
-                conf: d.conf,
-                iou: d.iou,
-                max_det: d.max_det as usize,
-                ..YoloParams::default()
-            },
+            enhance,
+            streak,
+            yolo,
             optics: Optics::default(),
             star_trail_angle_deg: None,
-            campaign: campaign.map(|c| c.source.clone()),
+            campaign: plan.map(|p| p.source.clone()),
             explain: false,
             catalog: None,
             catalog_epoch_jyear: GAIA_DR3_EPOCH,

@@ -8,7 +8,7 @@ use hifitime::Epoch;
 use serde::Serialize;
 
 use super::visibility::Snr;
-use super::{Pointing, Rejection, Spec};
+use super::{Body, Pointing, Rejection, Spec};
 use crate::atmosphere::{Scintillation, Seeing};
 use crate::background::FrameChoice;
 use crate::sensor::Sensor;
@@ -283,6 +283,31 @@ pub(super) struct Object {
     pub ephemeris: Option<Ephemeris>,
     pub trajectory: Vec<TrajectorySample>,
     pub snr: Snr,
+}
+
+impl Object {
+    /// Body `body`, at `index` in its list (the campaign's debris or the population), with its
+    /// own draws (area, tumble) and what its checks measured.
+    pub(super) fn of_body(
+        (index, body): (usize, &Body),
+        (area_m2, tumble): (f64, Option<Tumble>),
+        geometry: Geometry,
+        ephemeris: Option<Ephemeris>,
+        trajectory: Vec<TrajectorySample>,
+        snr: Snr,
+    ) -> Object {
+        Object {
+            debris_index: index,
+            debris_name: body.name.clone(),
+            norad: body.norad,
+            area_m2,
+            tumble,
+            geometry,
+            ephemeris,
+            trajectory,
+            snr,
+        }
+    }
 }
 
 impl Scene {

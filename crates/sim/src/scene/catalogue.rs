@@ -181,17 +181,7 @@ fn sight_object(
     let tumble = draw_tumble(spec, rng);
     let sun = sun_position_km(mid);
     let track = sighting.track(start, exposure_s)?;
-    let shot = Shot {
-        exposure_s,
-        sun,
-        area_m2,
-        tumble,
-        pointing: &at.pointing,
-        mid_tan: &at.projection(sensor),
-        shadowed: false,
-        extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
-        psf_core_px: at.psf(sensor).core_sigma_px(),
-    };
+    let shot = Shot::in_frame(spec, sensor, at, (sun, mid), (area_m2, tumble), false);
     // A path too fast to sample has samples in the field (`trajectory`): it crossed it.
     let trajectory = match trajectory(spec, sensor, &|t_s| track.at(t_s), &shot) {
         Ok(t) => t,
@@ -213,17 +203,14 @@ fn sight_object(
         Err(reason) => return Some(Err(reason)),
     };
     let exposure = Exposure::of_frame(at);
-    let object = Object {
-        debris_index: index,
-        debris_name: body.name.clone(),
-        norad: body.norad,
-        area_m2,
-        tumble,
+    let object = Object::of_body(
+        (index, body),
+        (area_m2, tumble),
         geometry,
-        ephemeris: sighting.ephemeris(start, exposure_s),
+        sighting.ephemeris(start, exposure_s),
         trajectory,
         snr,
-    };
+    );
     // Across a collect's frames an object keeps its NORAD number as its track id.
     let collect = CollectFrame::of(spec, at.image_index, body.norad);
     let mut scene = Scene::assemble(exposure, object).accept(1, BTreeMap::new(), collect, None);

@@ -322,7 +322,7 @@ fn try_draw(
             area_m2,
             tumble,
             pointing: &pointing,
-            mid_tan: &mid_tan,
+            mid_tan,
             shadowed,
             extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
             psf_core_px: psf_of(sensor, seeing).core_sigma_px(),
@@ -339,7 +339,6 @@ fn try_draw(
     )?;
 
     let ephemeris = sighting.ephemeris(start, exposure_s);
-    let debris = &inputs.debris[debris_index];
     let exposure = Exposure {
         image_index: image,
         start,
@@ -350,17 +349,14 @@ fn try_draw(
         seeing,
         sky_v_mag_per_arcsec2: sky,
     };
-    let object = Object {
-        debris_index,
-        debris_name: debris.name.clone(),
-        norad: debris.norad,
-        area_m2,
-        tumble,
+    let object = Object::of_body(
+        (debris_index, &inputs.debris[debris_index]),
+        (area_m2, tumble),
         geometry,
         ephemeris,
         trajectory,
         snr,
-    };
+    );
     Ok(Scene::assemble(exposure, object))
 }
 

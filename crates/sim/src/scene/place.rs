@@ -181,17 +181,7 @@ fn try_place(
         spec,
         sensor,
         &|t_s| turn.apply(track.at(t_s)),
-        &Shot {
-            exposure_s,
-            sun,
-            area_m2,
-            tumble,
-            pointing: &at.pointing,
-            mid_tan: &at.projection(sensor),
-            shadowed,
-            extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
-            psf_core_px: at.psf(sensor).core_sigma_px(),
-        },
+        &Shot::in_frame(spec, sensor, at, (sun, mid), (area_m2, tumble), shadowed),
     )?;
     let snr = gate_snr(
         spec,
@@ -201,19 +191,15 @@ fn try_place(
         inputs.frame(at.background),
         gated,
     )?;
-    let debris = &inputs.debris[debris_index];
     let exposure = Exposure::of_frame(at);
-    let object = Object {
-        debris_index,
-        debris_name: debris.name.clone(),
-        norad: debris.norad,
-        area_m2,
-        tumble,
+    let object = Object::of_body(
+        (debris_index, &inputs.debris[debris_index]),
+        (area_m2, tumble),
         geometry,
         // The object's own ephemeris is not where the image shows it.
-        ephemeris: None,
+        None,
         trajectory,
         snr,
-    };
+    );
     Ok(Scene::assemble(exposure, object))
 }

@@ -6,7 +6,9 @@ use soig_sky::photometry::{debris_magnitude, photon_rate};
 use soig_sky::projection::Tan;
 use soig_sky::{Vec3, angle_deg, norm, radec_deg, sub};
 
-use super::{Pointing, Rejection, Spec, TrajectorySample, Tumble};
+use hifitime::Epoch;
+
+use super::{Pointing, Rejection, Scene, Spec, TrajectorySample, Tumble};
 use crate::observer::Extinction;
 use crate::sensor::Sensor;
 use crate::sighting::Sight;
@@ -18,7 +20,7 @@ pub(super) struct Shot<'a> {
     pub area_m2: f64,
     pub tumble: Option<Tumble>,
     pub pointing: &'a Pointing,
-    pub mid_tan: &'a Tan,
+    pub mid_tan: Tan,
     /// In the Earth's shadow (a later frame of a collect): the object sends no light.
     pub shadowed: bool,
     /// A ground site's air, which dims the object by its airmass at each sample.
@@ -26,6 +28,32 @@ pub(super) struct Shot<'a> {
     /// The core sigma of the PSF drawn (`Psf::core_sigma_px`), pixels: the sensor's own, or
     /// the seeing's.
     pub psf_core_px: f64,
+}
+
+impl<'a> Shot<'a> {
+    /// The shot of one more object in the frame `at` already drawn (a placed or catalogue
+    /// object): the frame's exposure, pointing, mid-exposure projection and PSF, and the
+    /// site's air at `mid`, with the Sun there at `sun`.
+    pub(super) fn in_frame(
+        spec: &Spec,
+        sensor: &Sensor,
+        at: &'a Scene,
+        (sun, mid): (Vec3, Epoch),
+        (area_m2, tumble): (f64, Option<Tumble>),
+        shadowed: bool,
+    ) -> Self {
+        Shot {
+            exposure_s: at.exposure_s,
+            sun,
+            area_m2,
+            tumble,
+            pointing: &at.pointing,
+            mid_tan: at.projection(sensor),
+            shadowed,
+            extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),
+            psf_core_px: at.psf(sensor).core_sigma_px(),
+        }
+    }
 }
 
 /// The trajectory of one object, cut in samples at the centres of equal time slices, sampled

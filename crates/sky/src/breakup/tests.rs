@@ -21,6 +21,17 @@ fn cloud(event: &Event) -> Vec<Fragment> {
 
 const N: f64 = 20_000.0;
 
+/// The events the draws' laws are checked on: an explosion (scaling 1) and a collision of a
+/// 10 kg projectile with a 1000 kg target at 10 km/s.
+const EVENTS: [Event; 2] = [
+    Event::Explosion { scaling: 1.0 },
+    Event::Collision {
+        target_kg: 1000.0,
+        projectile_kg: 10.0,
+        speed_km_s: 10.0,
+    },
+];
+
 #[test]
 fn counts_follow_the_papers_equations() {
     // 6 x 0.1^-1.6 = 6 x 39.8107 = 238.86: 239 fragments.
@@ -57,14 +68,7 @@ fn counts_follow_the_papers_equations() {
 /// 0.05 is over four of them.
 #[test]
 fn sizes_follow_the_power_law() {
-    for event in [
-        Event::Explosion { scaling: 1.0 },
-        Event::Collision {
-            target_kg: 1000.0,
-            projectile_kg: 10.0,
-            speed_km_s: 10.0,
-        },
-    ] {
+    for event in EVENTS {
         let sizes = cloud(&event);
         assert!(sizes.iter().all(|f| f.lc_m >= 0.05 && f.lc_m.is_finite()));
         let logs: f64 = sizes.iter().map(|f| (f.lc_m / 0.05).ln()).sum();
@@ -84,14 +88,7 @@ fn sizes_follow_the_power_law() {
 /// 1 / sqrt(3n) = 0.0041; 0.02 is five.
 #[test]
 fn speeds_are_log_normal_about_the_line_and_isotropic() {
-    for event in [
-        Event::Explosion { scaling: 1.0 },
-        Event::Collision {
-            target_kg: 1000.0,
-            projectile_kg: 10.0,
-            speed_km_s: 10.0,
-        },
-    ] {
+    for event in EVENTS {
         let frags = cloud(&event);
         let residuals: Vec<f64> = frags
             .iter()
