@@ -92,8 +92,14 @@ fn run_detectors(
 ) -> anyhow::Result<Vec<DetectorRun>> {
     let frames: Vec<TestFrame> = chosen.iter().map(|w| TestFrame::of(w)).collect();
     let mut runs = Vec::new();
-    if let Some(params) = &plan.detect.streak {
-        runs.push(streak_run(plan, params, &frames, chosen, progress)?);
+    if plan.detect.classical {
+        runs.push(streak_run(
+            plan,
+            &plan.detect.streak,
+            &frames,
+            chosen,
+            progress,
+        )?);
     }
     if let Some(path) = model {
         runs.push(yolo_run(plan, path, &frames, progress)?);

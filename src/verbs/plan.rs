@@ -85,11 +85,11 @@ pub struct Objects {
 
 /// What the detect stage runs.
 pub struct DetectPlan {
-    /// The classical streak detector, with its parameters.
-    pub streak: Option<StreakParams>,
-    /// The campaign's `[detect.streak]` whether or not its run has the classical detector:
-    /// what `soig detect` runs with the campaign.
-    pub streak_params: StreakParams,
+    /// The run has the classical streak detector (`[detect] classical`).
+    pub classical: bool,
+    /// The campaign's `[detect.streak]`: the run's classical detector, and what `soig detect`
+    /// runs with the campaign whether or not the run has it.
+    pub streak: StreakParams,
     /// The streak detector is told of the stars (`stars = "catalogue"`); otherwise it measures
     /// the trails on each frame.
     pub told: bool,
@@ -167,10 +167,10 @@ impl<'c> Plan<'c> {
         });
         let told = d.stars == StarHint::Catalogue;
         let detect = DetectPlan {
-            streak: d.classical.then(|| d.streak.clone()),
+            classical: d.classical,
+            streak: d.streak.clone(),
             told,
             star_trails: told && c.pointing.mode == PointingMode::Survey,
-            streak_params: d.streak.clone(),
             yolo: yolo_params(d),
             model: d.model.as_ref().map(|m| campaign.base_dir.join(m)),
             model_name: d.model.clone(),

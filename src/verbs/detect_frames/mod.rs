@@ -95,11 +95,7 @@ impl Options {
     pub fn new(plan: Option<&Plan>, which: Which, model: Option<PathBuf>) -> Options {
         let default = Detect::default();
         let (enhance, streak, yolo) = match plan {
-            Some(p) => (
-                p.enhance.clone(),
-                p.detect.streak_params.clone(),
-                p.detect.yolo,
-            ),
+            Some(p) => (p.enhance.clone(), p.detect.streak.clone(), p.detect.yolo),
             None => (
                 crate::experiment::enhance_settings(None),
                 default.streak.clone(),
