@@ -275,22 +275,28 @@ fn along_own_trails(
     // Within a degree of the trails a line is debris where its length and profile say that no
     // trail, nor two end to end, explains it; a few degrees off them, where two trails side by
     // side do not (`lone_line`).
-    let explained: Vec<&Candidate> = second
+    let star: Vec<bool> = second.iter().map(|c| m.explains(c, p.psf_sigma)).collect();
+    let along: Vec<&Candidate> = second
         .iter()
-        .filter(|c| m.explains(c, p.psf_sigma))
+        .zip(&star)
+        .filter(|s| *s.1)
+        .map(|s| s.0)
         .collect();
-    let trail_px = trail_length(&explained);
+    let trail_px = trail_length(&along);
+    // A line's seams are read only where a rule asks for them (a profile along it each).
+    let seams = |c: &Candidate| trail_px.map(|t| Seams::of(c, t, &z, w, h));
     let debris = second
         .into_iter()
-        .filter(|c| {
-            let seams = trail_px.map(|t| Seams::of(c, t, &z, w, h));
-            if m.explains(c, p.psf_sigma) {
-                seams.is_some_and(|s| s.lone())
+        .zip(star)
+        .filter(|(c, star)| {
+            if *star {
+                seams(c).is_some_and(|s| s.lone())
             } else {
                 let d = angle_diff_deg(c.orientation_deg, m.angle_deg);
-                d > NEAR_DEG || !seams.is_some_and(|s| s.pair())
+                d > NEAR_DEG || !seams(c).is_some_and(|s| s.pair())
             }
         })
+        .map(|(c, _)| c)
         .collect();
     union(first, debris, trail, p)
 }
