@@ -12,6 +12,7 @@ use super::segment::Seg;
 pub enum Seeds {
     Local,
     LongLine,
+    FullLine,
 }
 
 impl fmt::Display for Seeds {
@@ -19,6 +20,7 @@ impl fmt::Display for Seeds {
         f.write_str(match self {
             Seeds::Local => "local line filter",
             Seeds::LongLine => "long-line stage",
+            Seeds::FullLine => "full-line stage",
         })
     }
 }

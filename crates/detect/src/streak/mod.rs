@@ -30,6 +30,12 @@
 //!    3b. **Long lines** (`radon`): the same filter on the clipped map binned by 2, 4 and 8, so
 //!    that a sum covers 100-400 pixels and a streak too faint per pixel for step 3 but long
 //!    enough (integrated SNR grows as the square root of its length) still gives a component.
+//!    3c. **Full lines** (`full_lines`, the star-aware pass only): a Radon transform of the
+//!    clipped map binned by 4, every line through the frame at every angle beyond the trails'
+//!    tolerance, each against the bins beside it; the best segment of each of the most
+//!    significant lines seeds step 5, which finds its ends as the most significant stretch of
+//!    its profile and measures its SNR with a clipped mean (a frame-crossing survey streak is
+//!    600-1100 px long, and each of its pixels far below the noise).
 //! 4. **Components.** Pixels with response >= `threshold_sigma` are joined by 8-connectivity,
 //!    but only between pixels whose best orientations differ by at most `angle_link_bins`
 //!    steps, so that a streak crossing a star trail splits instead of merging with it.
@@ -89,7 +95,7 @@
 //! they share a direction, runs both passes along it. A pass (`pass`) runs its stages in
 //! order, each a function of its own file: `unit_noise` (1-2: `background`, `smooth`),
 //! `flatten` (2: `trails`, `sky`, `stars`), `seeds` (3-4: `noise`, `lines`, `components`) and
-//! `radon` (3b), `fragments` (5: `refine`), `merge` (6), `accept`, `explain_away`, then the
+//! `radon` (3b), `full_lines` (3c), `fragments` (5: `refine`), `merge` (6), `accept`, `explain_away`, then the
 //! boxes (7: `reach`, `output`, `fit`). The later stages read the pass's maps through
 //! `maps::Maps`; `params` holds the knobs, `segment` the geometry they share, `star_test`
 //! whether a segment is a star's trail, and `stats` the robust statistics (bilinear sampling
@@ -104,6 +110,7 @@ mod explain_away;
 mod fit;
 mod flatten;
 mod fragments;
+mod full_lines;
 mod lines;
 mod lone_line;
 mod maps;

@@ -7,6 +7,7 @@ use super::explain::{Dropped, Seeds};
 use super::explain_away::explain_away;
 use super::flatten::flatten;
 use super::fragments::fragments;
+use super::full_lines::full_line_components;
 use super::maps::Maps;
 use super::merge::merge;
 use super::output::{Candidate, candidate};
@@ -39,6 +40,11 @@ pub(super) fn pass(
     let noise = line_noise(&flat.zc, w, h, p);
     let local = local_seeds(&flat.zc, w, h, p, &noise);
     let long = long_line_components(&flat.zc, w, h, p);
+    // The star-aware pass: lines across the frame, away from the trails (`full_lines`).
+    let full = match (trail, &sky) {
+        (Some(a), Some(_)) => full_line_components(&flat.zc, w, h, Some((a, p.trail_tol))),
+        _ => Vec::new(),
+    };
     let maps = Maps {
         w,
         h,
@@ -63,6 +69,8 @@ pub(super) fn pass(
         fragments(&maps, &local, trail.is_none(), Seeds::Local, &is_star);
     let (long_frags, d) = fragments(&maps, &long, true, Seeds::LongLine, &is_star);
     dropped.extend(d);
+    let (full_frags, d) = fragments(&maps, &full, true, Seeds::FullLine, &is_star);
+    dropped.extend(d);
     // The two stages' fragments are merged apart: a long-line fragment overlapping a local
     // one (the same streak, its ends less sharp) would otherwise re-refine it into a segment
     // that can fail where the local one passed. Where both find a streak, explaining away
@@ -75,6 +83,11 @@ pub(super) fn pass(
         merge(&maps, long_frags, &is_star)
             .into_iter()
             .map(|s| (s, Seeds::LongLine)),
+    );
+    merged.extend(
+        merge(&maps, full_frags, &is_star)
+            .into_iter()
+            .map(|s| (s, Seeds::FullLine)),
     );
     let (cands, d) = accept(&maps, merged, &is_star);
     dropped.extend(d);
