@@ -328,6 +328,7 @@ fn measure(
                 scene.image_index,
                 PixelPurpose::Noise,
             ),
+            None,
         );
         times.push(t.elapsed().as_secs_f64() * 1e3);
         for (i, &v) in e.electrons.iter().enumerate() {

@@ -124,6 +124,7 @@ pub fn render(
         &jitter,
         photons_rng,
         noise_rng,
+        None,
     )
 }
 
@@ -139,7 +140,11 @@ fn singles_only(scene: &Scene, merge_threshold: u64) -> bool {
     most + 12.0 * most.sqrt() + 12.0 < merge_threshold as f64
 }
 
-/// Render a scene for a given jitter path (a scene with placed objects: `render_placed`).
+/// Render a scene for a given jitter path. A scene with placed objects (`Scene::placed`) needs
+/// `object_photons`: each of its objects traces its photons on its own stream,
+/// `object_photons(k)`, after the frame's stars, with the same jitter path, and the pointing's
+/// own object is then not rendered.
+#[allow(clippy::too_many_arguments)]
 pub fn render_with_jitter(
     sensor: &Sensor,
     settings: &Settings,
@@ -148,32 +153,7 @@ pub fn render_with_jitter(
     jitter: &Jitter,
     photons_rng: &mut PixelRng,
     noise_rng: &mut PixelRng,
-) -> Exposure {
-    render_placed(
-        sensor,
-        settings,
-        scene,
-        frame,
-        jitter,
-        photons_rng,
-        noise_rng,
-        &|_| unreachable!("a scene with placed objects is rendered with their streams"),
-    )
-}
-
-/// Render a scene whose placed objects (`Scene::placed`), if any, each trace their photons on
-/// their own stream, `object_photons(k)`, after the frame's stars, with the same jitter path.
-/// The pointing's own object is then not rendered.
-#[allow(clippy::too_many_arguments)]
-pub fn render_placed(
-    sensor: &Sensor,
-    settings: &Settings,
-    scene: &Scene,
-    frame: Option<&RealFrame>,
-    jitter: &Jitter,
-    photons_rng: &mut PixelRng,
-    noise_rng: &mut PixelRng,
-    object_photons: &dyn Fn(u64) -> PixelRng,
+    object_photons: Option<&dyn Fn(u64) -> PixelRng>,
 ) -> Exposure {
     // A ground site's sky for this image, in the detector's noise and the truth's sigma.
     let sensor = &*sensor.under_sky(scene.sky_v_mag_per_arcsec2);
@@ -196,6 +176,8 @@ pub fn render_placed(
             .iter()
             .enumerate()
             .map(|(k, object)| {
+                let object_photons = object_photons
+                    .expect("a scene with placed objects is rendered with their streams");
                 let rng = &mut object_photons(k as u64);
                 let flux = expected::debris_flux(sensor, object, jitter);
                 // An object alone, its photons all single: drawn per pixel as `photons` would

@@ -326,6 +326,7 @@ fn noise_free(c: &Fixture, s: &Scene, jitter: &Jitter, runs: u64) -> Vec<Vec<u32
                 jitter,
                 &mut pixel_stream(11, i, PixelPurpose::Photons),
                 &mut pixel_stream(11, i, PixelPurpose::Noise),
+                None,
             )
             .electrons
         })
