@@ -36,8 +36,8 @@ impl Provenance {
             campaign: campaign.resolved.name.clone(),
             campaign_hash: campaign.hash.clone(),
             seed: campaign.resolved.seed,
-            observer: campaign.observer.name().to_string(),
-            site: campaign.observer.ground().map(|g| g.site),
+            observer: campaign.world.observer.name().to_string(),
+            site: campaign.world.observer.ground().map(|g| g.site),
         }
     }
 }
