@@ -461,7 +461,7 @@ fn photometry_cards(push: &mut Push, sensor: &Sensor, scene: &Scene, t: &Truth) 
     if scene.placed.is_none() {
         push(
             "DEBMAG",
-            Card::Real(t.magnitude),
+            Card::Real(t.seen.magnitude),
             "debris magnitude at mid-exposure (Eq. 6)",
         );
     }

@@ -31,7 +31,7 @@ use photons::{Canvas, Tally, trace};
 pub use sources::TracedStar;
 use sources::{Path, Source, for_each_source};
 pub use truth::iso_utc;
-pub use truth::{FrameTruth, ObjectTruth, Truth};
+pub use truth::{FrameTruth, ObjectTruth, Seen, StreakEnds, Truth};
 
 /// Above this many packets per source the packet weight grows so that no source traces more
 /// (only reached by sources far brighter than a scene allows, e.g. a magnitude -1 star). The
@@ -349,28 +349,32 @@ fn truth_of(
         exposure_s: t_exp,
         pointing: scene.pointing.clone(),
         jitter_mean_px: [jitter_mean.0, jitter_mean.1],
-        streak_start_px: first.unwrap_or([f64::NAN; 2]),
-        streak_end_px: last.unwrap_or([f64::NAN; 2]),
-        streak_start_wcs_radec_deg: through_wcs(first),
-        streak_end_wcs_radec_deg: through_wcs(last),
+        streak: StreakEnds {
+            start_px: first.unwrap_or([f64::NAN; 2]),
+            end_px: last.unwrap_or([f64::NAN; 2]),
+            start_wcs_radec_deg: through_wcs(first),
+            end_wcs_radec_deg: through_wcs(last),
+        },
         label_box_px,
         frame: None,
         label_box_final_px: None,
-        magnitude: g.magnitude,
-        magnitude_min: mag_min,
-        magnitude_max: mag_max,
-        area_m2: scene.area_m2,
-        range_km: g.range_km,
-        phase_angle_deg: g.phase_angle_deg,
-        earth_angle_deg: g.earth_angle_deg,
-        sun_angle_deg: g.sun_angle_deg,
-        moon_angle_deg: g.moon_angle_deg,
-        tumble: scene.tumble,
-        expected_debris_electrons: expected_debris,
-        rendered_debris_electrons: debris_total,
-        snr: scene.snr,
-        snr_noise_level: scene.snr_noise_level,
-        snr_noise_sigma: scene.snr_noise_sigma,
+        seen: Seen {
+            magnitude: g.magnitude,
+            magnitude_min: mag_min,
+            magnitude_max: mag_max,
+            area_m2: scene.area_m2,
+            range_km: g.range_km,
+            phase_angle_deg: g.phase_angle_deg,
+            earth_angle_deg: g.earth_angle_deg,
+            sun_angle_deg: g.sun_angle_deg,
+            moon_angle_deg: g.moon_angle_deg,
+            tumble: scene.tumble,
+            expected_debris_electrons: expected_debris,
+            rendered_debris_electrons: debris_total,
+            snr: scene.snr,
+            snr_noise_level: scene.snr_noise_level,
+            snr_noise_sigma: scene.snr_noise_sigma,
+        },
         snr_matched_filter: debris_flux.matched_filter_snr(sensor.gain_e_per_adu, sigma_adu),
         stars_in_cone: scene.stars.len(),
         stars_traced,

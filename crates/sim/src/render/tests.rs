@@ -70,10 +70,11 @@ fn mean_photons_match_eq3_within_poisson_error() {
             &mut pixel_stream(1, i, PixelPurpose::Noise),
         );
         let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
-        debris_sum += e.truth.rendered_debris_electrons as f64;
-        star_sum += (total - e.truth.rendered_debris_electrons) as f64;
+        debris_sum += e.truth.seen.rendered_debris_electrons as f64;
+        star_sum += (total - e.truth.seen.rendered_debris_electrons) as f64;
         assert!(
-            (e.truth.expected_debris_electrons - debris_expected).abs() < 1e-6 * debris_expected
+            (e.truth.seen.expected_debris_electrons - debris_expected).abs()
+                < 1e-6 * debris_expected
         );
     }
     for (sum, expected) in [(star_sum, star_expected), (debris_sum, debris_expected)] {
@@ -102,7 +103,7 @@ fn merged_packets_keep_the_total_and_the_label_holds_the_streak() {
         &mut pixel_stream(2, 0, PixelPurpose::Noise),
     );
     let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
-    assert_eq!(total, e.truth.rendered_debris_electrons);
+    assert_eq!(total, e.truth.seen.rendered_debris_electrons);
     let b = e.truth.label_box_px.unwrap();
     // The streak runs from x = 30 to 90 at y = 40; the box holds it with PSF margins.
     assert!(b.x_min <= 30.0 && b.x_max >= 89.5, "{b:?}");
