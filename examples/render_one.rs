@@ -33,7 +33,12 @@ fn main() -> Result<(), soig::Error> {
     let truth = &image.exposure.truth;
     println!(
         "{}: magnitude {:.2}, {:.1} s exposure from {}, SNR {:.2}, {} draws",
-        truth.object, truth.magnitude, truth.exposure_s, truth.start_utc, truth.snr, truth.attempts
+        truth.object,
+        truth.seen.magnitude,
+        truth.exposure_s,
+        truth.start_utc,
+        truth.seen.snr,
+        truth.attempts
     );
     let adu = &image.exposure.adu;
     let mean = adu.iter().map(|&v| v as f64).sum::<f64>() / adu.len() as f64;

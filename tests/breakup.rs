@@ -247,8 +247,11 @@ fn the_breakup_campaign_runs_and_its_fragments_leave_from_the_parent() {
 #[test]
 fn the_cloud_holds_n_above_lc_fragments() {
     let c = soig::campaign::Campaign::load(&repo("campaigns/breakup.toml")).unwrap();
-    let (catalogued, cloud): (Vec<_>, Vec<_>) =
-        c.population.iter().partition(|b| b.generated.is_none());
+    let (catalogued, cloud): (Vec<_>, Vec<_>) = c
+        .world
+        .population
+        .iter()
+        .partition(|b| b.generated.is_none());
     assert_eq!(catalogued.len(), 399);
     assert!(catalogued.iter().all(|b| b.norad != 90227));
     assert_eq!(
@@ -282,8 +285,9 @@ fn collisions_destroy_their_parent_only_when_catastrophic() {
         let c =
             soig::campaign::Campaign::load_with_overrides(&repo("campaigns/breakup.toml"), &sets)
                 .unwrap();
-        let parent = c.population.iter().any(|b| b.norad == 90227);
+        let parent = c.world.population.iter().any(|b| b.norad == 90227);
         let cloud: Vec<u64> = c
+            .world
             .population
             .iter()
             .filter(|b| b.generated.is_some())

@@ -287,16 +287,20 @@ fn every_frame_of_a_collect_is_judged_and_inside_the_window() {
         let start =
             soig::campaign::parse_epoch(&format!("{} UTC", t["start_utc"].as_str().unwrap()))
                 .unwrap();
-        assert!(start < c.window_end, "image {i} starts after the window");
+        assert!(
+            start < c.world.window_end,
+            "image {i} starts after the window"
+        );
         let mid = start + hifitime::Duration::from_seconds(t["exposure_s"].as_f64().unwrap() / 2.0);
         let obs = c
+            .world
             .observer
             .orbit()
             .expect("a satellite observer")
             .propagator
             .position_teme_km(mid)
             .unwrap();
-        let deb = c.debris[0].propagator.position_teme_km(mid).unwrap();
+        let deb = c.world.debris[0].propagator.position_teme_km(mid).unwrap();
         assert!(
             !soig::sky::segment_hits_sphere(obs, deb, radius),
             "image {i} (frame {}): the line of sight goes through the Earth",

@@ -307,9 +307,9 @@ fn exposures_of_10_ms_and_600_s() {
         for (s, e) in draw_and_render(&c, 1) {
             assert_eq!(s.exposure_s, t);
             let n = e.adu.len() as f64;
-            let debris_adu = e.truth.rendered_debris_electrons as f64 / 1.6;
+            let debris_adu = e.truth.seen.rendered_debris_electrons as f64 / 1.6;
             let stars_adu = (e.electrons.iter().map(|&v| v as f64).sum::<f64>()
-                - e.truth.rendered_debris_electrons as f64)
+                - e.truth.seen.rendered_debris_electrons as f64)
                 / 1.6;
             let mean = e.adu.iter().map(|&a| a as f64).sum::<f64>() / n;
             let expected = 200.0 * t / 5.0 + 2.5 + (debris_adu + stars_adu) / n;
@@ -323,11 +323,11 @@ fn exposures_of_10_ms_and_600_s() {
             );
             eprintln!(
                 "{t} s: mean ADU {mean:.3} (Eq. 11: {expected:.3}), debris {} e- rendered of {:.1} expected, snr {:.2}, sample spacing {spacing_px:.1} px, streak {:?} -> {:?}",
-                e.truth.rendered_debris_electrons,
-                e.truth.expected_debris_electrons,
+                e.truth.seen.rendered_debris_electrons,
+                e.truth.seen.expected_debris_electrons,
                 s.snr,
-                e.truth.streak_start_px,
-                e.truth.streak_end_px
+                e.truth.streak.start_px,
+                e.truth.streak.end_px
             );
             assert!(
                 (mean - expected).abs() < 0.01 * expected + 0.05,
@@ -393,7 +393,7 @@ fn magnitudes_from_minus_1_to_25() {
         let e = render_scene(&c, &s, 4);
         all_finite(&e);
         let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
-        let debris = e.truth.rendered_debris_electrons;
+        let debris = e.truth.seen.rendered_debris_electrons;
         let star = total - debris;
         for (what, got, mag) in [("star", star, star_mag), ("debris", debris, debris_mag)] {
             let expected = photon_rate(mag, zp) * t;
@@ -469,7 +469,7 @@ fn magnitude_6_star_in_the_field() {
     all_finite(&e);
     let expected = photon_rate(6.0, c.resolved.sensor.zero_point_mag) * 5.0;
     let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
-    let star_e = (total - e.truth.rendered_debris_electrons) as f64;
+    let star_e = (total - e.truth.seen.rendered_debris_electrons) as f64;
     assert!(
         (star_e - expected).abs() < 6.0 * expected.sqrt() + 0.001 * expected,
         "{star_e} vs {expected}"
@@ -514,14 +514,14 @@ fn streak_leaving_the_image() {
     let b = e.truth.label_box_px.expect("debris in the image");
     assert!(b.x_max == 127.5 && (b.x_min - 64.0).abs() < 4.0, "{b:?}");
     assert!(b.y_min > 55.0 && b.y_max < 73.0, "{b:?}");
-    let expected = e.truth.expected_debris_electrons;
-    let landed = e.truth.rendered_debris_electrons as f64;
+    let expected = e.truth.seen.expected_debris_electrons;
+    let landed = e.truth.seen.rendered_debris_electrons as f64;
     // The streak is 256 px long and 64 px of it lie in the image: a quarter of the flux.
     assert!(
         (landed / expected - 0.25).abs() < 0.02,
         "{landed} of {expected}"
     );
-    assert!(e.truth.streak_end_px[0] > 300.0);
+    assert!(e.truth.streak.end_px[0] > 300.0);
     // The SNR of the leaving streak is that of its in-image part alone.
     let inside: Vec<TrajectorySample> = s
         .trajectory
@@ -543,7 +543,7 @@ fn streak_leaving_the_image() {
     let e = render_scene(&c, &out, 8);
     all_finite(&e);
     assert_eq!(e.truth.label_box_px, None);
-    assert_eq!(e.truth.rendered_debris_electrons, 0);
+    assert_eq!(e.truth.seen.rendered_debris_electrons, 0);
 }
 
 /// A huge Poisson mean: rand_distr refuses means above ~1.8e19 (about u64::MAX); soig's draw

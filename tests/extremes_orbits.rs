@@ -113,8 +113,8 @@ fn decayed_tle_is_refused_naming_file_and_line() {
     let inside =
         "[window]\nstart = \"2022-01-02T00:00:00 UTC\"\nend = \"2022-01-05T00:00:00 UTC\"\n";
     let c = Campaign::from_toml(&campaign_text(&inline, inside), Path::new("x.toml")).unwrap();
-    let late = c.window_end;
-    assert!(c.debris[0].propagator.position_teme_km(late).is_err());
+    let late = c.world.window_end;
+    assert!(c.world.debris[0].propagator.position_teme_km(late).is_err());
 
     // The CLI prints the same message and fails before writing anything.
     let path = dir.path().join("decay.toml");
@@ -260,6 +260,7 @@ fn near_perigee_at_high_speed() {
     use soig::sky::{angle_deg, norm, radec_unit, sub, unit};
     let probe = campaign(ELEMENTS_40649, "");
     let obs = &probe
+        .world
         .observer
         .orbit()
         .expect("a satellite observer")
@@ -306,10 +307,10 @@ fn near_perigee_at_high_speed() {
             sensor(128, 0.0125)
         ),
     );
-    let deb = &c.debris[0].propagator;
-    let d0 = deb.position_teme_km(c.window_start).unwrap();
+    let deb = &c.world.debris[0].propagator;
+    let d0 = deb.position_teme_km(c.world.window_start).unwrap();
     let speed = norm(sub(
-        deb.position_teme_km(c.window_start + Duration::from_seconds(1.0))
+        deb.position_teme_km(c.world.window_start + Duration::from_seconds(1.0))
             .unwrap(),
         d0,
     ));

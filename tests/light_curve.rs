@@ -30,20 +30,8 @@ fn light_curves_match_the_truth_row_for_row() {
         let mut r = csv::Reader::from_path(&path).unwrap();
         let head: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
         assert_eq!(
-            head,
-            [
-                "image",
-                "object",
-                "norad",
-                "sample",
-                "t_s",
-                "utc",
-                "magnitude",
-                "electrons_per_s",
-                "electrons",
-                "x_px",
-                "y_px"
-            ]
+            head.join(","),
+            "image,object,norad,sample,t_s,utc,magnitude,electrons_per_s,electrons,x_px,y_px"
         );
         let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
         // 300 samples unless the streak was too fast for them (then more, never fewer).

@@ -58,6 +58,19 @@ fn journaled(out: &Path, pid: u32) -> usize {
     std::fs::read_to_string(journal).map_or(0, |t| t.lines().count().saturating_sub(1))
 }
 
+/// `resumed`, the run that resumed into `out`, ends with the digest of `campaign` run
+/// uninterrupted (beside it, into `reference`), naming the files that differ otherwise.
+fn assert_resumed_as_uninterrupted(campaign: &Path, out: &Path, resumed: &Output) {
+    let reference = out.with_file_name("reference");
+    let uninterrupted = digest(&command(campaign, &reference).output().unwrap());
+    assert_eq!(
+        digest(resumed),
+        uninterrupted,
+        "files that differ: {:?}",
+        differing_files(out, &reference)
+    );
+}
+
 /// Spawn the run on one thread (so that it is still rendering when the signal comes, on any
 /// machine), wait until it has journaled `images` images, signal it, and wait for its end.
 fn stop_after(campaign: &Path, out: &Path, images: usize, signal: &str) -> Output {
@@ -92,13 +105,7 @@ fn killed_at_any_phase_a_run_resumes_to_the_same_digest() {
     let stopped = stop_after(&long, &out, 3, "-KILL");
     assert_eq!(stopped.status.code(), None, "{stopped:?}");
     let resumed = command(&long, &out).output().unwrap();
-    let reference = digest(&command(&long, &t.join("reference")).output().unwrap());
-    assert_eq!(
-        digest(&resumed),
-        reference,
-        "files that differ: {:?}",
-        differing_files(&out, &t.join("reference"))
-    );
+    assert_resumed_as_uninterrupted(&long, &out, &resumed);
     let said = String::from_utf8_lossy(&resumed.stdout);
     assert!(
         said.contains("resumed)") && !said.starts_with("150 images"),
@@ -173,13 +180,7 @@ fn sigterm_keeps_the_work_and_the_same_command_resumes_it() {
     );
     let resumed = command(&c, &out).output().unwrap();
     assert!(String::from_utf8_lossy(&resumed.stdout).contains("resumed)"));
-    let reference = digest(&command(&c, &t.join("reference")).output().unwrap());
-    assert_eq!(
-        digest(&resumed),
-        reference,
-        "files that differ: {:?}",
-        differing_files(&out, &t.join("reference"))
-    );
+    assert_resumed_as_uninterrupted(&c, &out, &resumed);
     assert_no_leftovers(&out);
 }
 
@@ -251,7 +252,6 @@ fn a_killed_pid_1_in_its_own_namespace_resumes_on_retry() {
         .output()
         .unwrap();
     assert!(verify.status.success(), "{verify:?}");
-    let reference = digest(&command(&c, &t.join("reference")).output().unwrap());
-    assert_eq!(digest(&retry), reference);
+    assert_resumed_as_uninterrupted(&c, &out, &retry);
     assert_no_leftovers(&out);
 }

@@ -16,19 +16,17 @@ labels=$(find "$tmp/run/labels" -name img_000000.txt)
 import json
 import sys
 from PIL import Image, ImageDraw
+sys.path.insert(0, "docs")
+from boxes import label_rects
 out, png, labels, truth = sys.argv[1:]
 objects = [o for o in json.load(open(truth))["objects"] if o["label_box_final_px"] is not None]
 im = Image.open(png).convert("RGB")
-w, h = im.size
 draw = ImageDraw.Draw(im)
-lines = open(labels).read().splitlines()
-assert len(lines) == len(objects), (len(lines), len(objects))
-for line, o in zip(lines, objects):
-    _, xc, yc, bw, bh = map(float, line.split())
+rects = label_rects(labels, *im.size, pad=6)
+assert len(rects) == len(objects), (len(rects), len(objects))
+for rect, o in zip(rects, objects):
     color = (255, 160, 0) if o["source"] == "generated" else (255, 40, 40)
-    draw.rectangle(
-        [(xc - bw / 2) * w - 6, (yc - bh / 2) * h - 6, (xc + bw / 2) * w + 6, (yc + bh / 2) * h + 6],
-        outline=color, width=2)
+    draw.rectangle(rect, outline=color, width=2)
 # 64 levels: a quarter of the bytes.
 im.convert("P", palette=Image.ADAPTIVE, colors=64).save(out, optimize=True)
 PY

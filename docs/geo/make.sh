@@ -15,15 +15,13 @@ labels=$(find "$tmp/run/labels" -name img_000000.txt)
 "${PYTHON:-python3}" - docs/geo/geo-stare.png "$png" "$labels" <<'PY'
 import sys
 from PIL import Image, ImageDraw
+sys.path.insert(0, "docs")
+from boxes import label_rects
 out, png, labels = sys.argv[1:]
 im = Image.open(png).convert("RGB")
-w, h = im.size
 draw = ImageDraw.Draw(im)
-for line in open(labels):
-    _, xc, yc, bw, bh = map(float, line.split())
-    draw.rectangle(
-        [(xc - bw / 2) * w - 6, (yc - bh / 2) * h - 6, (xc + bw / 2) * w + 6, (yc + bh / 2) * h + 6],
-        outline=(255, 40, 40), width=2)
+for rect in label_rects(labels, *im.size, pad=6):
+    draw.rectangle(rect, outline=(255, 40, 40), width=2)
 # 64 grey levels and the red: a quarter of the bytes.
 im.convert("P", palette=Image.ADAPTIVE, colors=64).save(out, optimize=True)
 PY

@@ -27,17 +27,15 @@ done
 "${PYTHON:-python3}" - docs/multi/multi.png "${panels[@]}" <<'PY'
 import sys
 from PIL import Image, ImageDraw
+sys.path.insert(0, "docs")
+from boxes import label_rects
 out, args = sys.argv[1], sys.argv[2:]
 tiles = []
 for png, labels in zip(args[::2], args[1::2]):
     im = Image.open(png).convert("RGB")
-    w, h = im.size
     draw = ImageDraw.Draw(im)
-    for line in open(labels):
-        _, xc, yc, bw, bh = map(float, line.split())
-        draw.rectangle(
-            [(xc - bw / 2) * w - 8, (yc - bh / 2) * h - 8, (xc + bw / 2) * w + 8, (yc + bh / 2) * h + 8],
-            outline=(255, 40, 40), width=3)
+    for rect in label_rects(labels, *im.size, pad=8):
+        draw.rectangle(rect, outline=(255, 40, 40), width=3)
     tiles.append(im.resize((512, 512), Image.LANCZOS))
 sheet = Image.new("RGB", (512 * len(tiles) + 8 * (len(tiles) - 1), 512), (255, 255, 255))
 for i, t in enumerate(tiles):

@@ -74,8 +74,8 @@ pub fn of(campaign: &Campaign) -> Experiment {
     };
     let v = &c.visibility;
     let scene = scene::Spec {
-        window_start: campaign.window_start,
-        window_end: campaign.window_end,
+        window_start: campaign.world.window_start,
+        window_end: campaign.world.window_end,
         exposure_min_s: c.exposure.min_s,
         exposure_max_s: c.exposure.max_s,
         pointing: c.pointing.mode,
@@ -117,7 +117,7 @@ pub fn of(campaign: &Campaign) -> Experiment {
         },
         collect_frames: c.collect_frames() as u64,
         collect_gap_s: c.collect.as_ref().map_or(0.0, |k| k.gap_s),
-        ground: campaign.ground.clone(),
+        ground: campaign.world.ground.clone(),
         objects: c.objects.as_ref().map(|o| {
             let (min, max) = o.per_frame.bounds();
             scene::ObjectCount {
@@ -259,9 +259,9 @@ pub fn inputs(campaign: &Campaign) -> Result<Inputs, Error> {
         }
     };
     Ok(Inputs {
-        observer: campaign.observer.clone(),
-        debris: campaign.debris.clone(),
-        population: campaign.population.clone(),
+        observer: campaign.world.observer.clone(),
+        debris: campaign.world.debris.clone(),
+        population: campaign.world.population.clone(),
         population_coarse: coarse_orbits(campaign),
         stars,
         background: BackgroundModel::load(&frames)
@@ -307,11 +307,14 @@ fn photometry_area(p: &crate::campaign::Photometry) -> debris_sizes::AreaModel {
 /// an exposure may cover (the window and one longest exposure after it).
 fn coarse_orbits(campaign: &Campaign) -> Vec<crate::sky::orbit::CoarseOrbit> {
     use rayon::prelude::*;
-    let end =
-        campaign.window_end + hifitime::Duration::from_seconds(campaign.resolved.exposure.max_s);
+    let end = campaign.world.window_end
+        + hifitime::Duration::from_seconds(campaign.resolved.exposure.max_s);
     campaign
+        .world
         .population
         .par_iter()
-        .map(|b| crate::sky::orbit::CoarseOrbit::new(&b.propagator, (campaign.window_start, end)))
+        .map(|b| {
+            crate::sky::orbit::CoarseOrbit::new(&b.propagator, (campaign.world.window_start, end))
+        })
         .collect()
 }

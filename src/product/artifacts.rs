@@ -36,8 +36,8 @@ impl Provenance {
             campaign: campaign.resolved.name.clone(),
             campaign_hash: campaign.hash.clone(),
             seed: campaign.resolved.seed,
-            observer: campaign.observer.name().to_string(),
-            site: campaign.observer.ground().map(|g| g.site),
+            observer: campaign.world.observer.name().to_string(),
+            site: campaign.world.observer.ground().map(|g| g.site),
         }
     }
 }
@@ -461,7 +461,7 @@ fn photometry_cards(push: &mut Push, sensor: &Sensor, scene: &Scene, t: &Truth) 
     if scene.placed.is_none() {
         push(
             "DEBMAG",
-            Card::Real(t.magnitude),
+            Card::Real(t.seen.magnitude),
             "debris magnitude at mid-exposure (Eq. 6)",
         );
     }

@@ -14,14 +14,10 @@ use crate::dataset::Subset;
 #[derive(Debug, Serialize, Deserialize)]
 pub struct CollectManifest {
     pub collect: u64,
-    /// The object's id over the collect's frames (the truths' `collect.track_id`); with
-    /// `[objects]`, `objects` instead.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub track_id: Option<u64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub object: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub norad: Option<u64>,
+    /// The collect's one object, with its id over the collect's frames (the truths'
+    /// `collect.track_id`), flattened into the manifest; with `[objects]`, `objects` instead.
+    #[serde(flatten)]
+    pub track: Option<Track>,
     /// With `[objects]`: the collect's objects, the same in each of its frames (each truth's
     /// `objects[].track_id`), in their order.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -100,9 +96,14 @@ pub fn write_manifests(
             .entry(k.collect)
             .or_insert_with(|| CollectManifest {
                 collect: k.collect,
-                track_id: k.track_id,
-                object: t.object.clone(),
-                norad: t.norad,
+                track: match (k.track_id, &t.object, t.norad) {
+                    (Some(track_id), Some(object), Some(norad)) => Some(Track {
+                        track_id,
+                        object: object.clone(),
+                        norad,
+                    }),
+                    _ => None,
+                },
                 objects: t.objects.clone(),
                 subset: subset(i).map(|s| s.name().to_string()),
                 frames: Vec::new(),

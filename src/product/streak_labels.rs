@@ -127,7 +127,7 @@ pub fn labels(products: &ImageProducts) -> Vec<(BoxPx, StreakLabel)> {
         .into_iter()
         .filter_map(|(t, flux)| {
             let b = t.label_box_final_px?;
-            let ends = (t.streak_start_px, t.streak_end_px);
+            let ends = (t.streak.start_px, t.streak.end_px);
             let l = streak_label(ends, &flux, (w, h), &product.frame, &b);
             Some((b, l))
         })

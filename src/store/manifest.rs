@@ -261,13 +261,19 @@ pub fn verify(dir: &Path) -> Result<(Manifest, Vec<Problem>), Error> {
 mod tests {
     use super::*;
 
+    /// Write `bytes` to `rel` under `dir`, making its folders.
+    fn put(dir: &Path, rel: &str, bytes: &[u8]) {
+        let path = dir.join(rel);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, bytes).unwrap();
+    }
+
     #[test]
     fn verify_names_each_problem() {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
-        std::fs::create_dir_all(d.join("a")).unwrap();
-        std::fs::write(d.join("a/x.txt"), b"x").unwrap();
-        std::fs::write(d.join("y.txt"), b"y").unwrap();
+        put(d, "a/x.txt", b"x");
+        put(d, "y.txt", b"y");
         let m = Manifest::build(d, "h", serde_json::json!({"k": 1}), &[]).unwrap();
         m.write(d).unwrap();
         assert_eq!(verify(d).unwrap().1, vec![]);
@@ -277,9 +283,9 @@ mod tests {
                 .unwrap()
                 .digest
         );
-        std::fs::write(d.join("a/x.txt"), b"z").unwrap();
+        put(d, "a/x.txt", b"z");
         std::fs::remove_file(d.join("y.txt")).unwrap();
-        std::fs::write(d.join("new.txt"), b"n").unwrap();
+        put(d, "new.txt", b"n");
         let problems = verify(d).unwrap().1;
         assert_eq!(
             problems,
@@ -295,19 +301,17 @@ mod tests {
     fn verify_ignores_ultralytics_label_caches_only() {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
-        std::fs::create_dir_all(d.join("labels/train")).unwrap();
-        std::fs::write(d.join("labels/train/a.txt"), b"0 0.5 0.5 0.1 0.1\n").unwrap();
+        put(d, "labels/train/a.txt", b"0 0.5 0.5 0.1 0.1\n");
         Manifest::build(d, "h", serde_json::json!({}), &[])
             .unwrap()
             .write(d)
             .unwrap();
         // What `yolo train` leaves: one cache per split, beside the split's folder.
-        std::fs::write(d.join("labels/train.cache"), b"c").unwrap();
-        std::fs::write(d.join("labels/val.cache"), b"c").unwrap();
+        put(d, "labels/train.cache", b"c");
+        put(d, "labels/val.cache", b"c");
         // And `yolo obb` / `yolo pose` on the streak-shaped label sets.
         for set in ["obb", "keypoints"] {
-            std::fs::create_dir_all(d.join(set).join("labels")).unwrap();
-            std::fs::write(d.join(set).join("labels/train.cache"), b"c").unwrap();
+            put(d, &format!("{set}/labels/train.cache"), b"c");
         }
         assert_eq!(verify(d).unwrap().1, vec![]);
         // Anything else named .cache is still an extra file.
@@ -318,8 +322,7 @@ mod tests {
             "obb/train.cache",
             "other/labels/train.cache",
         ] {
-            std::fs::create_dir_all(d.join(other).parent().unwrap()).unwrap();
-            std::fs::write(d.join(other), b"c").unwrap();
+            put(d, other, b"c");
         }
         assert_eq!(
             verify(d).unwrap().1,

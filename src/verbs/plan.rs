@@ -211,6 +211,7 @@ impl<'c> Plan<'c> {
             render: c.render.clone(),
             objects: Objects {
                 debris: campaign
+                    .world
                     .debris
                     .iter()
                     .map(|b| (b.name.clone(), b.norad))
@@ -229,7 +230,7 @@ impl<'c> Plan<'c> {
     /// The objects of `[population]` (a catalogue's or a breakup cloud's; empty without),
     /// borrowed: a catalogue of tens of thousands is not copied into the plan.
     pub fn population(&self) -> &'c [Body] {
-        &self.campaign.population
+        &self.campaign.world.population
     }
 
     /// The subset of image `i`, where the run splits its images.

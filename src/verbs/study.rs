@@ -328,6 +328,7 @@ fn measure(
                 scene.image_index,
                 PixelPurpose::Noise,
             ),
+            None,
         );
         times.push(t.elapsed().as_secs_f64() * 1e3);
         for (i, &v) in e.electrons.iter().enumerate() {
@@ -337,7 +338,7 @@ fn measure(
             sq_err += (v - truth.mu[i]).powi(2);
             total += v;
         }
-        debris_total += e.truth.rendered_debris_electrons as f64;
+        debris_total += e.truth.seen.rendered_debris_electrons as f64;
         let debris: Vec<f64> = e.debris_electrons.iter().map(|&v| v as f64).collect();
         if let (Some(a), Some(b)) = (centroid(&debris, e.width), truth.centroid) {
             centroid_err.push((a.0 - b.0).hypot(a.1 - b.1));

@@ -37,11 +37,11 @@ pub fn all_finite(e: &Exposure) {
     );
     let t = &e.truth;
     for (name, v) in [
-        ("range", t.range_km),
-        ("phase", t.phase_angle_deg),
-        ("magnitude", t.magnitude),
-        ("expected debris", t.expected_debris_electrons),
-        ("snr", t.snr),
+        ("range", t.seen.range_km),
+        ("phase", t.seen.phase_angle_deg),
+        ("magnitude", t.seen.magnitude),
+        ("expected debris", t.seen.expected_debris_electrons),
+        ("snr", t.seen.snr),
         ("background sigma", t.background_sigma_adu),
     ] {
         assert!(v.is_finite(), "{name} is {v}");

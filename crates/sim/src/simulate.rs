@@ -64,7 +64,7 @@ pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProduct
     // `render::render`'s streams and order, with each placed object's photons on its own.
     let photons = &mut pixel_stream(seed, index, PixelPurpose::Photons);
     let jitter = render::Jitter::of_scene(&x.sensor, &x.render, &scene, photons);
-    let mut exposure = render::render_placed(
+    let mut exposure = render::render_with_jitter(
         &x.sensor,
         &x.render,
         &scene,
@@ -72,7 +72,7 @@ pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProduct
         &jitter,
         photons,
         &mut pixel_stream(seed, index, PixelPurpose::Noise),
-        &|k| object_pixel_stream(seed, index, k, PixelPurpose::ObjectPhotons),
+        Some(&|k| object_pixel_stream(seed, index, k, PixelPurpose::ObjectPhotons)),
     );
     let product = x.product.as_ref().map(|p| {
         let started = Instant::now();

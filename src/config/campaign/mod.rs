@@ -18,13 +18,11 @@ mod validate;
 
 use std::path::{Path, PathBuf};
 
-use hifitime::Epoch;
-
 pub use breakup::{Breakup, BreakupKind, MAX_FRAGMENTS, ParentType};
 pub use file::*;
 pub use ground::SiteSpec;
 pub use noise::{Noise, PhysicalNoise};
-pub use resolve::{MAX_SURVEY_DRIFT_DEG, parse_epoch};
+pub use resolve::{MAX_SURVEY_DRIFT_DEG, World, parse_epoch};
 pub use validate::MAX_OBJECTS_PER_FRAME;
 
 pub use crate::geometry::FrameKind;
@@ -53,14 +51,8 @@ pub struct Campaign {
     pub resolved: CampaignFile,
     /// sha256 of the canonical JSON of `resolved` (without `output`).
     pub hash: String,
-    pub observer: Observer,
-    pub debris: Vec<Body>,
-    /// The objects of `[population]` (empty without).
-    pub population: Vec<Body>,
-    /// A ground observer's site, night and the spans where each object can be seen.
-    pub ground: Option<GroundGate>,
-    pub window_start: Epoch,
-    pub window_end: Epoch,
+    /// The bodies, ground site and window the scenes are drawn from.
+    pub world: World,
     /// Where outputs go.
     pub output_dir: PathBuf,
     /// Directory of the campaign file, for relative paths.
@@ -195,9 +187,8 @@ impl Campaign {
         let file = layers.parse()?;
         let base_dir = dir_of(path);
         validate::validate(&file).map_err(|(field, msg)| layers.error(&field, msg))?;
-        let r =
+        let (mut resolved, world) =
             resolve::resolve(&file, &base_dir).map_err(|(field, msg)| layers.error(&field, msg))?;
-        let mut resolved = r.file;
         let output_dir = match &file.output {
             Some(o) => base_dir.join(o),
             None => base_dir.join("runs").join(&file.name),
@@ -207,12 +198,7 @@ impl Campaign {
         Ok(Campaign {
             resolved,
             hash,
-            observer: r.observer,
-            debris: r.debris,
-            population: r.population,
-            ground: r.ground,
-            window_start: r.window_start,
-            window_end: r.window_end,
+            world,
             output_dir,
             base_dir,
             source: path.to_path_buf(),
@@ -447,7 +433,7 @@ mod tests {
         assert!(msg.contains("NORAD 40649 is already debris[0]"), "{msg}");
         let asked = format!("allow_duplicates = true\n{}", minimal(&twice));
         let c = load(&asked).unwrap();
-        assert_eq!(c.debris.len(), 2);
+        assert_eq!(c.world.debris.len(), 2);
         assert!(c.resolved.allow_duplicates);
         let off = load(&minimal("")).unwrap();
         let json = serde_json::to_value(&off.resolved).unwrap();

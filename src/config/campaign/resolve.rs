@@ -16,20 +16,26 @@ use crate::sky::orbit::{self, OrbitalElements, Propagator, Tle};
 
 pub use crate::scene::MAX_SURVEY_DRIFT_DEG;
 
-/// A resolved campaign: what its hash covers, and the bodies and window the scenes use.
-pub(super) struct Resolved {
-    pub file: CampaignFile,
+/// What a campaign resolves to besides its file: the bodies, the ground site and the window
+/// the scenes are drawn from.
+#[derive(Debug)]
+pub struct World {
     pub observer: Observer,
     pub debris: Vec<Body>,
     /// The objects of `[population]` (empty without), the observer left out.
     pub population: Vec<Body>,
+    /// A ground observer's site, night and the spans where each object can be seen.
     pub ground: Option<GroundGate>,
     pub window_start: Epoch,
     pub window_end: Epoch,
 }
 
-/// Resolve `file`, reading its files relative to `base_dir`. Errors: (field path, message).
-pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, (String, String)> {
+/// Resolve `file`, reading its files relative to `base_dir`: the file its hash covers, and
+/// its world. Errors: (field path, message).
+pub(super) fn resolve(
+    file: &CampaignFile,
+    base_dir: &Path,
+) -> Result<(CampaignFile, World), (String, String)> {
     let fail = |field: &str, message: String| (field.to_string(), message);
     let window_start = parse_epoch(&file.window.start).map_err(|m| fail("window.start", m))?;
     let window_end = parse_epoch(&file.window.end).map_err(|m| fail("window.end", m))?;
@@ -208,15 +214,15 @@ pub(super) fn resolve(file: &CampaignFile, base_dir: &Path) -> Result<Resolved, 
 
     let ground = ground_gate(&resolved, &observer, &debris, (window_start, window_end))?;
 
-    Ok(Resolved {
-        file: resolved,
+    let world = World {
         observer,
         debris,
         population,
         ground,
         window_start,
         window_end,
-    })
+    };
+    Ok((resolved, world))
 }
 
 /// A placed object named twice (one NORAD number in two `debris` entries, by the same TLE or

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use super::matching::{greedy, tally};
 use super::ultralytics_map::{Stats, from_stats, ultra_match};
-use super::yolo_files::{paired, parse_lines};
+use super::yolo_files::{parse_lines, read_paired};
 use super::{AtThreshold, MetricsError, UltralyticsMetrics, UltralyticsVersion, cmp_desc};
 
 /// A box's four corners, in order around it.
@@ -208,22 +208,13 @@ pub fn read_obb_dirs(
     labels: &Path,
     predictions: &Path,
 ) -> Result<Vec<(String, ObbImage)>, MetricsError> {
-    paired(labels, predictions)?
-        .into_iter()
-        .map(|(stem, (path, text), prediction)| {
-            let truth = parse_obb(&path, &text, false)?;
-            let detections = match prediction {
-                Some((p, text)) => parse_obb(&p, &text, true)?,
-                None => Vec::new(),
-            };
-            let im = ObbImage {
-                truth: truth.iter().map(|t| t.0).collect(),
-                truth_class: truth.iter().map(|t| t.2).collect(),
-                detections,
-            };
-            Ok((stem, im))
-        })
-        .collect()
+    read_paired(labels, predictions, parse_obb, |truth, detections| {
+        ObbImage {
+            truth: truth.iter().map(|t| t.0).collect(),
+            truth_class: truth.iter().map(|t| t.2).collect(),
+            detections,
+        }
+    })
 }
 
 #[cfg(test)]

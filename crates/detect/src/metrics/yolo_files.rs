@@ -140,32 +140,46 @@ pub fn read_yolo_dirs(
     labels: &Path,
     predictions: &Path,
 ) -> Result<Vec<(String, ImageEval)>, MetricsError> {
+    read_paired(labels, predictions, parse_yolo, |truth, predicted| {
+        ImageEval {
+            truth: truth.iter().map(|t| t.1).collect(),
+            truth_class: truth.iter().map(|t| t.0).collect(),
+            detections: predicted
+                .into_iter()
+                .map(|(class, b, score)| box_det(b, score, class))
+                .collect(),
+        }
+    })
+}
+
+/// The label files of `labels` with their prediction files in `predictions` (`paired`), each
+/// parsed by `parse` (a prediction file's lines with their score) and made one image by
+/// `image` from its label lines and predicted lines (none without a prediction file).
+pub(super) fn read_paired<L, T>(
+    labels: &Path,
+    predictions: &Path,
+    parse: impl Fn(&Path, &str, bool) -> Result<Vec<L>, MetricsError>,
+    image: impl Fn(Vec<L>, Vec<L>) -> T,
+) -> Result<Vec<(String, T)>, MetricsError> {
     paired(labels, predictions)?
         .into_iter()
         .map(|(stem, (path, text), prediction)| {
-            let truth = parse_yolo(&path, &text, false)?;
-            let mut im = ImageEval {
-                truth: truth.iter().map(|t| t.1).collect(),
-                truth_class: truth.iter().map(|t| t.0).collect(),
-                detections: Vec::new(),
+            let truth = parse(&path, &text, false)?;
+            let predicted = match prediction {
+                Some((path, text)) => parse(&path, &text, true)?,
+                None => Vec::new(),
             };
-            if let Some((ppath, text)) = prediction {
-                im.detections = parse_yolo(&ppath, &text, true)?
-                    .into_iter()
-                    .map(|(class, b, score)| box_det(b, score, class))
-                    .collect();
-            }
-            Ok((stem, im))
+            Ok((stem, image(truth, predicted)))
         })
         .collect()
 }
 
 /// A label file's stem, path and text, and its prediction file's path and text if any.
-pub(super) type Paired = (String, (PathBuf, String), Option<(PathBuf, String)>);
+type Paired = (String, (PathBuf, String), Option<(PathBuf, String)>);
 
 /// The label files of `labels` with their prediction files in `predictions` (paired by stem,
 /// sorted); a prediction file with no label file is an error.
-pub(super) fn paired(labels: &Path, predictions: &Path) -> Result<Vec<Paired>, MetricsError> {
+fn paired(labels: &Path, predictions: &Path) -> Result<Vec<Paired>, MetricsError> {
     let label_files = txt_files(labels)?;
     let pred_files = txt_files(predictions)?;
     for (stem, path) in &pred_files {

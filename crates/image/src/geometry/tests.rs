@@ -129,6 +129,24 @@ fn rotated_regions(
     (inside, fill)
 }
 
+/// `img` rotated by `angle` degrees, its fill sky noise drawn on stream `seed`: the
+/// `contrast` figures (mean, sigma, contrast) of the rotated frame's inside and of its fill.
+fn rotated_inside_and_fill(
+    img: &[f32],
+    (w, h): (usize, usize),
+    angle: f64,
+    seed: u64,
+) -> ((f64, f64, f64), (f64, f64, f64)) {
+    let mut rng = pixel_stream(seed, 0, PixelPurpose::Enhance);
+    let f = Frame::rotated(w, h, angle);
+    let out = warp(img, w, h, &f, Fill::SkyNoise(&mut rng));
+    let (inside, fill) = rotated_regions(&f, w, h);
+    (
+        contrast(&out, f.width, inside),
+        contrast(&out, f.width, fill),
+    )
+}
+
 #[test]
 fn rotated_fill_has_the_correlation_of_the_resampled_sky() {
     // The paper's noise: background uniform in [190, 210] ADU plus bias in [2, 3].
@@ -138,12 +156,7 @@ fn rotated_fill_has_the_correlation_of_the_resampled_sky() {
         .map(|_| (noise.random_range(190.0..210.0) + noise.random_range(2.0..3.0)) as f32)
         .collect();
     for angle in [30.0, 17.0, -62.0] {
-        let mut rng = pixel_stream(1, 0, PixelPurpose::Enhance);
-        let f = Frame::rotated(w, h, angle);
-        let out = warp(&img, w, h, &f, Fill::SkyNoise(&mut rng));
-        let (inside, fill) = rotated_regions(&f, w, h);
-        let (mi, si, ci) = contrast(&out, f.width, inside);
-        let (mf, sf, cf) = contrast(&out, f.width, fill);
+        let ((mi, si, ci), (mf, sf, cf)) = rotated_inside_and_fill(&img, (w, h), angle, 1);
         // Tens of thousands of pixels in each region: the standard error of a standard
         // deviation is 1/sqrt(2 n) < 0.5%, and the bilinear weights follow each pixel's
         // sub-pixel offset, which the two regions sample alike only statistically (measured:
@@ -193,12 +206,7 @@ fn rotated_fill_keeps_the_hot_pixel_tail() {
         })
         .collect();
     for angle in [30.0, -62.0] {
-        let mut rng = pixel_stream(2, 0, PixelPurpose::Enhance);
-        let f = Frame::rotated(w, h, angle);
-        let out = warp(&img, w, h, &f, Fill::SkyNoise(&mut rng));
-        let (inside, fill) = rotated_regions(&f, w, h);
-        let (_, si, _) = contrast(&out, f.width, inside);
-        let (_, sf, _) = contrast(&out, f.width, fill);
+        let ((_, si, _), (_, sf, _)) = rotated_inside_and_fill(&img, (w, h), angle, 2);
         // The tail makes the pixel values' kurtosis large (0.01 * 100^4 / 125^2 = 64 before
         // the resampling averages it down), and the relative standard error of a standard
         // deviation is sqrt((kurtosis - 1) / n) / 2: under 1.5% over the 70 000 or more

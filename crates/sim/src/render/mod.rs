@@ -31,7 +31,7 @@ use photons::{Canvas, Tally, trace};
 pub use sources::TracedStar;
 use sources::{Path, Source, for_each_source};
 pub use truth::iso_utc;
-pub use truth::{FrameTruth, ObjectTruth, Truth};
+pub use truth::{FrameTruth, ObjectTruth, Seen, StreakEnds, Truth};
 
 /// Above this many packets per source the packet weight grows so that no source traces more
 /// (only reached by sources far brighter than a scene allows, e.g. a magnitude -1 star). The
@@ -124,6 +124,7 @@ pub fn render(
         &jitter,
         photons_rng,
         noise_rng,
+        None,
     )
 }
 
@@ -139,7 +140,11 @@ fn singles_only(scene: &Scene, merge_threshold: u64) -> bool {
     most + 12.0 * most.sqrt() + 12.0 < merge_threshold as f64
 }
 
-/// Render a scene for a given jitter path (a scene with placed objects: `render_placed`).
+/// Render a scene for a given jitter path. A scene with placed objects (`Scene::placed`) needs
+/// `object_photons`: each of its objects traces its photons on its own stream,
+/// `object_photons(k)`, after the frame's stars, with the same jitter path, and the pointing's
+/// own object is then not rendered.
+#[allow(clippy::too_many_arguments)]
 pub fn render_with_jitter(
     sensor: &Sensor,
     settings: &Settings,
@@ -148,32 +153,7 @@ pub fn render_with_jitter(
     jitter: &Jitter,
     photons_rng: &mut PixelRng,
     noise_rng: &mut PixelRng,
-) -> Exposure {
-    render_placed(
-        sensor,
-        settings,
-        scene,
-        frame,
-        jitter,
-        photons_rng,
-        noise_rng,
-        &|_| unreachable!("a scene with placed objects is rendered with their streams"),
-    )
-}
-
-/// Render a scene whose placed objects (`Scene::placed`), if any, each trace their photons on
-/// their own stream, `object_photons(k)`, after the frame's stars, with the same jitter path.
-/// The pointing's own object is then not rendered.
-#[allow(clippy::too_many_arguments)]
-pub fn render_placed(
-    sensor: &Sensor,
-    settings: &Settings,
-    scene: &Scene,
-    frame: Option<&RealFrame>,
-    jitter: &Jitter,
-    photons_rng: &mut PixelRng,
-    noise_rng: &mut PixelRng,
-    object_photons: &dyn Fn(u64) -> PixelRng,
+    object_photons: Option<&dyn Fn(u64) -> PixelRng>,
 ) -> Exposure {
     // A ground site's sky for this image, in the detector's noise and the truth's sigma.
     let sensor = &*sensor.under_sky(scene.sky_v_mag_per_arcsec2);
@@ -196,6 +176,8 @@ pub fn render_placed(
             .iter()
             .enumerate()
             .map(|(k, object)| {
+                let object_photons = object_photons
+                    .expect("a scene with placed objects is rendered with their streams");
                 let rng = &mut object_photons(k as u64);
                 let flux = expected::debris_flux(sensor, object, jitter);
                 // An object alone, its photons all single: drawn per pixel as `photons` would
@@ -367,28 +349,32 @@ fn truth_of(
         exposure_s: t_exp,
         pointing: scene.pointing.clone(),
         jitter_mean_px: [jitter_mean.0, jitter_mean.1],
-        streak_start_px: first.unwrap_or([f64::NAN; 2]),
-        streak_end_px: last.unwrap_or([f64::NAN; 2]),
-        streak_start_wcs_radec_deg: through_wcs(first),
-        streak_end_wcs_radec_deg: through_wcs(last),
+        streak: StreakEnds {
+            start_px: first.unwrap_or([f64::NAN; 2]),
+            end_px: last.unwrap_or([f64::NAN; 2]),
+            start_wcs_radec_deg: through_wcs(first),
+            end_wcs_radec_deg: through_wcs(last),
+        },
         label_box_px,
         frame: None,
         label_box_final_px: None,
-        magnitude: g.magnitude,
-        magnitude_min: mag_min,
-        magnitude_max: mag_max,
-        area_m2: scene.area_m2,
-        range_km: g.range_km,
-        phase_angle_deg: g.phase_angle_deg,
-        earth_angle_deg: g.earth_angle_deg,
-        sun_angle_deg: g.sun_angle_deg,
-        moon_angle_deg: g.moon_angle_deg,
-        tumble: scene.tumble,
-        expected_debris_electrons: expected_debris,
-        rendered_debris_electrons: debris_total,
-        snr: scene.snr,
-        snr_noise_level: scene.snr_noise_level,
-        snr_noise_sigma: scene.snr_noise_sigma,
+        seen: Seen {
+            magnitude: g.magnitude,
+            magnitude_min: mag_min,
+            magnitude_max: mag_max,
+            area_m2: scene.area_m2,
+            range_km: g.range_km,
+            phase_angle_deg: g.phase_angle_deg,
+            earth_angle_deg: g.earth_angle_deg,
+            sun_angle_deg: g.sun_angle_deg,
+            moon_angle_deg: g.moon_angle_deg,
+            tumble: scene.tumble,
+            expected_debris_electrons: expected_debris,
+            rendered_debris_electrons: debris_total,
+            snr: scene.snr,
+            snr_noise_level: scene.snr_noise_level,
+            snr_noise_sigma: scene.snr_noise_sigma,
+        },
         snr_matched_filter: debris_flux.matched_filter_snr(sensor.gain_e_per_adu, sigma_adu),
         stars_in_cone: scene.stars.len(),
         stars_traced,

@@ -144,6 +144,7 @@ fn a_point_source_has_the_seeing_fwhm_at_two_airmasses_and_keeps_its_flux() {
             &jitter,
             &mut pixel_stream(3, 0, PixelPurpose::Photons),
             &mut pixel_stream(3, 0, PixelPurpose::Noise),
+            None,
         );
         let counts: Vec<f64> = e.electrons.iter().map(|&c| f64::from(c)).collect();
         let fit = fitted_fwhm(&counts, beta, formula_px);

@@ -35,6 +35,19 @@ fn scene(c: &Fixture, stars: Vec<Star>, debris_mag: f64, exposure_s: f64) -> Sce
     Scene::fixed_streak(&c.sensor, (10.0, 20.0), stars, debris_mag, ends, exposure_s)
 }
 
+/// Scene `s` rendered on the fixture's sensor, with no real frame, on the photon and noise
+/// streams of (`seed`, `i`).
+fn rendered(c: &Fixture, s: &Scene, seed: u64, i: u64) -> Exposure {
+    render(
+        &c.sensor,
+        &c.render,
+        s,
+        None,
+        &mut pixel_stream(seed, i, PixelPurpose::Photons),
+        &mut pixel_stream(seed, i, PixelPurpose::Noise),
+    )
+}
+
 #[test]
 fn mean_photons_match_eq3_within_poisson_error() {
     // One star in the middle, far from the edges, and a debris streak: over many seeds the
@@ -61,19 +74,13 @@ fn mean_photons_match_eq3_within_poisson_error() {
     let runs = 200;
     let (mut star_sum, mut debris_sum) = (0.0, 0.0);
     for i in 0..runs {
-        let e = render(
-            &c.sensor,
-            &c.render,
-            &s,
-            None,
-            &mut pixel_stream(1, i, PixelPurpose::Photons),
-            &mut pixel_stream(1, i, PixelPurpose::Noise),
-        );
+        let e = rendered(&c, &s, 1, i);
         let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
-        debris_sum += e.truth.rendered_debris_electrons as f64;
-        star_sum += (total - e.truth.rendered_debris_electrons) as f64;
+        debris_sum += e.truth.seen.rendered_debris_electrons as f64;
+        star_sum += (total - e.truth.seen.rendered_debris_electrons) as f64;
         assert!(
-            (e.truth.expected_debris_electrons - debris_expected).abs() < 1e-6 * debris_expected
+            (e.truth.seen.expected_debris_electrons - debris_expected).abs()
+                < 1e-6 * debris_expected
         );
     }
     for (sum, expected) in [(star_sum, star_expected), (debris_sum, debris_expected)] {
@@ -93,16 +100,9 @@ fn merged_packets_keep_the_total_and_the_label_holds_the_streak() {
     c.render.merge_threshold = 1000;
     c.render.merge_factor = 5;
     let s = scene(&c, vec![], 10.0, 2.0);
-    let e = render(
-        &c.sensor,
-        &c.render,
-        &s,
-        None,
-        &mut pixel_stream(2, 0, PixelPurpose::Photons),
-        &mut pixel_stream(2, 0, PixelPurpose::Noise),
-    );
+    let e = rendered(&c, &s, 2, 0);
     let total: u64 = e.electrons.iter().map(|&v| v as u64).sum();
-    assert_eq!(total, e.truth.rendered_debris_electrons);
+    assert_eq!(total, e.truth.seen.rendered_debris_electrons);
     let b = e.truth.label_box_px.unwrap();
     // The streak runs from x = 30 to 90 at y = 40; the box holds it with PSF margins.
     assert!(b.x_min <= 30.0 && b.x_max >= 89.5, "{b:?}");
@@ -138,14 +138,7 @@ fn star_centroid_lands_where_the_wcs_says() {
         8.0,
     );
     for i in 0..5 {
-        let e = render(
-            &c.sensor,
-            &c.render,
-            &s,
-            None,
-            &mut pixel_stream(3, i, PixelPurpose::Photons),
-            &mut pixel_stream(3, i, PixelPurpose::Noise),
-        );
+        let e = rendered(&c, &s, 3, i);
         let st = e.stars[0];
         let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
         for y in 0..128 {
@@ -326,6 +319,7 @@ fn noise_free(c: &Fixture, s: &Scene, jitter: &Jitter, runs: u64) -> Vec<Vec<u32
                 jitter,
                 &mut pixel_stream(11, i, PixelPurpose::Photons),
                 &mut pixel_stream(11, i, PixelPurpose::Noise),
+                None,
             )
             .electrons
         })

@@ -21,39 +21,16 @@ pub struct Truth {
     /// Mean pointing-jitter shift of every source over the exposure, pixels. The FITS WCS
     /// includes it (CRPIX is moved by it), as an astrometric fit of the image would.
     pub jitter_mean_px: [f64; 2],
-    /// Pixel coordinates of the debris at the first and last trajectory samples, jitter
-    /// included (may lie outside the image).
-    pub streak_start_px: [f64; 2],
-    pub streak_end_px: [f64; 2],
-    /// The (RA, Dec), degrees, that the image's FITS WCS gives at `streak_start_px` and
-    /// `streak_end_px`: what an astrometric measurement of the streak's ends reads. In survey
-    /// pointing they differ from the ephemeris' start and end (see [`SURVEY_COORDINATES`]).
-    pub streak_start_wcs_radec_deg: [f64; 2],
-    pub streak_end_wcs_radec_deg: [f64; 2],
+    #[serde(flatten)]
+    pub streak: StreakEnds,
     /// The label box of the debris as rendered, in the original image (None when no debris
     /// photon landed).
     pub label_box_px: Option<BoxPx>,
     /// The frame of the final PNG (original, padded or rotated) and the label box in it.
     pub frame: Option<Frame>,
     pub label_box_final_px: Option<BoxPx>,
-    pub magnitude: f64,
-    pub magnitude_min: f64,
-    pub magnitude_max: f64,
-    pub area_m2: f64,
-    pub range_km: f64,
-    pub phase_angle_deg: f64,
-    pub earth_angle_deg: f64,
-    pub sun_angle_deg: f64,
-    pub moon_angle_deg: f64,
-    pub tumble: Option<crate::scene::Tumble>,
-    pub expected_debris_electrons: f64,
-    pub rendered_debris_electrons: u64,
-    /// The signal-to-noise ratio the scene gate judged (`visibility.snr_definition`), and
-    /// both ratios: expected debris ADU per footprint pixel over the mean level of background
-    /// plus bias (the paper's) and over their standard deviation (`scene::expected_snr`).
-    pub snr: f64,
-    pub snr_noise_level: f64,
-    pub snr_noise_sigma: f64,
+    #[serde(flatten)]
+    pub seen: Seen,
     /// The streak's integrated matched-filter SNR, `sqrt(sum_i s_i^2 / sigma_i^2)` over pixels
     /// with shot noise (`render::expected::matched_filter_snr`): below ~7 it is hard to find.
     pub snr_matched_filter: f64,
@@ -84,6 +61,49 @@ pub struct Truth {
     /// A ground site's sky toward the boresight, V mag/arcsec^2 (dark sky, twilight, Moon).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sky_v_mag_per_arcsec2: Option<f64>,
+}
+
+/// Where an object's streak runs, in a [`Truth`] and an [`ObjectTruth`] (flattened: the
+/// sidecar's fields keep their names and order).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct StreakEnds {
+    /// Pixel coordinates of the debris at the first and last trajectory samples, jitter
+    /// included (may lie outside the image).
+    #[serde(rename = "streak_start_px")]
+    pub start_px: [f64; 2],
+    #[serde(rename = "streak_end_px")]
+    pub end_px: [f64; 2],
+    /// The (RA, Dec), degrees, that the image's FITS WCS gives at `start_px` and `end_px`:
+    /// what an astrometric measurement of the streak's ends reads. In survey pointing they
+    /// differ from the ephemeris' start and end (see [`SURVEY_COORDINATES`]).
+    #[serde(rename = "streak_start_wcs_radec_deg")]
+    pub start_wcs_radec_deg: [f64; 2],
+    #[serde(rename = "streak_end_wcs_radec_deg")]
+    pub end_wcs_radec_deg: [f64; 2],
+}
+
+/// How an object was seen, in a [`Truth`] and an [`ObjectTruth`] (flattened): its brightness,
+/// size, geometry and tumble at mid-exposure, its electrons and the gate's signal-to-noise.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Seen {
+    pub magnitude: f64,
+    pub magnitude_min: f64,
+    pub magnitude_max: f64,
+    pub area_m2: f64,
+    pub range_km: f64,
+    pub phase_angle_deg: f64,
+    pub earth_angle_deg: f64,
+    pub sun_angle_deg: f64,
+    pub moon_angle_deg: f64,
+    pub tumble: Option<crate::scene::Tumble>,
+    pub expected_debris_electrons: f64,
+    pub rendered_debris_electrons: u64,
+    /// The signal-to-noise ratio the scene gate judged (`visibility.snr_definition`), and
+    /// both ratios: expected debris ADU per footprint pixel over the mean level of background
+    /// plus bias (the paper's) and over their standard deviation (`scene::expected_snr`).
+    pub snr: f64,
+    pub snr_noise_level: f64,
+    pub snr_noise_sigma: f64,
 }
 
 /// The truth sidecar of an image of a campaign with `[objects]` (#34): the frame's fields of
@@ -150,27 +170,12 @@ pub struct ObjectTruth<'a> {
     /// (`scene::object_track_id`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub track_id: Option<u64>,
-    pub streak_start_px: [f64; 2],
-    pub streak_end_px: [f64; 2],
-    pub streak_start_wcs_radec_deg: [f64; 2],
-    pub streak_end_wcs_radec_deg: [f64; 2],
+    #[serde(flatten)]
+    pub streak: &'a StreakEnds,
     pub label_box_px: Option<BoxPx>,
     pub label_box_final_px: Option<BoxPx>,
-    pub magnitude: f64,
-    pub magnitude_min: f64,
-    pub magnitude_max: f64,
-    pub area_m2: f64,
-    pub range_km: f64,
-    pub phase_angle_deg: f64,
-    pub earth_angle_deg: f64,
-    pub sun_angle_deg: f64,
-    pub moon_angle_deg: f64,
-    pub tumble: Option<crate::scene::Tumble>,
-    pub expected_debris_electrons: f64,
-    pub rendered_debris_electrons: u64,
-    pub snr: f64,
-    pub snr_noise_level: f64,
-    pub snr_noise_sigma: f64,
+    #[serde(flatten)]
+    pub seen: &'a Seen,
     pub snr_matched_filter: f64,
     pub attempts: u32,
     pub rejections: &'a std::collections::BTreeMap<crate::scene::Rejection, u32>,
@@ -251,27 +256,10 @@ impl<'a> FrameTruth<'a> {
                     debris_index,
                     source,
                     track_id: t.collect.map(|k| k.track_id),
-                    streak_start_px: t.streak_start_px,
-                    streak_end_px: t.streak_end_px,
-                    streak_start_wcs_radec_deg: t.streak_start_wcs_radec_deg,
-                    streak_end_wcs_radec_deg: t.streak_end_wcs_radec_deg,
+                    streak: &t.streak,
                     label_box_px: t.label_box_px,
                     label_box_final_px: t.label_box_final_px,
-                    magnitude: t.magnitude,
-                    magnitude_min: t.magnitude_min,
-                    magnitude_max: t.magnitude_max,
-                    area_m2: t.area_m2,
-                    range_km: t.range_km,
-                    phase_angle_deg: t.phase_angle_deg,
-                    earth_angle_deg: t.earth_angle_deg,
-                    sun_angle_deg: t.sun_angle_deg,
-                    moon_angle_deg: t.moon_angle_deg,
-                    tumble: t.tumble,
-                    expected_debris_electrons: t.expected_debris_electrons,
-                    rendered_debris_electrons: t.rendered_debris_electrons,
-                    snr: t.snr,
-                    snr_noise_level: t.snr_noise_level,
-                    snr_noise_sigma: t.snr_noise_sigma,
+                    seen: &t.seen,
                     snr_matched_filter: t.snr_matched_filter,
                     attempts: t.attempts,
                     rejections: &t.rejections,

@@ -496,10 +496,15 @@ mod tests {
         let text = catalog_text();
         let lines: Vec<String> = text.lines().map(str::to_string).collect();
         let join = |l: &[String]| l.join("\n");
+        // The error of the catalogue with its line `k` (0-based) edited.
+        let error_after = |k: usize, edit: &dyn Fn(&mut String)| {
+            let mut edited = lines.clone();
+            edit(&mut edited[k]);
+            parse_tles(&join(&edited)).unwrap_err()
+        };
 
-        let mut bad = lines.clone();
-        bad[4].replace_range(68..69, "7"); // 40386 line 1, true checksum 6
-        let err = parse_tles(&join(&bad)).unwrap_err();
+        // 40386 line 1, true checksum 6.
+        let err = error_after(4, &|l| l.replace_range(68..69, "7"));
         assert_eq!(
             err,
             TleError::BadChecksum {
@@ -510,19 +515,17 @@ mod tests {
         );
         assert!(err.to_string().contains("line 5"), "{err}");
 
-        let mut short = lines.clone();
-        short[8].truncate(60);
         assert_eq!(
-            parse_tles(&join(&short)).unwrap_err(),
+            error_after(8, &|l| l.truncate(60)),
             TleError::BadLength {
                 line: 9,
                 length: 60
             }
         );
 
-        let mut mismatch = lines.clone();
-        mismatch[11] = with_checksum(&mismatch[11].replacen("41335", "41336", 1));
-        let err = parse_tles(&join(&mismatch)).unwrap_err();
+        let err = error_after(11, &|l| {
+            *l = with_checksum(&l.replacen("41335", "41336", 1))
+        });
         assert!(
             matches!(
                 err,
@@ -535,10 +538,8 @@ mod tests {
             "{err}"
         );
 
-        let mut marker = lines.clone();
-        marker[2] = with_checksum(&format!("3{}", &marker[2][1..]));
         assert_eq!(
-            parse_tles(&join(&marker)).unwrap_err(),
+            error_after(2, &|l| *l = with_checksum(&format!("3{}", &l[1..]))),
             TleError::BadLineNumber {
                 line: 3,
                 expected: '2',
@@ -546,9 +547,9 @@ mod tests {
             }
         );
 
-        let mut field = lines.clone();
-        field[5] = with_checksum(&field[5].replacen("50.6833", "50.6x33", 1));
-        let err = parse_tles(&join(&field)).unwrap_err();
+        let err = error_after(5, &|l| {
+            *l = with_checksum(&l.replacen("50.6833", "50.6x33", 1))
+        });
         assert!(
             matches!(
                 err,
@@ -563,10 +564,8 @@ mod tests {
             "{err}"
         );
 
-        let mut accented = lines.clone();
-        accented[13].replace_range(20..21, "é");
         assert_eq!(
-            parse_tles(&join(&accented)).unwrap_err(),
+            error_after(13, &|l| l.replace_range(20..21, "é")),
             TleError::NonAscii {
                 line: 14,
                 column: 21
