@@ -126,7 +126,7 @@ impl Seams {
 
 /// The mean of `z` at -1, 0 and 1 px across the line `c`, every pixel along it from end to end
 /// (the ends are in pixel-edge coordinates, `z`'s pixel centres at integers).
-fn profile(c: &Candidate, z: &[f32], w: usize, h: usize) -> Vec<f64> {
+pub(super) fn profile(c: &Candidate, z: &[f32], w: usize, h: usize) -> Vec<f64> {
     let [[x0, y0], [x1, y1]] = c.ends;
     let (x0, y0, x1, y1) = (x0 - 0.5, y0 - 0.5, x1 - 0.5, y1 - 0.5);
     let len = (x1 - x0).hypot(y1 - y0).max(1.0);

@@ -1,0 +1,153 @@
+//! A line along the frame's own trails cut at its seams (issue #44): a debris streak a few
+//! degrees off the trails meets a trail at one end, or both, and the pass follows the line on
+//! along that trail (overlapping it, or end to end). The joined line is then unevenly lit and
+//! dropped as two trails side by side, or boxed a trail's length too long. Where it joins, the
+//! profile along the line steps to the trail's level (brighter or fainter); the piece beyond
+//! the step, at most a trail long, is cut off, and what is left is judged on its own
+//! (`lone_line`).
+//!
+//! Measured on the development SatSim frames (`/tmp/wt-44/{h3,h4,d11,d12}`, 160 frames: seeds
+//! 3 and 4, 11, 12 `--near 0.6` of scripts/independent/satsim_frames.py) with
+//! `soig detect FRAMES --psf-fwhm-px 3.34` and a debugging print of each line's profile (not
+//! committed): the joined pieces were 0.9-1.4 trail lengths long, at 0.3-0.4 or 2.6-10 times
+//! the debris' level.
+
+use super::lone_line::profile;
+use super::output::{Candidate, confidence};
+use super::params::Sanitized;
+
+/// A piece cut off an end is at most this many trail lengths long (a trail overlapping the
+/// debris reaches at most one trail length beyond it; the trails' length, a median, is off by
+/// a tenth or two), and at least `MIN_PIECE` of one and `MIN_PIECE_PX` (a shorter piece's
+/// level is noise).
+const CUT_MAX: f64 = 1.25;
+const MIN_PIECE: f64 = 0.25;
+const MIN_PIECE_PX: usize = 12;
+/// What is left is at least this many trail lengths long: a single trail cut out of two side
+/// by side is no debris (its length is a trail's, within the median's error).
+const KEEP_MIN: f64 = 1.3;
+/// A cut is made where two levels fit the profile better than one by at least this, in the
+/// squared residuals over `CORR_PX` (as `lone_line`'s `EVEN_GAIN`: the smoothed map's noise is
+/// correlated over about 5 px), and the piece's level lies outside `LEVEL_LOW`-`LEVEL_HIGH`
+/// of the rest's (`lone_line`'s evenness band: a debris streak's own pieces stay inside it).
+const STEP_GAIN: f64 = 10.0;
+const CORR_PX: f64 = 5.0;
+const LEVEL_LOW: f64 = 0.75;
+const LEVEL_HIGH: f64 = 1.3;
+/// At most this many cuts: a trail at each end.
+const MAX_CUTS: usize = 2;
+
+/// The line `c` with the trails of length `trail_px` joined to its ends cut off, on the
+/// unit-noise map `z` (`w` x `h`), or None where no end steps to another level. The piece
+/// keeps the line's axis and its box's margins around the ends; its SNR is the line's scaled by
+/// the share of the light it keeps over the square root of the share of its length (a matched
+/// filter's, the noise even along the line).
+pub(super) fn cut(
+    c: &Candidate,
+    trail_px: f64,
+    z: &[f32],
+    (w, h): (usize, usize),
+    p: &Sanitized,
+) -> Option<Candidate> {
+    let prof = profile(c, z, w, h);
+    let n = prof.len();
+    if n == 0 || trail_px <= 0.0 {
+        return None;
+    }
+    let (mut a, mut b) = (0usize, n);
+    for _ in 0..MAX_CUTS {
+        match end_step(&prof[a..b], trail_px) {
+            Some(End::Start(k)) => a += k,
+            Some(End::Finish(k)) => b -= k,
+            None => break,
+        }
+    }
+    let kept = b - a;
+    if kept == n || (kept as f64) < KEEP_MIN * trail_px {
+        return None;
+    }
+    Some(piece(c, &prof, (a, b), (w * h) as f64, p))
+}
+
+/// Which end of a profile steps to another level, and how many samples beyond the step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum End {
+    Start(usize),
+    Finish(usize),
+}
+
+/// The end piece of `prof` (at most `CUT_MAX` trails of `trail_px`, at least `MIN_PIECE` of
+/// one and `MIN_PIECE_PX`) whose own level fits it best, where that beats one level by
+/// `STEP_GAIN` and the piece's level lies outside the rest's evenness band.
+fn end_step(prof: &[f64], trail_px: f64) -> Option<End> {
+    let n = prof.len();
+    let lo = ((MIN_PIECE * trail_px).ceil() as usize).max(MIN_PIECE_PX);
+    let hi = ((CUT_MAX * trail_px) as usize).min(n.saturating_sub(lo));
+    if lo > hi {
+        return None;
+    }
+    // Prefix sums of the values and their squares: the squared residuals about the mean of
+    // any span in constant time.
+    let (mut s, mut q) = (vec![0.0; n + 1], vec![0.0; n + 1]);
+    for (i, v) in prof.iter().enumerate() {
+        s[i + 1] = s[i] + v;
+        q[i + 1] = q[i] + v * v;
+    }
+    let sse = |i: usize, j: usize| {
+        let m = (j - i) as f64;
+        q[j] - q[i] - (s[j] - s[i]).powi(2) / m
+    };
+    let mean = |i: usize, j: usize| (s[j] - s[i]) / (j - i) as f64;
+    let one = sse(0, n);
+    let mut best: Option<(f64, End)> = None;
+    for k in lo..=hi {
+        for (end, (pa, pb), (ra, rb)) in [
+            (End::Start(k), (0, k), (k, n)),
+            (End::Finish(k), (n - k, n), (0, n - k)),
+        ] {
+            let gain = (one - sse(pa, pb) - sse(ra, rb)) / CORR_PX;
+            let rest = mean(ra, rb);
+            let ratio = mean(pa, pb) / rest;
+            let stepped = rest > 0.0 && !(LEVEL_LOW..=LEVEL_HIGH).contains(&ratio);
+            if gain >= STEP_GAIN && stepped && best.is_none_or(|b| gain > b.0) {
+                best = Some((gain, end));
+            }
+        }
+    }
+    best.map(|b| b.1)
+}
+
+/// The samples `a..b` of the line `c` (profile `prof`) as a candidate of their own, scored
+/// as the pass scores (`confidence`) in an image of `area` pixels.
+fn piece(c: &Candidate, prof: &[f64], (a, b): (usize, usize), area: f64, p: &Sanitized) -> Candidate {
+    let n = prof.len() as f64;
+    let [[x0, y0], [x1, y1]] = c.ends;
+    let len = (x1 - x0).hypot(y1 - y0).max(1.0);
+    let (ux, uy) = ((x1 - x0) / len, (y1 - y0) / len);
+    // Sample i lies i + 0.5 px from the first end; the piece spans its samples' pixels.
+    let at = |t: f64| [x0 + t * ux, y0 + t * uy];
+    let ends = [at(a as f64), at(b as f64)];
+    // The box keeps its margins beyond the ends, per axis.
+    let d = &c.detection;
+    let pad_x = 0.5 * ((d.x2 - d.x1) - (x1 - x0).abs()).max(0.0);
+    let pad_y = 0.5 * ((d.y2 - d.y1) - (y1 - y0).abs()).max(0.0);
+    let mut out = *c;
+    out.detection.x1 = (ends[0][0].min(ends[1][0]) - pad_x).max(d.x1);
+    out.detection.x2 = (ends[0][0].max(ends[1][0]) + pad_x).min(d.x2);
+    out.detection.y1 = (ends[0][1].min(ends[1][1]) - pad_y).max(d.y1);
+    out.detection.y2 = (ends[0][1].max(ends[1][1]) + pad_y).min(d.y2);
+    out.ends = ends;
+    let share = (b - a) as f64 / n;
+    out.length_px = c.length_px * share;
+    out.elongation = c.elongation * share;
+    let total: f64 = prof.iter().sum();
+    let light = if total > 0.0 {
+        (prof[a..b].iter().sum::<f64>() / total).max(0.0)
+    } else {
+        share
+    };
+    out.flux = c.flux * light;
+    out.snr = c.snr * light / share.sqrt();
+    out.detection.score = confidence(out.snr, out.elongation, area, p);
+    out
+}
