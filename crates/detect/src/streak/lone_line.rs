@@ -18,6 +18,7 @@
 //! thresholds sit between the two groups, some with little room (`EVEN_GAIN`, `PAIR_HIGH`).
 
 use super::output::Candidate;
+use super::seam_cut::crossing;
 use super::stats::median_of;
 use soig_image::imaging::bilinear;
 
@@ -75,6 +76,10 @@ pub(super) struct Seams {
     pub high: f64,
     pub gain: f64,
     pub inside: bool,
+    /// `low` and `high` without the light of a trail crossing the line, where the line is
+    /// longer than `PAIR_LONGEST` (no two trails side by side make it) and one crosses it
+    /// (`seam_cut::crossing`); else `low` and `high`.
+    pub crossed: (f64, f64),
 }
 
 impl Seams {
@@ -89,19 +94,33 @@ impl Seams {
         let prof = profile(c, z, w, h);
         let level = median_of(&mut prof.clone());
         let (low, high) = pieces(&prof, trail_px, level);
+        let ratio = c.length_px / trail_px;
+        let crossed = match crossing(&prof, trail_px) {
+            Some((i, j)) if ratio > PAIR_LONGEST => {
+                let rest: Vec<f64> = prof[..i].iter().chain(&prof[j..]).copied().collect();
+                pieces(&rest, trail_px, median_of(&mut rest.clone()))
+            }
+            _ => (low, high),
+        };
         Seams {
-            ratio: c.length_px / trail_px,
+            ratio,
             level,
             low,
             high,
             gain: one_line_gain(&prof, trail_px),
             inside,
+            crossed,
         }
     }
 
     /// Evenly lit: every piece within `PIECE_LOW`-`high` of the level.
     fn even(&self, high: f64) -> bool {
         self.level > 0.0 && self.low >= PIECE_LOW && self.high <= high
+    }
+
+    /// Evenly lit but where a trail crosses it (`crossed`).
+    fn even_crossed(&self, high: f64) -> bool {
+        self.level > 0.0 && self.crossed.0 >= PIECE_LOW && self.crossed.1 <= high
     }
 
     /// A line along the trails that is no star's: `LONGER` trail lengths or more, inside the
@@ -116,10 +135,10 @@ impl Seams {
 
     /// A line a few degrees off the trails that two of them side by side make: unevenly lit
     /// (each trail crosses the line's axis at a slant, so its light leaves the axis towards
-    /// its ends), or, longer than a trail but not than `PAIR_LONGEST`, fitted as well by two
+    /// its ends; but for one trail crossing a line too long to be two), or, longer than a trail but not than `PAIR_LONGEST`, fitted as well by two
     /// trails from its ends.
     pub(super) fn pair(&self) -> bool {
-        !self.even(PAIR_HIGH)
+        !self.even_crossed(PAIR_HIGH)
             || (self.ratio > 1.0 && self.ratio <= PAIR_LONGEST && self.gain < EVEN_GAIN)
     }
 }

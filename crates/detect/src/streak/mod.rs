@@ -269,6 +269,7 @@ fn along_own_trails(
     let along = Sanitized {
         along: Some(trail),
         max_candidates: p.max_candidates.max(ALL_LINES),
+        quiet_side: true,
         ..p.clone()
     };
     let (second, dropped2) = pass(pixels, w, h, &along, bg, z.clone(), Some(trail), Some(&[]));

@@ -86,13 +86,7 @@ fn end_step(prof: &[f64], trail_px: f64) -> Option<End> {
     if lo > hi {
         return None;
     }
-    // Prefix sums of the values and their squares: the squared residuals about the mean of
-    // any span in constant time.
-    let (mut s, mut q) = (vec![0.0; n + 1], vec![0.0; n + 1]);
-    for (i, v) in prof.iter().enumerate() {
-        s[i + 1] = s[i] + v;
-        q[i + 1] = q[i] + v * v;
-    }
+    let (s, q) = prefix_sums(prof);
     let sse = |i: usize, j: usize| {
         let m = (j - i) as f64;
         q[j] - q[i] - (s[j] - s[i]).powi(2) / m
@@ -115,6 +109,49 @@ fn end_step(prof: &[f64], trail_px: f64) -> Option<End> {
         }
     }
     best.map(|b| b.1)
+}
+
+/// The interior run of `prof` that a trail crossing the line lights, where one does: at most
+/// `CUT_MAX` trails of `trail_px` long, at least `MIN_PIECE` of one and `MIN_PIECE_PX`, and as
+/// far from either end; brighter than `LEVEL_HIGH` times the rest, fitted better so than by one
+/// level by `STEP_GAIN` (the best fitting such run).
+pub(super) fn crossing(prof: &[f64], trail_px: f64) -> Option<(usize, usize)> {
+    let n = prof.len();
+    let lo = ((MIN_PIECE * trail_px).ceil() as usize).max(MIN_PIECE_PX);
+    let hi = (CUT_MAX * trail_px) as usize;
+    if n < 2 * lo + lo.max(1) || lo > hi {
+        return None;
+    }
+    let (s, q) = prefix_sums(prof);
+    let sum = |i: usize, j: usize| s[j] - s[i];
+    let one = q[n] - s[n] * s[n] / n as f64;
+    let mut best: Option<(f64, (usize, usize))> = None;
+    for i in lo..n - 2 * lo {
+        for j in (i + lo)..=(i + hi).min(n - lo) {
+            let (m_in, m_out) = ((j - i) as f64, (n - j + i) as f64);
+            let (s_in, s_out) = (sum(i, j), s[n] - sum(i, j));
+            let (q_in, q_out) = (q[j] - q[i], q[n] - q[j] + q[i]);
+            let two = q_in - s_in * s_in / m_in + q_out - s_out * s_out / m_out;
+            let gain = (one - two) / CORR_PX;
+            let rest = s_out / m_out;
+            let bright = rest > 0.0 && s_in / m_in > LEVEL_HIGH * rest;
+            if bright && gain >= STEP_GAIN && best.is_none_or(|b| gain > b.0) {
+                best = Some((gain, (i, j)));
+            }
+        }
+    }
+    best.map(|b| b.1)
+}
+
+/// Prefix sums of `v` and of its squares (the squared residuals about the mean of any span in
+/// constant time).
+fn prefix_sums(v: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let (mut s, mut q) = (vec![0.0; v.len() + 1], vec![0.0; v.len() + 1]);
+    for (i, x) in v.iter().enumerate() {
+        s[i + 1] = s[i] + x;
+        q[i + 1] = q[i] + x * x;
+    }
+    (s, q)
 }
 
 /// The samples `a..b` of the line `c` (profile `prof`) as a candidate of their own, scored
