@@ -272,12 +272,7 @@ fn along_own_trails(
         quiet_side: true,
         ..p.clone()
     };
-    let (second, dropped2) = pass(pixels, w, h, &along, bg, z.clone(), Some(trail), Some(&[]));
-    if std::env::var_os("SOIG_DEBUG_OWN").is_some() {
-        for d in &dropped2 {
-            eprintln!("DROP2 {:?}", d);
-        }
-    }
+    let second = pass(pixels, w, h, &along, bg, z.clone(), Some(trail), Some(&[])).0;
     m.settle(&second);
     // Within a degree of the trails a line is debris where its length and profile say that no
     // trail, nor two end to end, explains it; a few degrees off them, where two trails side by
@@ -292,18 +287,6 @@ fn along_own_trails(
     let trail_px = trail_length(&along);
     // A line's seams are read only where a rule asks for them (a profile along it each).
     let seams = |c: &Candidate| trail_px.map(|t| Seams::of(c, t, &z, w, h));
-    if std::env::var_os("SOIG_DEBUG_OWN").is_some() {
-        eprintln!("DBGT {:?} {:.3}", trail_px, m.angle_deg);
-        for c in &second {
-            let d = (c.orientation_deg - m.angle_deg + 90.0).rem_euclid(180.0) - 90.0;
-            eprintln!("DBG2 {:.2} {:.0} {:.1} {:.3} {:?} 0 {} {:?}", d, c.length_px, c.snr, c.detection.score, c.ends, m.explains(c, p.psf_sigma), seams(c));
-            if let Some(t) = trail_px { if let Some(k) = seam_cut::cut(c, t, &z, (w, h), p) { eprintln!("CUT {:.0} {:.1} {:.3} {:?} {:?}", k.length_px, k.snr, k.detection.score, k.ends, seams(&k)); } }
-        }
-        for c in &first {
-            let d = (c.orientation_deg - m.angle_deg + 90.0).rem_euclid(180.0) - 90.0;
-            eprintln!("DBG1 {:.2} {:.0} {:.1} {:.3} {:?}", d, c.length_px, c.snr, c.detection.score, c.ends);
-        }
-    }
     // A few degrees off the trails, a line joined to a trail at an end is first cut at the
     // seam (`seam_cut`) and judged as what is left. (Not along them: there the lone rule's
     // two trails are fitted from the line's own ends, which a cut would move; a line of two
