@@ -97,6 +97,9 @@ impl Seams {
         let ratio = c.length_px / trail_px;
         let crossed = match crossing(&prof, trail_px) {
             Some((i, j)) if ratio > PAIR_LONGEST => {
+                // With its shoulders, where its light leaves the axis (half as long again).
+                let pad = (j - i) / 4;
+                let (i, j) = (i.saturating_sub(pad), (j + pad).min(prof.len()));
                 let rest: Vec<f64> = prof[..i].iter().chain(&prof[j..]).copied().collect();
                 pieces(&rest, trail_px, median_of(&mut rest.clone()))
             }
@@ -225,15 +228,15 @@ fn one_line_gain(prof: &[f64], trail_px: f64) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     /// A segment from (x0, y0) to (x1, y1), x0 < x1, and its level.
-    type Drawn = ((usize, f64), (usize, f64), f32);
+    pub(in crate::streak) type Drawn = ((usize, f64), (usize, f64), f32);
 
     /// A noise-free map of `w` x `h` with the given segments, 3 px wide (levels add where two
     /// overlap).
-    fn map(w: usize, h: usize, segs: &[Drawn]) -> Vec<f32> {
+    pub(in crate::streak) fn map(w: usize, h: usize, segs: &[Drawn]) -> Vec<f32> {
         let mut z = vec![0f32; w * h];
         for &((x0, y0), (x1, y1), level) in segs {
             for x in x0..x1 {
@@ -247,7 +250,7 @@ mod tests {
     }
 
     /// A horizontal segment on row `row`, x from `a` to `b`.
-    fn flat(a: usize, b: usize, row: f64, level: f32) -> Drawn {
+    pub(in crate::streak) fn flat(a: usize, b: usize, row: f64, level: f32) -> Drawn {
         ((a, row), (b, row), level)
     }
 
@@ -255,7 +258,7 @@ mod tests {
         Seams::of(c, trail_px, z, w, h).lone()
     }
 
-    fn line(x0: f64, x1: f64, row: f64) -> Candidate {
+    pub(in crate::streak) fn line(x0: f64, x1: f64, row: f64) -> Candidate {
         Candidate {
             detection: crate::Detection {
                 x1: x0,
@@ -334,6 +337,26 @@ mod tests {
         // Nor when shorter than a trail (the two trails' fit is then one even line).
         let z = map(400, 40, &[flat(50, 130, 20.0, 6.0)]);
         assert!(!Seams::of(&line(50.0, 130.0, 20.0), 100.0, &z, 400, 40).pair());
+    }
+
+    #[test]
+    fn a_trail_crossing_a_long_line_leaves_it_no_pair() {
+        // Debris of four trail lengths, 3 px wide, crossed by a trail of 100 px at 4 degrees
+        // (a bump of its light on the axis): evenly lit but for it, so no pair.
+        let crossed = |a: usize, b: usize| {
+            map(
+                600,
+                40,
+                &[flat(a, b, 20.0, 4.0), ((250, 16.5), (350, 23.5), 8.0)],
+            )
+        };
+        let z = crossed(50, 450);
+        let s = Seams::of(&line(50.0, 450.0, 20.0), 100.0, &z, 600, 40);
+        assert!(s.high > PAIR_HIGH && s.crossed.1 <= PAIR_HIGH, "{s:?}");
+        assert!(!s.pair(), "{s:?}");
+        // Two trail lengths long, it may be two trails side by side: the bump still counts.
+        let z = crossed(200, 400);
+        assert!(Seams::of(&line(200.0, 400.0, 20.0), 100.0, &z, 600, 40).pair());
     }
 
     #[test]

@@ -34,8 +34,6 @@ const STEP_GAIN: f64 = 10.0;
 const CORR_PX: f64 = 5.0;
 const LEVEL_LOW: f64 = 0.75;
 const LEVEL_HIGH: f64 = 1.3;
-/// At most this many cuts: a trail at each end.
-const MAX_CUTS: usize = 2;
 
 /// The line `c` with the trails of length `trail_px` joined to its ends cut off, on the
 /// unit-noise map `z` (`w` x `h`), or None where no end steps to another level. The piece
@@ -54,9 +52,10 @@ pub(super) fn cut(
     if n == 0 || trail_px <= 0.0 {
         return None;
     }
+    // One cut at each end at most (a trail joins an end once).
     let (mut a, mut b) = (0usize, n);
-    for _ in 0..MAX_CUTS {
-        match end_step(&prof[a..b], trail_px) {
+    for _ in 0..2 {
+        match end_step(&prof[a..b], trail_px, (a == 0, b == n)) {
             Some(End::Start(k)) => a += k,
             Some(End::Finish(k)) => b -= k,
             None => break,
@@ -78,8 +77,9 @@ enum End {
 
 /// The end piece of `prof` (at most `CUT_MAX` trails of `trail_px`, at least `MIN_PIECE` of
 /// one and `MIN_PIECE_PX`) whose own level fits it best, where that beats one level by
-/// `STEP_GAIN` and the piece's level lies outside the rest's evenness band.
-fn end_step(prof: &[f64], trail_px: f64) -> Option<End> {
+/// `STEP_GAIN` and the piece's level lies outside the rest's evenness band; at the `start`
+/// and `finish` ends where asked.
+fn end_step(prof: &[f64], trail_px: f64, (start, finish): (bool, bool)) -> Option<End> {
     let n = prof.len();
     let lo = ((MIN_PIECE * trail_px).ceil() as usize).max(MIN_PIECE_PX);
     let hi = ((CUT_MAX * trail_px) as usize).min(n.saturating_sub(lo));
@@ -95,10 +95,11 @@ fn end_step(prof: &[f64], trail_px: f64) -> Option<End> {
     let one = sse(0, n);
     let mut best: Option<(f64, End)> = None;
     for k in lo..=hi {
-        for (end, (pa, pb), (ra, rb)) in [
-            (End::Start(k), (0, k), (k, n)),
-            (End::Finish(k), (n - k, n), (0, n - k)),
-        ] {
+        let ends = [
+            (start, End::Start(k), (0, k), (k, n)),
+            (finish, End::Finish(k), (n - k, n), (0, n - k)),
+        ];
+        for (_, end, (pa, pb), (ra, rb)) in ends.into_iter().filter(|e| e.0) {
             let gain = (one - sse(pa, pb) - sse(ra, rb)) / CORR_PX;
             let rest = mean(ra, rb);
             let ratio = mean(pa, pb) / rest;
@@ -187,4 +188,82 @@ fn piece(c: &Candidate, prof: &[f64], (a, b): (usize, usize), area: f64, p: &San
     out.snr = c.snr * light / share.sqrt();
     out.detection.score = confidence(out.snr, out.elongation, area, p);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::lone_line::tests::{flat, line, map};
+    use super::super::params::StreakParams;
+    use super::*;
+
+    fn cut_of(c: &Candidate, z: &[f32]) -> Option<Candidate> {
+        cut(c, 80.0, z, (500, 40), &Sanitized::new(&StreakParams::default()))
+    }
+
+    /// Where the line's piece begins and ends along x.
+    fn span(c: &Candidate) -> (f64, f64) {
+        let x = [c.ends[0][0], c.ends[1][0]];
+        (x[0].min(x[1]), x[0].max(x[1]))
+    }
+
+    #[test]
+    fn a_trail_joined_to_an_end_is_cut_off() {
+        // Debris of 250 px (level 2) and a trail of 80 px beyond it, brighter or fainter.
+        for level in [6.0, 0.6] {
+            let z = map(500, 40, &[flat(50, 300, 20.0, 2.0), flat(300, 380, 20.0, level)]);
+            let c = cut_of(&line(50.0, 380.0, 20.0), &z).expect("cut");
+            let (a, b) = span(&c);
+            assert!((a - 50.0).abs() <= 1.0 && (b - 300.0).abs() <= 3.0, "{level}: {a} {b}");
+            assert!((c.length_px - 250.0).abs() <= 3.0, "{}", c.length_px);
+            // The box shrinks with it.
+            assert!(c.detection.x2 <= 300.0 + 4.0, "{:?}", c.detection);
+        }
+        // A trail at each end: both cut.
+        let z = map(
+            500,
+            40,
+            &[
+                flat(20, 90, 20.0, 5.0),
+                flat(90, 350, 20.0, 2.0),
+                flat(350, 420, 20.0, 4.0),
+            ],
+        );
+        let (a, b) = span(&cut_of(&line(20.0, 420.0, 20.0), &z).expect("cut"));
+        assert!((a - 90.0).abs() <= 3.0 && (b - 350.0).abs() <= 3.0, "{a} {b}");
+    }
+
+    #[test]
+    fn an_even_line_or_a_trail_and_a_trail_are_not_cut() {
+        // Evenly lit: no step.
+        let z = map(500, 40, &[flat(50, 380, 20.0, 2.0)]);
+        assert!(cut_of(&line(50.0, 380.0, 20.0), &z).is_none());
+        // A step of less than the evenness band (1.2 times) is none.
+        let z = map(500, 40, &[flat(50, 300, 20.0, 2.0), flat(300, 380, 20.0, 2.4)]);
+        assert!(cut_of(&line(50.0, 380.0, 20.0), &z).is_none());
+        // Two trails end to end: what a cut leaves is a trail (under `KEEP_MIN` of one).
+        let z = map(500, 40, &[flat(50, 130, 20.0, 5.0), flat(130, 210, 20.0, 2.0)]);
+        assert!(cut_of(&line(50.0, 210.0, 20.0), &z).is_none());
+        // Of a brighter piece longer than `CUT_MAX` trails, at most that is cut.
+        let z = map(500, 40, &[flat(50, 250, 20.0, 2.0), flat(250, 380, 20.0, 6.0)]);
+        let c = cut_of(&line(50.0, 380.0, 20.0), &z);
+        assert!(c.is_none_or(|c| span(&c).1 >= 380.0 - CUT_MAX * 80.0 - 1.0), "{c:?}");
+    }
+
+    #[test]
+    fn a_crossing_is_a_bright_run_inside_the_line() {
+        let mut prof = vec![2.0; 400];
+        prof[200..260].iter_mut().for_each(|v| *v = 6.0);
+        let (i, j) = crossing(&prof, 80.0).expect("crossing");
+        assert!(i.abs_diff(200) <= 1 && j.abs_diff(260) <= 1, "{i} {j}");
+        // Not at an end (a joined trail, `cut`), nor longer than a trail, nor faint.
+        let mut end = vec![2.0; 400];
+        end[390..].iter_mut().for_each(|v| *v = 6.0);
+        assert_eq!(crossing(&end, 80.0), None);
+        let mut long = vec![2.0; 400];
+        long[100..300].iter_mut().for_each(|v| *v = 6.0);
+        assert!(crossing(&long, 80.0).is_none_or(|(i, j)| j - i <= 100));
+        let mut faint = vec![2.0; 400];
+        faint[200..260].iter_mut().for_each(|v| *v = 2.4);
+        assert_eq!(crossing(&faint, 80.0), None);
+    }
 }
