@@ -146,10 +146,13 @@ pub(super) fn gap(maps: &Maps, s: &Seg) -> Option<Gap> {
     })
 }
 
+/// Contrast taps: (lateral offset, weight).
+type Taps = Vec<(f64, f64)>;
+
 /// The contrast taps `taps` (the profile sample's, then the side bands') with one side band
 /// each: the taps beyond the streak on the positive side, weighted twice, and on the negative.
-fn one_sided(taps: &[(f64, f64)]) -> (Vec<(f64, f64)>, Vec<(f64, f64)>) {
-    let side = |positive: bool| -> Vec<(f64, f64)> {
+fn one_sided(taps: &[(f64, f64)]) -> (Taps, Taps) {
+    let side = |positive: bool| -> Taps {
         taps.iter()
             .filter_map(|&(u, a)| match (a > 0.0, (u > 0.0) == positive) {
                 (true, _) => Some((u, a)),
