@@ -89,6 +89,19 @@ pub(super) fn gap(maps: &Maps, s: &Seg) -> Option<Gap> {
     let (ux, uy) = s.dir();
     let (nx, ny) = (-uy, ux);
     let taps = maps.contrast_taps();
+    // Along the frame's own trails nothing is subtracted, and a bright trail beside a faint
+    // streak (13 px off, in one side band) or crossing it at a few degrees (in a side band over
+    // tens of pixels) made a gap of it; so there each sample's contrast is read against its
+    // quieter side (two development SatSim streaks, 2.7 and 5.4 degrees off, SNR 23-38).
+    let (plus, minus) = one_sided(&taps);
+    let contrast = |x: f64, y: f64| {
+        if maps.p.quiet_side {
+            let c = |t: &[(f64, f64)]| maps.contrast(t, x, y, nx, ny);
+            c(&plus).max(c(&minus))
+        } else {
+            maps.contrast(&taps, x, y, nx, ny)
+        }
+    };
     // Samples under a subtracted star trail are left out: a streak crossing a bright trail
     // shows less there (the 8-bit stretch), which is no gap (a debris streak 5 degrees off
     // the trails, SNR 200, crossed one over 1/8 of its length and was dropped).
@@ -105,7 +118,7 @@ pub(super) fn gap(maps: &Maps, s: &Seg) -> Option<Gap> {
     let vals: Vec<f64> = s
         .axis_points()
         .filter(|&(x, y)| !under(x, y))
-        .map(|(x, y)| maps.contrast(&taps, x, y, nx, ny))
+        .map(|(x, y)| contrast(x, y))
         .collect();
     let n = vals.len();
     if n < 4 {
@@ -122,7 +135,8 @@ pub(super) fn gap(maps: &Maps, s: &Seg) -> Option<Gap> {
         let (a, b) = (c * n / k, (c + 1) * n / k);
         let m = (b - a) as f64;
         let mean = vals[a..b].iter().sum::<f64>() / m;
-        let sd = maps.contrast_sum_sd(&taps, s.theta, b - a) / m;
+        let used = if maps.p.quiet_side { &plus } else { &taps };
+        let sd = maps.contrast_sum_sd(used, s.theta, b - a) / m;
         (mean < GAP_LEVEL * level && level - mean > GAP_SIGMA * sd).then_some(Gap {
             chunk: c,
             chunks: k,
@@ -130,4 +144,22 @@ pub(super) fn gap(maps: &Maps, s: &Seg) -> Option<Gap> {
             sigma: (level - mean) / sd,
         })
     })
+}
+
+/// Contrast taps: (lateral offset, weight).
+type Taps = Vec<(f64, f64)>;
+
+/// The contrast taps `taps` (the profile sample's, then the side bands') with one side band
+/// each: the taps beyond the streak on the positive side, weighted twice, and on the negative.
+fn one_sided(taps: &[(f64, f64)]) -> (Taps, Taps) {
+    let side = |positive: bool| -> Taps {
+        taps.iter()
+            .filter_map(|&(u, a)| match (a > 0.0, (u > 0.0) == positive) {
+                (true, _) => Some((u, a)),
+                (false, true) => Some((u, 2.0 * a)),
+                (false, false) => None,
+            })
+            .collect()
+    };
+    (side(true), side(false))
 }

@@ -18,6 +18,7 @@
 //! thresholds sit between the two groups, some with little room (`EVEN_GAIN`, `PAIR_HIGH`).
 
 use super::output::Candidate;
+use super::seam_cut::crossing;
 use super::stats::median_of;
 use soig_image::imaging::bilinear;
 
@@ -75,6 +76,10 @@ pub(super) struct Seams {
     pub high: f64,
     pub gain: f64,
     pub inside: bool,
+    /// `low` and `high` without the light of a trail crossing the line, where the line is
+    /// longer than `PAIR_LONGEST` (no two trails side by side make it) and one crosses it
+    /// (`seam_cut::crossing`); else `low` and `high`.
+    pub crossed: (f64, f64),
 }
 
 impl Seams {
@@ -89,19 +94,36 @@ impl Seams {
         let prof = profile(c, z, w, h);
         let level = median_of(&mut prof.clone());
         let (low, high) = pieces(&prof, trail_px, level);
+        let ratio = c.length_px / trail_px;
+        let crossed = match crossing(&prof, trail_px) {
+            Some((i, j)) if ratio > PAIR_LONGEST => {
+                // With its shoulders, where its light leaves the axis (half as long again).
+                let pad = (j - i) / 4;
+                let (i, j) = (i.saturating_sub(pad), (j + pad).min(prof.len()));
+                let rest: Vec<f64> = prof[..i].iter().chain(&prof[j..]).copied().collect();
+                pieces(&rest, trail_px, median_of(&mut rest.clone()))
+            }
+            _ => (low, high),
+        };
         Seams {
-            ratio: c.length_px / trail_px,
+            ratio,
             level,
             low,
             high,
             gain: one_line_gain(&prof, trail_px),
             inside,
+            crossed,
         }
     }
 
     /// Evenly lit: every piece within `PIECE_LOW`-`high` of the level.
     fn even(&self, high: f64) -> bool {
         self.level > 0.0 && self.low >= PIECE_LOW && self.high <= high
+    }
+
+    /// Evenly lit but where a trail crosses it (`crossed`).
+    fn even_crossed(&self, high: f64) -> bool {
+        self.level > 0.0 && self.crossed.0 >= PIECE_LOW && self.crossed.1 <= high
     }
 
     /// A line along the trails that is no star's: `LONGER` trail lengths or more, inside the
@@ -116,17 +138,17 @@ impl Seams {
 
     /// A line a few degrees off the trails that two of them side by side make: unevenly lit
     /// (each trail crosses the line's axis at a slant, so its light leaves the axis towards
-    /// its ends), or, longer than a trail but not than `PAIR_LONGEST`, fitted as well by two
+    /// its ends; but for one trail crossing a line too long to be two), or, longer than a trail but not than `PAIR_LONGEST`, fitted as well by two
     /// trails from its ends.
     pub(super) fn pair(&self) -> bool {
-        !self.even(PAIR_HIGH)
+        !self.even_crossed(PAIR_HIGH)
             || (self.ratio > 1.0 && self.ratio <= PAIR_LONGEST && self.gain < EVEN_GAIN)
     }
 }
 
 /// The mean of `z` at -1, 0 and 1 px across the line `c`, every pixel along it from end to end
 /// (the ends are in pixel-edge coordinates, `z`'s pixel centres at integers).
-fn profile(c: &Candidate, z: &[f32], w: usize, h: usize) -> Vec<f64> {
+pub(super) fn profile(c: &Candidate, z: &[f32], w: usize, h: usize) -> Vec<f64> {
     let [[x0, y0], [x1, y1]] = c.ends;
     let (x0, y0, x1, y1) = (x0 - 0.5, y0 - 0.5, x1 - 0.5, y1 - 0.5);
     let len = (x1 - x0).hypot(y1 - y0).max(1.0);
@@ -206,15 +228,15 @@ fn one_line_gain(prof: &[f64], trail_px: f64) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     /// A segment from (x0, y0) to (x1, y1), x0 < x1, and its level.
-    type Drawn = ((usize, f64), (usize, f64), f32);
+    pub(in crate::streak) type Drawn = ((usize, f64), (usize, f64), f32);
 
     /// A noise-free map of `w` x `h` with the given segments, 3 px wide (levels add where two
     /// overlap).
-    fn map(w: usize, h: usize, segs: &[Drawn]) -> Vec<f32> {
+    pub(in crate::streak) fn map(w: usize, h: usize, segs: &[Drawn]) -> Vec<f32> {
         let mut z = vec![0f32; w * h];
         for &((x0, y0), (x1, y1), level) in segs {
             for x in x0..x1 {
@@ -228,7 +250,7 @@ mod tests {
     }
 
     /// A horizontal segment on row `row`, x from `a` to `b`.
-    fn flat(a: usize, b: usize, row: f64, level: f32) -> Drawn {
+    pub(in crate::streak) fn flat(a: usize, b: usize, row: f64, level: f32) -> Drawn {
         ((a, row), (b, row), level)
     }
 
@@ -236,7 +258,7 @@ mod tests {
         Seams::of(c, trail_px, z, w, h).lone()
     }
 
-    fn line(x0: f64, x1: f64, row: f64) -> Candidate {
+    pub(in crate::streak) fn line(x0: f64, x1: f64, row: f64) -> Candidate {
         Candidate {
             detection: crate::Detection {
                 x1: x0,
@@ -315,6 +337,26 @@ mod tests {
         // Nor when shorter than a trail (the two trails' fit is then one even line).
         let z = map(400, 40, &[flat(50, 130, 20.0, 6.0)]);
         assert!(!Seams::of(&line(50.0, 130.0, 20.0), 100.0, &z, 400, 40).pair());
+    }
+
+    #[test]
+    fn a_trail_crossing_a_long_line_leaves_it_no_pair() {
+        // Debris of four trail lengths, 3 px wide, crossed by a trail of 100 px at 4 degrees
+        // (a bump of its light on the axis): evenly lit but for it, so no pair.
+        let crossed = |a: usize, b: usize| {
+            map(
+                600,
+                40,
+                &[flat(a, b, 20.0, 4.0), ((250, 16.5), (350, 23.5), 8.0)],
+            )
+        };
+        let z = crossed(50, 450);
+        let s = Seams::of(&line(50.0, 450.0, 20.0), 100.0, &z, 600, 40);
+        assert!(s.high > PAIR_HIGH && s.crossed.1 <= PAIR_HIGH, "{s:?}");
+        assert!(!s.pair(), "{s:?}");
+        // Two trail lengths long, it may be two trails side by side: the bump still counts.
+        let z = crossed(200, 400);
+        assert!(Seams::of(&line(200.0, 400.0, 20.0), 100.0, &z, 600, 40).pair());
     }
 
     #[test]

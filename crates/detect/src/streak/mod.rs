@@ -124,6 +124,7 @@ mod radon;
 mod reach;
 mod refine;
 mod runs;
+mod seam_cut;
 mod seeds;
 mod segment;
 mod sky;
@@ -275,6 +276,7 @@ fn along_own_trails(
     let along = Sanitized {
         along: Some(trail),
         max_candidates: p.max_candidates.max(ALL_LINES),
+        quiet_side: true,
         ..p.clone()
     };
     let second = pass(pixels, w, h, &along, bg, z.clone(), Some(trail), Some(&[])).0;
@@ -292,15 +294,26 @@ fn along_own_trails(
     let trail_px = trail_length(&along);
     // A line's seams are read only where a rule asks for them (a profile along it each).
     let seams = |c: &Candidate| trail_px.map(|t| Seams::of(c, t, &z, w, h));
+    // A few degrees off the trails, a line joined to a trail at an end is first cut at the
+    // seam (`seam_cut`) and judged as what is left. (Not along them: there the lone rule's
+    // two trails are fitted from the line's own ends, which a cut would move; a line of two
+    // trails end to end, cut by 21 px, then passed it.)
+    let near = |c: &Candidate| angle_diff_deg(c.orientation_deg, m.angle_deg) <= NEAR_DEG;
     let debris = second
         .into_iter()
         .zip(star)
+        .map(|(c, star)| {
+            let piece = match trail_px {
+                Some(t) if !star && near(&c) => seam_cut::cut(&c, t, &z, (w, h), p).unwrap_or(c),
+                _ => c,
+            };
+            (piece, star)
+        })
         .filter(|(c, star)| {
             if *star {
                 seams(c).is_some_and(|s| s.lone())
             } else {
-                let d = angle_diff_deg(c.orientation_deg, m.angle_deg);
-                d > NEAR_DEG || !seams(c).is_some_and(|s| s.pair())
+                !near(c) || !seams(c).is_some_and(|s| s.pair())
             }
         })
         .map(|(c, _)| c)

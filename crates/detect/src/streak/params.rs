@@ -309,6 +309,9 @@ pub(super) struct Sanitized {
     /// The star-aware pass: the trails' direction (degrees), whose neighbourhood alone the
     /// line filters search (see [`Sanitized::uses`]); `None`: every orientation.
     pub(super) along: Option<f64>,
+    /// The pass along the frame's own trails (no trail predicted): the gap test reads each
+    /// sample's contrast against its quieter side band (see `accept::gap`).
+    pub(super) quiet_side: bool,
 }
 
 impl Sanitized {
@@ -360,6 +363,7 @@ impl Sanitized {
             max_candidates: p.max_candidates,
             calibrate_noise: p.calibrate_noise,
             along: None,
+            quiet_side: false,
         }
     }
 

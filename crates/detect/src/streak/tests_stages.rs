@@ -2,7 +2,7 @@
 //! promises, on input where the answer is known.
 
 use super::Candidate;
-use super::accept::accept;
+use super::accept::{accept, gap};
 use super::explain::{Reason, Seeds};
 use super::explain_away::explain_away;
 use super::flatten::flatten;
@@ -236,6 +236,37 @@ fn accept_scores_a_streak_and_drops_a_short_one() {
     // The star test drops it.
     let (cands, dropped) = accept(&world.maps(), vec![(s, Seeds::Local)], &|_: &Seg| true);
     assert!(cands.is_empty() && dropped[0].reason == Reason::StarTrail);
+}
+
+/// Step 7, the gap test: a bright trail in one side band (11 px off, over 20 px) makes a gap
+/// of a streak against both side bands, none against the quieter (the pass along the frame's
+/// own trails); a true gap stays one.
+#[test]
+fn gap_against_the_quieter_side_band() {
+    let mut z = streak_map(3.0, 64.0, 30, 90);
+    let beside = streak_map(30.0, 75.0, 50, 70);
+    z.iter_mut().zip(&beside).for_each(|(a, b)| *a += b);
+    let mut world = World::new(z);
+    let s = refined(&World::new(streak_map(3.0, 64.0, 30, 90)).maps()).unwrap();
+    assert!(gap(&world.maps(), &s).is_some());
+    world.p.quiet_side = true;
+    assert_eq!(gap(&world.maps(), &s), None);
+    // A hole of 17 px in the streak (one of its four chunks of 15 px, at its SNR) is a gap on
+    // either side.
+    let mut z = streak_map(3.0, 64.0, 30, 90);
+    for y in 0..H {
+        for x in 44..61 {
+            z[y * W + x] = 0.0;
+        }
+    }
+    let world = World {
+        p: Sanitized {
+            quiet_side: true,
+            ..params()
+        },
+        ..World::new(z)
+    };
+    assert!(gap(&world.maps(), &s).is_some());
 }
 
 /// Step 7: of one streak found twice, the better scoring is kept and the other explained away.
