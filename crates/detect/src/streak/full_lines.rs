@@ -17,6 +17,7 @@
 //! background, and in units of the spread of all its parallels' contrasts (measured).
 
 use super::components::Component;
+use super::radon::bin;
 use super::segment::angle_diff_deg;
 use super::stats::{map_stats, median_of};
 
@@ -53,7 +54,7 @@ pub(super) fn full_line_components(
     if (bw.max(bh) as f64) < min_len || bw < 2 || bh < 2 {
         return Vec::new();
     }
-    let mut map = bin(zc, w, bw, bh);
+    let mut map = bin(zc, w, BIN, bw, bh);
     let sd = map_stats(&map, bw, bh).1;
     if sd.is_nan() || sd <= 0.0 {
         return Vec::new();
@@ -75,22 +76,6 @@ pub(super) fn full_line_components(
         // found here on the binned map ends within a few bins of them, but not always.
         .map(|c| (c, (w + h) as f64))
         .collect()
-}
-
-/// Block means of `BIN` x `BIN` pixels (the last partial blocks left out).
-fn bin(zc: &[f32], w: usize, bw: usize, bh: usize) -> Vec<f32> {
-    let mut out = vec![0f32; bw * bh];
-    for by in 0..bh {
-        let row = &mut out[by * bw..(by + 1) * bw];
-        for y in by * BIN..(by + 1) * BIN {
-            let src = &zc[y * w..y * w + bw * BIN];
-            for (o, chunk) in row.iter_mut().zip(src.chunks_exact(BIN)) {
-                *o += chunk.iter().sum::<f32>();
-            }
-        }
-        row.iter_mut().for_each(|v| *v /= (BIN * BIN) as f32);
-    }
-    out
 }
 
 /// The binned map, and its transpose (columns contiguous, for the shears along x).

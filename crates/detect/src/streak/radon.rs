@@ -75,7 +75,7 @@ pub(super) fn long_line_components(
 }
 
 /// Block means of `b` x `b` pixels (the last partial blocks left out).
-fn bin(zc: &[f32], w: usize, b: usize, bw: usize, bh: usize) -> Vec<f32> {
+pub(super) fn bin(zc: &[f32], w: usize, b: usize, bw: usize, bh: usize) -> Vec<f32> {
     let mut out = vec![0f32; bw * bh];
     let inv = 1.0 / (b * b) as f32;
     for by in 0..bh {

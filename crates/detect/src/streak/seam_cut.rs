@@ -161,7 +161,13 @@ fn prefix_sums(v: &[f64]) -> (Vec<f64>, Vec<f64>) {
 
 /// The samples `a..b` of the line `c` (profile `prof`) as a candidate of their own, scored
 /// as the pass scores (`confidence`) in an image of `area` pixels.
-fn piece(c: &Candidate, prof: &[f64], (a, b): (usize, usize), area: f64, p: &Sanitized) -> Candidate {
+fn piece(
+    c: &Candidate,
+    prof: &[f64],
+    (a, b): (usize, usize),
+    area: f64,
+    p: &Sanitized,
+) -> Candidate {
     let n = prof.len() as f64;
     let [[x0, y0], [x1, y1]] = c.ends;
     let len = (x1 - x0).hypot(y1 - y0).max(1.0);
@@ -201,7 +207,13 @@ mod tests {
     use super::*;
 
     fn cut_of(c: &Candidate, z: &[f32]) -> Option<Candidate> {
-        cut(c, 80.0, z, (500, 40), &Sanitized::new(&StreakParams::default()))
+        cut(
+            c,
+            80.0,
+            z,
+            (500, 40),
+            &Sanitized::new(&StreakParams::default()),
+        )
     }
 
     /// Where the line's piece begins and ends along x.
@@ -214,10 +226,17 @@ mod tests {
     fn a_trail_joined_to_an_end_is_cut_off() {
         // Debris of 250 px (level 2) and a trail of 80 px beyond it, brighter or fainter.
         for level in [6.0, 0.6] {
-            let z = map(500, 40, &[flat(50, 300, 20.0, 2.0), flat(300, 380, 20.0, level)]);
+            let z = map(
+                500,
+                40,
+                &[flat(50, 300, 20.0, 2.0), flat(300, 380, 20.0, level)],
+            );
             let c = cut_of(&line(50.0, 380.0, 20.0), &z).expect("cut");
             let (a, b) = span(&c);
-            assert!((a - 50.0).abs() <= 1.0 && (b - 300.0).abs() <= 3.0, "{level}: {a} {b}");
+            assert!(
+                (a - 50.0).abs() <= 1.0 && (b - 300.0).abs() <= 3.0,
+                "{level}: {a} {b}"
+            );
             assert!((c.length_px - 250.0).abs() <= 3.0, "{}", c.length_px);
             // The box shrinks with it.
             assert!(c.detection.x2 <= 300.0 + 4.0, "{:?}", c.detection);
@@ -233,7 +252,10 @@ mod tests {
             ],
         );
         let (a, b) = span(&cut_of(&line(20.0, 420.0, 20.0), &z).expect("cut"));
-        assert!((a - 90.0).abs() <= 3.0 && (b - 350.0).abs() <= 3.0, "{a} {b}");
+        assert!(
+            (a - 90.0).abs() <= 3.0 && (b - 350.0).abs() <= 3.0,
+            "{a} {b}"
+        );
     }
 
     #[test]
@@ -242,15 +264,30 @@ mod tests {
         let z = map(500, 40, &[flat(50, 380, 20.0, 2.0)]);
         assert!(cut_of(&line(50.0, 380.0, 20.0), &z).is_none());
         // A step of less than the evenness band (1.2 times) is none.
-        let z = map(500, 40, &[flat(50, 300, 20.0, 2.0), flat(300, 380, 20.0, 2.4)]);
+        let z = map(
+            500,
+            40,
+            &[flat(50, 300, 20.0, 2.0), flat(300, 380, 20.0, 2.4)],
+        );
         assert!(cut_of(&line(50.0, 380.0, 20.0), &z).is_none());
         // Two trails end to end: what a cut leaves is a trail (under `KEEP_MIN` of one).
-        let z = map(500, 40, &[flat(50, 130, 20.0, 5.0), flat(130, 210, 20.0, 2.0)]);
+        let z = map(
+            500,
+            40,
+            &[flat(50, 130, 20.0, 5.0), flat(130, 210, 20.0, 2.0)],
+        );
         assert!(cut_of(&line(50.0, 210.0, 20.0), &z).is_none());
         // Of a brighter piece longer than `CUT_MAX` trails, at most that is cut.
-        let z = map(500, 40, &[flat(50, 250, 20.0, 2.0), flat(250, 380, 20.0, 6.0)]);
+        let z = map(
+            500,
+            40,
+            &[flat(50, 250, 20.0, 2.0), flat(250, 380, 20.0, 6.0)],
+        );
         let c = cut_of(&line(50.0, 380.0, 20.0), &z);
-        assert!(c.is_none_or(|c| span(&c).1 >= 380.0 - CUT_MAX * 80.0 - 1.0), "{c:?}");
+        assert!(
+            c.is_none_or(|c| span(&c).1 >= 380.0 - CUT_MAX * 80.0 - 1.0),
+            "{c:?}"
+        );
     }
 
     #[test]
