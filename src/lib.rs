@@ -41,7 +41,7 @@
 //! let experiment = soig::experiment::of(&campaign);
 //! let inputs = soig::experiment::inputs(&campaign)?;
 //! let image = soig::simulate::image(&experiment, &inputs, 0)?;
-//! println!("{} at SNR {:.2}", image.exposure.truth.object, image.exposure.truth.snr);
+//! println!("{} at SNR {:.2}", image.exposure.truth.object, image.exposure.truth.seen.snr);
 //! # Ok::<(), soig::Error>(())
 //! ```
 //!

@@ -166,7 +166,7 @@ impl Campaign {
     /// let c = Campaign::from_toml(&text, Path::new("demo.toml")).unwrap();
     /// assert_eq!(c.resolved.images, 10);
     /// assert_eq!(c.resolved.sensor.width_px, 1024); // the paper's value
-    /// assert_eq!(c.debris[0].name, "NORAD 40649");
+    /// assert_eq!(c.world.debris[0].name, "NORAD 40649");
     /// ```
     pub fn from_toml(text: &str, path: &Path) -> Result<Campaign, CampaignError> {
         Campaign::compose(text, path, &[])
