@@ -124,7 +124,14 @@ fn follow(maps: &Maps, e: Point, u: (f64, f64), level: f64) -> Point {
             let mut removed: Vec<f64> = (0..n).map(|k| removed_at(maps, at(o, k))).collect();
             median_of(&mut removed) >= HIDDEN_SHARE * level
         });
-        let gain = (m.min(cap) - 0.5 * level) * PIECE_PX;
+        // A seen piece's gain is read on the line the streak is followed along, not on the
+        // best of the offsets searched, which noise alone lifts: on the original
+        // semisynthetic development row (seed 777) that reading carried two streaks' ends 175
+        // and 240 px past their true ends (`reach_does_not_follow_noise_beyond_the_end`). Under a hidden piece the
+        // followed line has no fair reading (the subtraction took the streak's light with
+        // the trail's), so the best offset stays, and only light counts there.
+        let read = if hidden { m } else { mean(off) };
+        let gain = (read.min(cap) - 0.5 * level) * PIECE_PX;
         if !hidden && m >= 0.5 * level {
             (off, missed) = (o_best, 0.0);
         } else {
