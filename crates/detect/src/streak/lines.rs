@@ -22,7 +22,7 @@ pub(super) fn line_filter(
     transpose(zc, &mut zt, w, h);
     let mut best = vec![f32::NEG_INFINITY; w * h];
     let mut best_t = vec![f32::NEG_INFINITY; w * h];
-    let mut accs: Vec<Vec<f32>> = vec![Vec::new(); p.half_lengths.len()];
+    let (mut flat, mut steep) = (Vec::new(), Vec::new());
     for j in (0..n).filter(|&j| p.uses(j)) {
         let (x_major, t) = slope(j, n);
         let model = noise.model_sd(j);
@@ -31,18 +31,15 @@ pub(super) fn line_filter(
             .enumerate()
             .map(|(l, &sd)| (1.0 / (sd * noise.at(j, l))) as f32)
             .collect();
-        let sw = Sweep {
-            halves: &p.half_lengths,
-            inv: &inv,
-            j: j as u8,
-            t,
-        };
+        let dir = Dir { j: j as u8, t, inv };
         if x_major {
-            sw.run(&zt, w, h, &mut best_t, &mut accs);
+            flat.push(dir);
         } else {
-            sw.run(zc, h, w, &mut best, &mut accs);
+            steep.push(dir);
         }
     }
+    sweep(&p.half_lengths, &flat, &zt, w, h, &mut best_t);
+    sweep(&p.half_lengths, &steep, zc, h, w, &mut best);
     // Merge the transposed results, then unpack the orientation index.
     transpose(&best_t, &mut zt, h, w);
     drop(best_t);
@@ -72,64 +69,81 @@ pub(super) fn transpose(src: &[f32], dst: &mut [f32], w: usize, h: usize) {
     }
 }
 
-/// One orientation of the line filter over a map of `rows` rows of `m` values, for lines that
-/// advance one row per step: line `r` passes through (row `i`, position `r + round(i t)`),
-/// |t| <= 1. Window sums are running sums over rows, so every memory access is a contiguous
-/// row. Values beyond the map are zero (responses within half a window of an edge are
-/// conservative).
-struct Sweep<'a> {
-    halves: &'a [usize],
-    inv: &'a [f32],
+/// One orientation of the line filter: its index, slope and, per length, 1 / its noise sd.
+struct Dir {
     j: u8,
     t: f64,
+    inv: Vec<f32>,
 }
 
-impl Sweep<'_> {
-    #[inline(never)]
-    fn run(&self, src: &[f32], rows: usize, m: usize, best: &mut [f32], accs: &mut [Vec<f32>]) {
-        let shift: Vec<usize> = {
+/// One length's window of one orientation: line `r` passes through (row `i`, position
+/// `r + round(i t)`), and `acc[r - round(i t) + smax]`, after step `i`, sums rows `i - k + 1
+/// ..= i` of it. Each step adds row `i` and takes away row `i - k`, contiguous rows.
+struct Window {
+    acc: Vec<f32>,
+    /// The next step to take.
+    next: usize,
+}
+
+/// The orientations `dirs` of the line filter over a map of `rows` rows of `m` values, for
+/// lines that advance one row per step (|t| <= 1); the best response per value into `best`.
+/// Values beyond the map are zero (responses within half a window of an edge are
+/// conservative). All orientations go down the map together, row by row: each output row
+/// takes its maxima over them all while it is in the L1 cache, and the rows they add are the
+/// same ones (one orientation at a time streamed the whole map, 4-8 MB, through the cache
+/// twice per orientation). Every window's sums and every maximum are taken in the order the
+/// orientation-at-a-time loop took them, so the output is the same to the bit.
+#[inline(never)]
+fn sweep(halves: &[usize], dirs: &[Dir], src: &[f32], rows: usize, m: usize, best: &mut [f32]) {
+    // Per orientation: offset of row i's values in its windows (index = pos - s[i] + smax).
+    let shifts: Vec<Vec<usize>> = dirs
+        .iter()
+        .map(|d| {
             let s: Vec<isize> = (0..rows)
-                .map(|i| (i as f64 * self.t).round() as isize)
+                .map(|i| (i as f64 * d.t).round() as isize)
                 .collect();
             let smax = s.iter().copied().max().unwrap_or(0).max(0);
-            // Offset of row i's values in the accumulators: index = pos - s[i] + smax.
             s.iter().map(|&v| (smax - v) as usize).collect()
-        };
-        let span = shift.iter().copied().max().unwrap_or(0) + m;
-        for acc in accs.iter_mut() {
-            acc.clear();
-            acc.resize(span, 0.0);
-        }
-        let hmax = *self.halves.iter().max().unwrap_or(&0);
-        for i in 0..rows + hmax {
-            for (l, &hk) in self.halves.iter().enumerate() {
+        })
+        .collect();
+    let mut windows: Vec<Vec<Window>> = shifts
+        .iter()
+        .map(|shift| {
+            let span = shift.iter().copied().max().unwrap_or(0) + m;
+            let acc = vec![0.0; span];
+            halves.iter().map(|_| Window { acc: acc.clone(), next: 0 }).collect()
+        })
+        .collect();
+    let row = |i: usize| &src[i * m..(i + 1) * m];
+    for c in 0..rows {
+        let brow = &mut best[c * m..(c + 1) * m];
+        for ((d, shift), wins) in dirs.iter().zip(&shifts).zip(windows.iter_mut()) {
+            for ((&hk, win), &f) in halves.iter().zip(wins.iter_mut()).zip(&d.inv) {
                 let k = 2 * hk + 1;
-                let acc = &mut accs[l];
-                if i < rows {
-                    let o = shift[i];
-                    for (a, &v) in acc[o..o + m].iter_mut().zip(&src[i * m..(i + 1) * m]) {
-                        *a += v;
+                // Steps up to c + hk: the window centred on row c.
+                while win.next <= c + hk {
+                    let i = win.next;
+                    if i < rows {
+                        let o = shift[i];
+                        for (a, &v) in win.acc[o..o + m].iter_mut().zip(row(i)) {
+                            *a += v;
+                        }
                     }
+                    if i >= k && i - k < rows {
+                        let o = shift[i - k];
+                        for (a, &v) in win.acc[o..o + m].iter_mut().zip(row(i - k)) {
+                            *a -= v;
+                        }
+                    }
+                    win.next += 1;
                 }
-                if i >= k && i - k < rows {
-                    let q = i - k;
-                    let o = shift[q];
-                    for (a, &v) in acc[o..o + m].iter_mut().zip(&src[q * m..(q + 1) * m]) {
-                        *a -= v;
-                    }
-                }
-                if i >= hk && i - hk < rows {
-                    let c = i - hk;
-                    let o = shift[c];
-                    let f = self.inv[l];
-                    let j = self.j as u32;
-                    let brow = &mut best[c * m..(c + 1) * m];
-                    // The orientation index rides in the 8 low mantissa bits, so the update is
-                    // a plain (vectorised) max.
-                    for (b, &v) in brow.iter_mut().zip(&acc[o..o + m]) {
-                        let r = f32::from_bits(((v * f).to_bits() & !0xFF) | j);
-                        *b = b.max(r);
-                    }
+                let o = shift[c];
+                let j = d.j as u32;
+                // The orientation index rides in the 8 low mantissa bits, so the update is a
+                // plain (vectorised) max.
+                for (b, &v) in brow.iter_mut().zip(&win.acc[o..o + m]) {
+                    let r = f32::from_bits(((v * f).to_bits() & !0xFF) | j);
+                    *b = b.max(r);
                 }
             }
         }
