@@ -111,7 +111,13 @@ fn sweep(halves: &[usize], dirs: &[Dir], src: &[f32], rows: usize, m: usize, bes
         .map(|shift| {
             let span = shift.iter().copied().max().unwrap_or(0) + m;
             let acc = vec![0.0; span];
-            halves.iter().map(|_| Window { acc: acc.clone(), next: 0 }).collect()
+            halves
+                .iter()
+                .map(|_| Window {
+                    acc: acc.clone(),
+                    next: 0,
+                })
+                .collect()
         })
         .collect();
     let row = |i: usize| &src[i * m..(i + 1) * m];
@@ -147,5 +153,104 @@ fn sweep(halves: &[usize], dirs: &[Dir], src: &[f32], rows: usize, m: usize, bes
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::params::{Sanitized, StreakParams};
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The line filter one orientation at a time, as it was before `sweep` took them all
+    /// together (commit 7eec7c3): the reference the bits are checked against.
+    fn one_at_a_time(zc: &[f32], w: usize, h: usize, p: &Sanitized, noise: &LineNoise) -> Vec<f32> {
+        let n = p.n_angles;
+        let mut zt = vec![0f32; w * h];
+        transpose(zc, &mut zt, w, h);
+        let mut best = vec![f32::NEG_INFINITY; w * h];
+        let mut best_t = vec![f32::NEG_INFINITY; w * h];
+        for j in (0..n).filter(|&j| p.uses(j)) {
+            let (x_major, t) = slope(j, n);
+            let inv: Vec<f32> = noise
+                .model_sd(j)
+                .iter()
+                .enumerate()
+                .map(|(l, &sd)| (1.0 / (sd * noise.at(j, l))) as f32)
+                .collect();
+            let (src, rows, m, best) = match x_major {
+                true => (&zt[..], w, h, &mut best_t),
+                false => (zc, h, w, &mut best),
+            };
+            let shift: Vec<usize> = {
+                let s: Vec<isize> = (0..rows).map(|i| (i as f64 * t).round() as isize).collect();
+                let smax = s.iter().copied().max().unwrap_or(0).max(0);
+                s.iter().map(|&v| (smax - v) as usize).collect()
+            };
+            let span = shift.iter().copied().max().unwrap_or(0) + m;
+            let mut accs = vec![vec![0f32; span]; p.half_lengths.len()];
+            let hmax = *p.half_lengths.iter().max().unwrap();
+            for i in 0..rows + hmax {
+                for (l, &hk) in p.half_lengths.iter().enumerate() {
+                    let k = 2 * hk + 1;
+                    let acc = &mut accs[l];
+                    if i < rows {
+                        let o = shift[i];
+                        for (a, &v) in acc[o..o + m].iter_mut().zip(&src[i * m..(i + 1) * m]) {
+                            *a += v;
+                        }
+                    }
+                    if i >= k && i - k < rows {
+                        let (q, o) = (i - k, shift[i - k]);
+                        for (a, &v) in acc[o..o + m].iter_mut().zip(&src[q * m..(q + 1) * m]) {
+                            *a -= v;
+                        }
+                    }
+                    if i >= hk && i - hk < rows {
+                        let (c, o) = (i - hk, shift[i - hk]);
+                        for (b, &v) in best[c * m..(c + 1) * m].iter_mut().zip(&acc[o..o + m]) {
+                            let r = f32::from_bits(((v * inv[l]).to_bits() & !0xFF) | j as u32);
+                            *b = b.max(r);
+                        }
+                    }
+                }
+            }
+        }
+        transpose(&best_t, &mut zt, h, w);
+        best.iter().zip(&zt).map(|(b, &t)| b.max(t)).collect()
+    }
+
+    /// All orientations down the map together give the orientation-at-a-time responses and
+    /// orientations bit for bit: on maps wider than tall and taller than wide, maps shorter
+    /// than a window (3 and 5 rows against 21 and 51 px), every orientation and only those
+    /// along a trail (the star-aware pass), and lengths in either order.
+    #[test]
+    fn all_orientations_at_once_give_the_same_bits() {
+        let mut rng = ChaCha8Rng::seed_from_u64(44);
+        let mut checked = 0;
+        for &(w, h) in &[(97, 64), (40, 131), (5, 70), (83, 3), (128, 128)] {
+            let zc: Vec<f32> = (0..w * h).map(|_| rng.random_range(-3.0f32..3.0)).collect();
+            for (along, lengths) in [
+                (None, vec![21, 51]),
+                (Some(30.0), vec![21, 51]),
+                (Some(95.0), vec![51, 7]),
+            ] {
+                let base = Sanitized::new(&StreakParams {
+                    line_lengths_px: lengths,
+                    ..StreakParams::default()
+                });
+                let p = Sanitized { along, ..base };
+                let noise = LineNoise::measure(&zc, w, h, &p);
+                let (best, arg) = line_filter(&zc, w, h, &p, &noise);
+                let want = one_at_a_time(&zc, w, h, &p, &noise);
+                for ((b, a), r) in best.iter().zip(&arg).zip(&want) {
+                    assert_eq!(b.to_bits(), r.to_bits(), "{w}x{h} along {along:?}");
+                    assert_eq!(*a as u32, r.to_bits() & 0xFF);
+                }
+                checked += best.len();
+            }
+        }
+        assert!(checked > 50_000);
     }
 }
