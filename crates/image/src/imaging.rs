@@ -4,6 +4,9 @@
 
 /// Bilinear interpolation between pixel centres (as `cv2.warpAffine` with INTER_LINEAR), in
 /// single precision; a point beyond the outer pixel centres takes the edge value.
+// Inlined across crates: the streak refinement samples it ~10^6 times an image (22% of the
+// detector's time in a call of its own).
+#[inline]
 pub fn bilinear(img: &[f32], width: usize, height: usize, x: f64, y: f64) -> f32 {
     let x = x.clamp(0.0, (width - 1) as f64);
     let y = y.clamp(0.0, (height - 1) as f64);
