@@ -208,13 +208,13 @@ fn residuals_of_known_detections() {
 /// The campaign field needs the detect stage: refused with its name.
 #[test]
 fn astrometry_needs_the_detect_stage() {
-    let tmp = tempfile::tempdir().unwrap();
+    let (_tmp, out) = scratch("run");
     let o = quickstart_with(
         &[
             "stages=[\"render\", \"enhance\"]",
             "artifacts.astrometry=true",
         ],
-        &tmp.path().join("run"),
+        &out,
     );
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);

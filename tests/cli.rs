@@ -383,9 +383,8 @@ fn committed_model_detects_the_quickstart_debris() {
     if !ort_available() {
         return;
     }
-    let tmp = tempfile::tempdir().unwrap();
+    let (_tmp, out) = scratch("quickstart");
     let campaign = repo("campaigns/quickstart.toml");
-    let out = tmp.path().join("quickstart");
     run_ok(&campaign, &out, None);
     let report = json(&out.join("report/report.json"));
     let yolo = report["detectors"]
