@@ -52,3 +52,33 @@ impl PredictedTrail {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn trail(electrons: Option<f64>) -> PredictedTrail {
+        PredictedTrail {
+            ra_deg: 10.0,
+            dec_deg: -5.0,
+            mag: 9.0,
+            nodes: vec![[-3.0, 1.0], [2.0, 1.0], [7.0, 1.0], [12.0, 1.0]],
+            times_s: vec![0.0, 1.0, 2.0, 3.0],
+            electrons,
+        }
+    }
+
+    /// The nodes `at` places are kept with their own times, in order; a trail none of whose
+    /// nodes lands is no trail; a header without a zero point gives NaN electrons.
+    #[test]
+    fn on_image_keeps_the_placed_nodes_with_their_times() {
+        // An image 10 px wide, shifted 1 px left.
+        let at = |[x, y]: [f64; 2]| (x >= 0.0 && x <= 9.0).then_some((x - 1.0, y));
+        let t = trail(Some(500.0)).on_image(at).unwrap();
+        assert_eq!(t.nodes, vec![(1.0, 1.0), (6.0, 1.0)]);
+        assert_eq!(t.times_s, vec![1.0, 2.0]);
+        assert_eq!(t.electrons, 500.0);
+        assert!(trail(None).on_image(at).unwrap().electrons.is_nan());
+        assert!(trail(Some(500.0)).on_image(|_| None).is_none());
+    }
+}
