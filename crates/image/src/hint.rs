@@ -73,7 +73,7 @@ mod tests {
     #[test]
     fn on_image_keeps_the_placed_nodes_with_their_times() {
         // An image 10 px wide, shifted 1 px left.
-        let at = |[x, y]: [f64; 2]| (x >= 0.0 && x <= 9.0).then_some((x - 1.0, y));
+        let at = |[x, y]: [f64; 2]| (0.0..=9.0).contains(&x).then_some((x - 1.0, y));
         let t = trail(Some(500.0)).on_image(at).unwrap();
         assert_eq!(t.nodes, vec![(1.0, 1.0), (6.0, 1.0)]);
         assert_eq!(t.times_s, vec![1.0, 2.0]);
