@@ -14,11 +14,10 @@ use soig::sky::apparent::{C_KM_S, earth_velocity_km_s};
 use soig::sky::{angle_deg, dot, radec_unit, scale, sub, unit};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, arg, rendered, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, arg, rendered};
 
 fn campaign(render: &str) -> Campaign {
-    CampaignToml::new("apparent", 5, 3)
-        .debris(&tle_object(37476))
+    CampaignToml::leo("apparent", 5, 3)
         .debris(ELEMENTS_40649)
         .tables(&format!(
             "[sensor]\nwidth_px = 256\nheight_px = 256\nfov_radius_deg = 0.025\n[render]\ntrajectory_samples = 500\n{render}"
@@ -88,8 +87,7 @@ fn apparent_switch_moves_the_debris_against_the_stars() {
 #[test]
 fn date_obs_has_microseconds_and_truth_the_ephemeris() {
     let dir = tempfile::tempdir().unwrap();
-    let toml = CampaignToml::new("stamps", 5, 3)
-        .debris(&tle_object(37476))
+    let toml = CampaignToml::leo("stamps", 5, 3)
         .tables("[sensor]\nwidth_px = 128\nheight_px = 128\nfov_radius_deg = 0.0125\n[render]\ntrajectory_samples = 200\n")
         .write(&dir.path().join("stamps.toml"));
     let out = dir.path().join("out");

@@ -13,7 +13,7 @@ mod common;
 use std::io::Write as _;
 use std::path::Path;
 
-use common::{arg, json, ok, python_with_astropy, repo, run_quickstart, scratch, soig};
+use common::{arg, json, ok, python_with_astropy, quickstart_with, repo, scratch, soig};
 use soig::detect::Detection;
 use soig::observations::{FrameSky, Line, observe};
 use soig::report::astrometry::{TruthObject, offset_arcsec, residual};
@@ -46,14 +46,8 @@ fn pixel_to_sky_agrees_with_astropy() {
         &survey,
     );
     let fixed = tmp.path().join("fixed");
-    ok(run_quickstart(
-        &[
-            "--set",
-            "images=2",
-            "--set",
-            "stages=[\"render\", \"enhance\"]",
-            "--quiet",
-        ],
+    ok(quickstart_with(
+        &["images=2", "stages=[\"render\", \"enhance\"]"],
         &fixed,
     ));
     let mut checked = 0;
@@ -126,14 +120,8 @@ fn png_edge(matrix: &serde_json::Value, p: &serde_json::Value) -> [f64; 2] {
 #[test]
 fn residuals_of_known_detections() {
     let (_tmp, out) = scratch("run");
-    ok(run_quickstart(
-        &[
-            "--set",
-            "images=4",
-            "--set",
-            "stages=[\"render\", \"enhance\"]",
-            "--quiet",
-        ],
+    ok(quickstart_with(
+        &["images=4", "stages=[\"render\", \"enhance\"]"],
         &out,
     ));
     let mut swapped = 0;
@@ -220,16 +208,13 @@ fn residuals_of_known_detections() {
 /// The campaign field needs the detect stage: refused with its name.
 #[test]
 fn astrometry_needs_the_detect_stage() {
-    let tmp = tempfile::tempdir().unwrap();
-    let o = run_quickstart(
+    let (_tmp, out) = scratch("run");
+    let o = quickstart_with(
         &[
-            "--set",
             "stages=[\"render\", \"enhance\"]",
-            "--set",
             "artifacts.astrometry=true",
-            "--quiet",
         ],
-        &tmp.path().join("run"),
+        &out,
     );
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);

@@ -18,8 +18,8 @@ fn soig(args: &[&str], threads: Option<usize>) -> Output {
 
 mod common;
 use common::{
-    CampaignToml, ELEMENTS_40649, arg, assert_refused, json, ort_available, scratch, tle_file,
-    tle_object,
+    CampaignToml, ELEMENTS_40649, arg, assert_refused, json, ort_available, repo, scratch,
+    tle_file, tle_object,
 };
 
 /// A small, fast campaign: 256 px images, few samples.
@@ -30,14 +30,13 @@ fn small() -> CampaignToml {
 /// `small()` with the detect stage and `tables` (its model), written as `dir/small.toml`.
 fn small_detecting(dir: &Path, tables: &str) -> PathBuf {
     small()
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
+        .stages(&["render", "enhance", "dataset", "detect"])
         .tables(tables)
         .write(&dir.join("small.toml"))
 }
 
 fn small_with(seed: u64, images: u32) -> CampaignToml {
-    CampaignToml::new("small", seed, images)
-        .debris(&tle_object(37476))
+    CampaignToml::leo("small", seed, images)
         .debris(ELEMENTS_40649)
         .tables("[sensor]\nwidth_px = 256\nheight_px = 256\nfov_radius_deg = 0.025\n[render]\ntrajectory_samples = 500\n[artifacts]\nnoise_free_fits = true\n")
 }
@@ -312,11 +311,7 @@ fn rotated_geometry_needs_survey_pointing() {
 }
 
 fn fixture(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/yolo")
-        .join(name)
-        .display()
-        .to_string()
+    repo("tests/fixtures/yolo").join(name).display().to_string()
 }
 
 #[test]
@@ -388,9 +383,8 @@ fn committed_model_detects_the_quickstart_debris() {
     if !ort_available() {
         return;
     }
-    let tmp = tempfile::tempdir().unwrap();
-    let campaign = Path::new(env!("CARGO_MANIFEST_DIR")).join("campaigns/quickstart.toml");
-    let out = tmp.path().join("quickstart");
+    let (_tmp, out) = scratch("quickstart");
+    let campaign = repo("campaigns/quickstart.toml");
     run_ok(&campaign, &out, None);
     let report = json(&out.join("report/report.json"));
     let yolo = report["detectors"]
@@ -412,7 +406,7 @@ fn committed_model_detects_the_quickstart_debris() {
 fn train_stage_without_ultralytics_fails_cleanly() {
     let tmp = tempfile::tempdir().unwrap();
     let c = small()
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"train\"]\n")
+        .stages(&["render", "enhance", "dataset", "train"])
         .write(&tmp.path().join("small.toml"));
     let out = tmp.path().join("out");
     let missing = tmp.path().join("no-such-python");

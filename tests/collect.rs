@@ -20,8 +20,7 @@ use common::{
 /// `collects` collects of `frames` frames 10 s apart, 256 px at the paper's pixel scale, in
 /// pointing `mode`, a LEO and a GEO object.
 fn collects(mode: &str, collects: u32, frames: u32, extra: &str) -> CampaignToml {
-    CampaignToml::new("collect", 5, collects * frames)
-        .debris(&tle_object(37476))
+    CampaignToml::leo("collect", 5, collects * frames)
         .debris(&tle_object(40989))
         .tables(&format!(
             "[pointing]\nmode = \"{mode}\"\n[collect]\nframes = {frames}\ngap_s = 10.0\n[sensor]\nwidth_px = 256\nheight_px = 256\nfov_radius_deg = 0.025\n[render]\ntrajectory_samples = 500\n{extra}"
@@ -269,13 +268,10 @@ fn several_objects_keep_their_track_ids_over_a_collect() {
 #[test]
 fn every_frame_of_a_collect_is_judged_and_inside_the_window() {
     let tmp = tempfile::tempdir().unwrap();
-    let toml = CampaignToml::new("gaps", 3, 12)
-        .top("stages = [\"render\"]\n")
-        .debris(&tle_object(37476))
-        .tables(
-            "[collect]\nframes = 4\ngap_s = 120.0\n[sensor]\nwidth_px = 64\nheight_px = 64\n\
+    let toml = CampaignToml::leo("gaps", 3, 12).stages(&["render"]).tables(
+        "[collect]\nframes = 4\ngap_s = 120.0\n[sensor]\nwidth_px = 64\nheight_px = 64\n\
              [window]\nstart = \"2022-01-22T00:00:00 UTC\"\nend = \"2022-01-22T12:00:00 UTC\"\n",
-        );
+    );
     let file = toml.write(&tmp.path().join("gaps.toml"));
     let c = Campaign::load(&file).unwrap();
     let out = tmp.path().join("out");

@@ -11,7 +11,7 @@ use std::process::{Command, Output};
 
 mod common;
 use common::{
-    CampaignToml, ELEMENTS_40649, arg, json, ort_available, run_quiet, scratch, soig, tle_object,
+    CampaignToml, ELEMENTS_40649, arg, json, ort_available, repo, run_quiet, scratch, soig,
 };
 
 fn stdout(o: &Output) -> String {
@@ -31,13 +31,12 @@ fn compare(baseline: &Path, run: &Path, extra: &[&str]) -> (i32, String) {
 /// A tiny campaign: 256 px, 6 images, as tests/cli.rs's `small`; with `model`, the detect
 /// stage on half of them.
 fn campaign(dir: &Path, seed: u64, model: Option<&Path>) -> PathBuf {
-    let mut c = CampaignToml::new("small", seed, 6)
-        .debris(&tle_object(37476))
+    let mut c = CampaignToml::leo("small", seed, 6)
         .debris(ELEMENTS_40649)
         .tables("[sensor]\nwidth_px = 256\nheight_px = 256\nfov_radius_deg = 0.025\n[render]\ntrajectory_samples = 500\n[artifacts]\nnoise_free_fits = true\n");
     if let Some(model) = model {
         c = c
-            .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
+            .stages(&["render", "enhance", "dataset", "detect"])
             .tables(&format!(
                 "[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n[detect]\nmodel = \"{}\"\n",
                 model.display()
@@ -158,7 +157,7 @@ fn metric_drop_within_and_beyond_tolerance_and_a_results_row() {
         return;
     }
     let tmp = tempfile::tempdir().unwrap();
-    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/yolo/tiny.onnx");
+    let model = repo("tests/fixtures/yolo/tiny.onnx");
     let c = campaign(tmp.path(), 7, Some(&model));
     // `soig run .../x/../base` ends naming the clean path, the digest, the report and the
     // headline metrics of each detector.
@@ -251,7 +250,7 @@ fn errors_exit_2() {
     let o = soig(&["compare", arg(tmp.path()), arg(tmp.path())]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("is not a soig output"));
-    let row = Path::new(env!("CARGO_MANIFEST_DIR")).join("results/ci-quickstart");
+    let row = repo("results/ci-quickstart");
     let row = arg(&row);
     let o = soig(&["compare", row, row, "--tolerance", "map=1"]);
     assert_eq!(o.status.code(), Some(2));

@@ -6,20 +6,12 @@
 // store (clippy.toml's disallowed-methods, checked on every target by scripts/test.sh).
 #![allow(clippy::disallowed_methods)]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 mod common;
-use common::{arg, ok, scratch, soig};
+use common::{arg, json, ok, repo, scratch, soig};
 
 use soig::sky::projection::Tan;
-
-fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
 
 /// Angular distance between two (RA, Dec) in degrees (the astrometric report's haversine).
 fn separation_deg(a: [f64; 2], b: [f64; 2]) -> f64 {

@@ -8,12 +8,11 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{CampaignToml, ELEMENTS_40649, arg, run_quiet, soig, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, arg, run_quiet, soig};
 
 /// A run of 4 small fixed-pointing images (FITS and PNG); returns its folder.
 fn small_run(dir: &Path) -> (PathBuf, PathBuf) {
-    let campaign = CampaignToml::new("small", 11, 4)
-        .debris(&tle_object(37476))
+    let campaign = CampaignToml::leo("small", 11, 4)
         .debris(ELEMENTS_40649)
         .tables("[sensor]\nwidth_px = 256\nheight_px = 256\nfov_radius_deg = 0.025\n[render]\ntrajectory_samples = 500\n")
         .write(&dir.join("small.toml"));

@@ -18,16 +18,15 @@ use std::path::{Path, PathBuf};
 use common::{
     CampaignToml, ELEMENTS_40649, arg, assert_coco_agrees_with_soig_eval,
     assert_coco_bbox_is_label_box, coco_images, digest, export_readers, export_readers_python,
-    json, run_quiet, soig, tle_object,
+    json, run_quiet, soig,
 };
 use serde_json::Value;
 
 /// A run of 16 fixed-pointing images in the padded frame (so the DS9 boxes are mapped back
 /// from the PNG), split 50/25/25, detected by the streak detector, with both exports.
 fn run(dir: &Path) -> PathBuf {
-    let campaign = CampaignToml::new("exports", 7, 16)
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-        .debris(&tle_object(37476))
+    let campaign = CampaignToml::leo("exports", 7, 16)
+        .stages(&["render", "enhance", "dataset", "detect"])
         .debris(ELEMENTS_40649)
         .tables(
             "[enhance]\ngeometry = \"padded\"\n\

@@ -13,7 +13,7 @@
 use std::process::Command;
 
 mod common;
-use common::{python_with_astropy, run_quickstart, scratch};
+use common::{python_with_astropy, quickstart_with, scratch};
 
 const CHECK: &str = r#"
 import sys, warnings
@@ -61,16 +61,7 @@ fn astropy_parses_every_card_and_unit_of_both_fits() {
         return;
     };
     let (_dir, out) = scratch("run");
-    let o = run_quickstart(
-        &[
-            "--quiet",
-            "--set",
-            "images=2",
-            "--set",
-            "stages=[\"render\"]",
-        ],
-        &out,
-    );
+    let o = quickstart_with(&["images=2", "stages=[\"render\"]"], &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let mut files: Vec<_> = std::fs::read_dir(out.join("fits"))
         .unwrap()

@@ -8,14 +8,13 @@
 
 mod common;
 
-use common::{CampaignToml, ELEMENTS_40649, digest, run_quiet, tle_object};
+use common::{CampaignToml, ELEMENTS_40649, digest, run_quiet};
 
 #[test]
 fn light_curves_match_the_truth_row_for_row() {
     let tmp = tempfile::tempdir().unwrap();
-    let campaign = CampaignToml::new("curves", 11, 4)
-        .top("stages = [\"render\"]\n")
-        .debris(&tle_object(37476))
+    let campaign = CampaignToml::leo("curves", 11, 4)
+        .stages(&["render"])
         .debris(ELEMENTS_40649)
         .tables("[render]\ntrajectory_samples = 300\n[artifacts]\nlight_curve = true\n")
         .write(&tmp.path().join("curves.toml"));

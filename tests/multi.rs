@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use common::{
     CampaignToml, CocoImage, ELEMENTS_40649, arg, assert_coco_agrees_with_soig_eval,
-    assert_coco_bbox_is_label_box, coco_images, digest, export_readers_python, json,
+    assert_coco_bbox_is_label_box, coco_images, digest, export_readers_python, json, repo,
     run_on_threads, soig, tle_object,
 };
 use serde_json::Value;
@@ -22,9 +22,8 @@ use serde_json::Value;
 /// 30 fixed-pointing images of four objects, 0-3 per frame (20% empty), split 50/25/25,
 /// detected by the streak detector, with the COCO, DS9 and light-curve artifacts.
 fn campaign(dir: &Path) -> PathBuf {
-    CampaignToml::new("multi", 11, 30)
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-        .debris(&tle_object(37476))
+    CampaignToml::leo("multi", 11, 30)
+        .stages(&["render", "enhance", "dataset", "detect"])
         .debris(&tle_object(40386))
         .debris(ELEMENTS_40649)
         .debris(&tle_object(40989))
@@ -182,7 +181,7 @@ fn several_objects_or_none_per_frame_agree_everywhere() {
 
 #[test]
 fn object_counts_are_checked_and_the_committed_campaign_loads() {
-    let c = Path::new(env!("CARGO_MANIFEST_DIR")).join("campaigns/quickstart-multi.toml");
+    let c = repo("campaigns/quickstart-multi.toml");
     let loaded = soig::campaign::Campaign::load(&c).unwrap_or_else(|e| panic!("{e}"));
     assert!(loaded.resolved.objects.is_some());
     for (objects, field) in [

@@ -26,6 +26,14 @@ fn campaign(dir: &Path, name: &str, images: u32) -> PathBuf {
     .write(&dir.join(format!("{name}.toml")))
 }
 
+/// A scratch folder holding `campaign(.., name, images)` and the output path `out` in it.
+fn resume_case(name: &str, images: u32) -> (tempfile::TempDir, PathBuf, PathBuf) {
+    let tmp = tempfile::tempdir().unwrap();
+    let c = campaign(tmp.path(), name, images);
+    let out = tmp.path().join("out");
+    (tmp, c, out)
+}
+
 fn command(campaign: &Path, out: &Path) -> Command {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_soig"));
     cmd.args(["run", arg(campaign), "--quiet", "--out"])
@@ -160,10 +168,8 @@ fn killed_at_any_phase_a_run_resumes_to_the_same_digest() {
 
 #[test]
 fn sigterm_keeps_the_work_and_the_same_command_resumes_it() {
-    let tmp = tempfile::tempdir().unwrap();
+    let (tmp, c, out) = resume_case("resume", 150);
     let t = tmp.path();
-    let c = campaign(t, "resume", 150);
-    let out = t.join("out");
     let stopped = stop_after(&c, &out, 2, "-TERM");
     assert_eq!(stopped.status.code(), Some(143), "{stopped:?}");
     let err = String::from_utf8_lossy(&stopped.stderr);
@@ -190,10 +196,8 @@ fn sigterm_keeps_the_work_and_the_same_command_resumes_it() {
 /// Needs root for `unshare -p`; skipped, saying so, without it.
 #[test]
 fn a_killed_pid_1_in_its_own_namespace_resumes_on_retry() {
-    let tmp = tempfile::tempdir().unwrap();
+    let (tmp, c, out) = resume_case("pod", 60);
     let t = tmp.path();
-    let c = campaign(t, "pod", 60);
-    let out = t.join("out");
     let pod = || {
         let mut cmd = Command::new("unshare");
         cmd.args([

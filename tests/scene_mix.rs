@@ -31,8 +31,7 @@ const CHI2_3DOF_P001: f64 = 16.266;
 /// trajectory cut into 200 samples rather than 2000 (a tenth of the draw's propagation; the
 /// gate's signal is the same sum of sample fluxes, and only the mix is tested here).
 fn paper_objects(name: &str, images: u32) -> CampaignToml {
-    CampaignToml::new(name, 20220101, images)
-        .debris(&tle_object(37476))
+    CampaignToml::leo(name, 20220101, images)
         .debris(&tle_object(40386))
         .debris(&format!(
             "name = \"NORAD 40649 (paper Table 1)\"\n{ELEMENTS_40649}"
@@ -87,9 +86,7 @@ fn weights_set_the_shares() {
 #[test]
 fn weights_are_read_and_checked() {
     let with = |w: &str| {
-        CampaignToml::new("w", 1, 10)
-            .debris(&tle_object(37476))
-            .debris(&format!("{}\nweight = {w}", tle_object(40386)))
+        CampaignToml::leo("w", 1, 10).debris(&format!("{}\nweight = {w}", tle_object(40386)))
     };
     let c = with("2.5").load("w.toml");
     assert_eq!(experiment::of(&c).scene.debris_weights, vec![1.0, 2.5]);
@@ -103,9 +100,8 @@ fn weights_are_read_and_checked() {
         );
     }
     let e = soig::campaign::Campaign::from_toml(
-        &CampaignToml::new("o", 1, 10)
+        &CampaignToml::leo("o", 1, 10)
             .observer(&format!("{}\nweight = 2.0", tle_object(41335)))
-            .debris(&tle_object(37476))
             .text(),
         "o.toml".as_ref(),
     )

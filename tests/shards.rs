@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{arg, assert_refused, digest, small_detecting_run};
+use common::{arg, assert_refused, digest, repo, small_detecting_run};
 
 fn soig(args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_soig"));
@@ -31,7 +31,7 @@ fn soig(args: &[&str], env: &[(&str, &str)]) -> Output {
 /// 7 small images with the detect stage (both detectors, the model given relative to the
 /// campaign's folder, which a merge must find again), written as `dir/NAME.toml`.
 fn campaign(dir: &Path, name: &str, seed: u64) -> PathBuf {
-    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/yolo/tiny.onnx");
+    let model = repo("tests/fixtures/yolo/tiny.onnx");
     std::fs::copy(model, dir.join("tiny.onnx")).unwrap();
     small_detecting_run(name, seed, 7, "[detect]\nmodel = \"tiny.onnx\"\n")
         .write(&dir.join(format!("{name}.toml")))

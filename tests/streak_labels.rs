@@ -17,9 +17,8 @@ use soig::experiment;
 use soig::simulate;
 
 fn campaign() -> CampaignToml {
-    CampaignToml::new("streaks", 5, 16)
-        .top("stages = [\"render\", \"enhance\", \"dataset\"]\n")
-        .debris(&tle_object(37476))
+    CampaignToml::leo("streaks", 5, 16)
+        .stages(&["render", "enhance", "dataset"])
         .debris(&tle_object(40386))
         .debris(ELEMENTS_40649)
         .tables(

@@ -15,7 +15,7 @@ mod common;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use common::{arg, json, ok, ort_available, run_quickstart, scratch, soig};
+use common::{arg, json, ok, ort_available, quickstart_with, scratch, soig};
 
 /// Header keywords of a TDM (503.0-B-2, 3.2).
 const HEADER: [&str; 5] = [
@@ -174,16 +174,8 @@ fn check(out: &Path, tdm: &Path) -> usize {
 #[test]
 fn truth_tdm_follows_the_standard_and_the_truth() {
     let (tmp, out) = scratch("run");
-    ok(run_quickstart(
-        &[
-            "--set",
-            "images=5",
-            "--set",
-            "stages=[\"render\"]",
-            "--set",
-            "artifacts.tdm=true",
-            "--quiet",
-        ],
+    ok(quickstart_with(
+        &["images=5", "stages=[\"render\"]", "artifacts.tdm=true"],
         &out,
     ));
     assert_eq!(check(&out, &out.join("export/tdm/truth.tdm")), 5);
@@ -216,10 +208,7 @@ fn detections_tdm_and_ades_psv() {
         return;
     }
     let (_tmp, out) = scratch("run");
-    ok(run_quickstart(
-        &["--set", "artifacts.astrometry=true", "--quiet"],
-        &out,
-    ));
+    ok(quickstart_with(&["artifacts.astrometry=true"], &out));
     ok(soig(&["verify", arg(&out)]));
     let (mut records, mut mags) = (0, 0);
     for det in ["streak", "yolo"] {

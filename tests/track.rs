@@ -173,9 +173,8 @@ fn track_campaign_runs_verifies_and_is_thread_independent() {
 #[test]
 fn the_streak_detector_reports_no_star_trail_in_track_images() {
     let tmp = tempfile::tempdir().unwrap();
-    let file = CampaignToml::new("track-detect", 20220101, 12)
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-        .debris(&tle_object(37476))
+    let file = CampaignToml::leo("track-detect", 20220101, 12)
+        .stages(&["render", "enhance", "dataset", "detect"])
         .debris(&tle_object(40386))
         .debris(&tle_object(40989))
         .tables("[pointing]\nmode = \"track\"\n[split]\ntrain = 0.5\nval = 0.0\ntest = 0.5\n[detect]\nclassical = true\n")

@@ -49,30 +49,16 @@ pub fn of_image(
     });
     // Only the part of a trail on the detector: beyond it a frame holds fill, not starlight.
     let (sw, sh) = (x.sensor.width_px as f64, x.sensor.height_px as f64);
-    let on_detector =
-        |n: &&[f64; 2]| n[0] >= 0.0 && n[1] >= 0.0 && n[0] <= sw - 1.0 && n[1] <= sh - 1.0;
+    let on_detector = |[x, y]: [f64; 2]| x >= 0.0 && y >= 0.0 && x <= sw - 1.0 && y <= sh - 1.0;
     let trails: Vec<StarTrail> = crate::render::trails::star_trails(&x.sensor, &scene, [0.0, 0.0])
         .iter()
-        .filter(|t| t.nodes.iter().any(|n| on_detector(&n)))
-        .map(|t| {
-            let (nodes, times_s) = t
-                .nodes
-                .iter()
-                .zip(&t.times_s)
-                .filter(|(n, _)| on_detector(n))
-                .map(|(&[px, py], &time)| {
-                    let at = match &frame {
-                        Some(f) => f.map(px, py),
-                        None => (px, py),
-                    };
-                    (at, time)
+        .filter_map(|t| {
+            t.on_image(|n| {
+                on_detector(n).then(|| match &frame {
+                    Some(f) => f.map(n[0], n[1]),
+                    None => (n[0], n[1]),
                 })
-                .unzip();
-            StarTrail {
-                nodes,
-                times_s,
-                electrons: t.expected_electrons,
-            }
+            })
         })
         .collect();
     let (dx, dy) = pointing_offset(&trails, pixels, w, h);

@@ -76,6 +76,16 @@ pub fn run_quiet(campaign: &Path, out: &Path) -> Output {
     soig(&["run", arg(campaign), "--quiet", "--out", arg(out)])
 }
 
+/// `soig run campaigns/quickstart.toml --quiet --set S ... --out OUT`, a `--set` for each of
+/// `sets` (`key=value`).
+pub fn quickstart_with(sets: &[&str], out: &Path) -> Output {
+    let mut args = vec!["--quiet"];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    run_quickstart(&args, out)
+}
+
 /// `soig run campaigns/quickstart.toml ARGS --out OUT`.
 pub fn run_quickstart(args: &[&str], out: &Path) -> Output {
     let campaign = repo("campaigns/quickstart.toml");
@@ -287,6 +297,18 @@ impl CampaignToml {
         }
     }
 
+    /// `new` with the LEO object of the TLE file (NORAD 37476) as its first debris: most
+    /// tests' one moving object.
+    pub fn leo(name: &str, seed: u64, images: u32) -> CampaignToml {
+        CampaignToml::new(name, seed, images).debris(&tle_object(37476))
+    }
+
+    /// The run's `stages`, in order (a top-level key).
+    pub fn stages(self, stages: &[&str]) -> CampaignToml {
+        let quoted: Vec<String> = stages.iter().map(|s| format!("\"{s}\"")).collect();
+        self.top(&format!("stages = [{}]\n", quoted.join(", ")))
+    }
+
     /// Top-level keys (e.g. `stages = [...]`), which TOML wants before the first table.
     pub fn top(mut self, keys: &str) -> CampaignToml {
         self.top.push_str(keys);
@@ -339,8 +361,7 @@ impl CampaignToml {
 /// images, of a LEO (NORAD 37476) and a GEO object (40989) in pointing `mode`; `tables` go
 /// between `[pointing]` and `[sensor]`.
 pub fn leo_and_geo(name: &str, mode: &str, tables: &str) -> CampaignToml {
-    CampaignToml::new(name, 11, 4)
-        .debris(&tle_object(37476))
+    CampaignToml::leo(name, 11, 4)
         .debris(&tle_object(40989))
         .tables(&format!(
             "[pointing]\nmode = \"{mode}\"\n{tables}[sensor]\nwidth_px = 512\nheight_px = 512\nfov_radius_deg = 0.05\n"
@@ -351,9 +372,8 @@ pub fn leo_and_geo(name: &str, mode: &str, tables: &str) -> CampaignToml {
 /// (NORAD 37476) and 40649, every stage to detect, split 0.5 / 0.2 / 0.3, with `tables`
 /// after: the small detecting run the resume and shard tests interrupt and merge.
 pub fn small_detecting_run(name: &str, seed: u64, images: u32, tables: &str) -> CampaignToml {
-    CampaignToml::new(name, seed, images)
-        .top("stages = [\"render\", \"enhance\", \"dataset\", \"detect\"]\n")
-        .debris(&tle_object(37476))
+    CampaignToml::leo(name, seed, images)
+        .stages(&["render", "enhance", "dataset", "detect"])
         .debris(ELEMENTS_40649)
         .tables("[sensor]\nwidth_px = 128\nheight_px = 128\nfov_radius_deg = 0.0125\n[render]\ntrajectory_samples = 300\n[split]\ntrain = 0.5\nval = 0.2\ntest = 0.3\n")
         .tables(tables)

@@ -58,16 +58,23 @@ class SplitMix64:
 
 # An image: (truth boxes [[x1,y1,x2,y2]], truth classes, detections [[x1,y1,x2,y2,score,class]])
 
+def random_box(rng):
+    """A box of 4-64 px a side with its corner anywhere in 1000 x 1000: (x1, y1, w, h), drawn
+    in the order w, h, x1, y1 (the Rust stress test draws the same)."""
+    w = 4.0 + 60.0 * rng.uniform()
+    h = 4.0 + 60.0 * rng.uniform()
+    x1 = 1000.0 * rng.uniform()
+    y1 = 1000.0 * rng.uniform()
+    return x1, y1, w, h
+
+
 def stress(seed, n_images, n_classes):
     rng = SplitMix64(seed)
     images = []
     for _ in range(n_images):
         truth, tcls, dets = [], [], []
         for _ in range(rng.below(6)):
-            w = 4.0 + 60.0 * rng.uniform()
-            h = 4.0 + 60.0 * rng.uniform()
-            x1 = 1000.0 * rng.uniform()
-            y1 = 1000.0 * rng.uniform()
+            x1, y1, w, h = random_box(rng)
             c = rng.below(n_classes)
             truth.append([x1, y1, x1 + w, y1 + h])
             tcls.append(c)
@@ -81,10 +88,7 @@ def stress(seed, n_images, n_classes):
                 score = rng.uniform()
                 dets.append([x1 + dx1, y1 + dy1, x1 + w + dx2, y1 + h + dy2, score, dc])
         for _ in range(rng.below(3)):
-            w = 4.0 + 60.0 * rng.uniform()
-            h = 4.0 + 60.0 * rng.uniform()
-            x1 = 1000.0 * rng.uniform()
-            y1 = 1000.0 * rng.uniform()
+            x1, y1, w, h = random_box(rng)
             dc = rng.below(n_classes)
             score = 0.6 * rng.uniform()
             dets.append([x1, y1, x1 + w, y1 + h, score, dc])

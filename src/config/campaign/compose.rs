@@ -237,12 +237,8 @@ fn merge(into: &mut Table, over: Table) {
 /// The layer of one `--set key.path=value`: the value is a TOML value (`512`, `true`,
 /// `[8, 8]`, `"text"`) if it parses as one, else the text as a string.
 fn set_layer(arg: &str) -> Result<Layer, CampaignError> {
-    let fail = |message: String| CampaignError {
-        file: Source::Set(arg.to_string()).label(),
-        line: None,
-        field: None,
-        message,
-    };
+    let fail =
+        |message: String| CampaignError::of_file(Source::Set(arg.to_string()).label(), message);
     let (key, value) = arg
         .split_once('=')
         .ok_or_else(|| fail("write it as `key.path=value`".into()))?;

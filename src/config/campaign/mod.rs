@@ -44,6 +44,19 @@ pub struct CampaignError {
     pub message: String,
 }
 
+impl CampaignError {
+    /// An error of the whole file (it cannot be read, or is not what it should be): no line,
+    /// no field.
+    pub fn of_file(file: impl Into<PathBuf>, message: String) -> CampaignError {
+        CampaignError {
+            file: file.into(),
+            line: None,
+            field: None,
+            message,
+        }
+    }
+}
+
 /// A validated campaign with every default filled in, files read, and its hash.
 #[derive(Debug)]
 pub struct Campaign {
@@ -143,12 +156,8 @@ impl Campaign {
         path: &Path,
         overrides: &[String],
     ) -> Result<Campaign, CampaignError> {
-        let text = crate::input_file::read_text(path).map_err(|why| CampaignError {
-            file: path.to_path_buf(),
-            line: None,
-            field: None,
-            message: format!("campaign file: {why}"),
-        })?;
+        let text = crate::input_file::read_text(path)
+            .map_err(|why| CampaignError::of_file(path, format!("campaign file: {why}")))?;
         Campaign::compose(&text, path, overrides)
     }
 
@@ -243,12 +252,7 @@ impl Campaign {
         base_dir: &Path,
     ) -> Result<Campaign, CampaignError> {
         let source = base_dir.join("(resolved campaign of a manifest)");
-        let fail = |message: String| CampaignError {
-            file: source.clone(),
-            line: None,
-            field: None,
-            message,
-        };
+        let fail = |message: String| CampaignError::of_file(&source, message);
         let file: CampaignFile = serde_json::from_value(resolved.clone())
             .map_err(|e| fail(format!("not a campaign of this soig version: {e}")))?;
         let text = toml::to_string(&file).map_err(|e| fail(format!("cannot write it: {e}")))?;

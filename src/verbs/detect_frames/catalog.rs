@@ -22,6 +22,7 @@ use hifitime::Epoch;
 
 use crate::detect::streak::StarTrail;
 use crate::frames::Frame;
+use crate::hint::PredictedTrail;
 use crate::sky::motion::{Camera, ExposureMotion};
 use crate::sky::photometry::photon_rate;
 use crate::sky::radec_unit;
@@ -49,23 +50,6 @@ pub struct FrameSky {
     pub start: Epoch,
     pub exposure_s: f64,
     pub zero_point_mag: Option<f64>,
-}
-
-/// One catalogued star's predicted trail in a frame.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct Predicted {
-    pub ra_deg: f64,
-    pub dec_deg: f64,
-    pub mag: f64,
-    /// Positions in the file's pixel grid (0-based, pixel centres at integers) at the time
-    /// nodes while the star is near the frame, linear in between; one node under fixed pointing.
-    pub nodes: Vec<[f64; 2]>,
-    /// Seconds from the exposure's start of each node: the start and end WCS time the camera's
-    /// turn, so the star-aware pass can follow a trail's wander over the exposure
-    /// (`jitter_across`), as `soig run` does with the renderer's nodes.
-    pub times_s: Vec<f64>,
-    /// Expected photo-electrons while it is near the frame (with the header's `MAGZERO`).
-    pub electrons: Option<f64>,
 }
 
 impl FrameSky {
@@ -159,7 +143,7 @@ impl FrameSky {
         catalog: &StarCatalog,
         region: crate::frames::Region,
         psf_sigma_px: f64,
-    ) -> Vec<Predicted> {
+    ) -> Vec<PredictedTrail> {
         let scale_deg = self.wcs.pixel_scale_arcsec() / 3600.0;
         let margin = 8.0 * psf_sigma_px + 1.0;
         let (x0, y0) = (
@@ -199,7 +183,7 @@ impl FrameSky {
                         continue;
                     };
                     if near(p) {
-                        out.push(Predicted {
+                        out.push(PredictedTrail {
                             ra_deg: s.ra_deg,
                             dec_deg: s.dec_deg,
                             mag: s.mag,
@@ -231,7 +215,7 @@ impl FrameSky {
                     };
                     // One node of slack on each side covers a trail entering between nodes.
                     let (a, b) = (a.saturating_sub(1), (b + 1).min(nodes - 1));
-                    out.push(Predicted {
+                    out.push(PredictedTrail {
                         ra_deg: s.ra_deg,
                         dec_deg: s.dec_deg,
                         mag: s.mag,
@@ -262,24 +246,16 @@ fn parse_date(text: &str) -> anyhow::Result<Epoch> {
 
 /// The predicted trails in the detector's image of `region` (its pixels, 0-based from the
 /// region's corner): only the nodes on it, as `soig run` gives them (`star_trails`).
-pub fn in_region(predicted: &[Predicted], region: crate::frames::Region) -> Vec<StarTrail> {
+pub fn in_region(predicted: &[PredictedTrail], region: crate::frames::Region) -> Vec<StarTrail> {
     let (ox, oy) = (region.x0 as f64, region.y0 as f64);
     let (w, h) = (region.width() as f64, region.height() as f64);
     let on = |x: f64, y: f64| x >= 0.0 && y >= 0.0 && x <= w - 1.0 && y <= h - 1.0;
     predicted
         .iter()
         .filter_map(|p| {
-            let (nodes, times_s): (Vec<(f64, f64)>, Vec<f64>) = p
-                .nodes
-                .iter()
-                .zip(&p.times_s)
-                .map(|(n, &t)| ((n[0] - ox, n[1] - oy), t))
-                .filter(|&((x, y), _)| on(x, y))
-                .unzip();
-            (!nodes.is_empty()).then(|| StarTrail {
-                nodes,
-                times_s,
-                electrons: p.electrons.unwrap_or(f64::NAN),
+            p.on_image(|[x, y]| {
+                let (x, y) = (x - ox, y - oy);
+                on(x, y).then_some((x, y))
             })
         })
         .collect()

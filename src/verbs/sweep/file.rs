@@ -153,11 +153,8 @@ impl Experiment {
     /// Read, check and expand an experiment file; nothing runs.
     pub fn load(path: &Path) -> Result<Experiment, CampaignError> {
         // A FIFO or a device would block or never end: a regular file of a sane size only.
-        let text = crate::input_file::read_text(path).map_err(|e| CampaignError {
-            file: path.to_path_buf(),
-            line: None,
-            field: None,
-            message: format!("cannot read experiment file: {e}"),
+        let text = crate::input_file::read_text(path).map_err(|e| {
+            CampaignError::of_file(path, format!("cannot read experiment file: {e}"))
         })?;
         let file: ExperimentFile = toml::from_str(&text).map_err(|e| CampaignError {
             file: path.to_path_buf(),

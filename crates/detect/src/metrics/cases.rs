@@ -37,6 +37,16 @@ impl SplitMix64 {
     }
 }
 
+/// `random_box()` of tests/reference/metrics_reference.py: a box of 4-64 px a side with its
+/// corner anywhere in 1000 x 1000, `(x1, y1, w, h)`, drawn in the order w, h, x1, y1.
+fn random_box(rng: &mut SplitMix64) -> (f64, f64, f64, f64) {
+    let w = 4.0 + 60.0 * rng.uniform();
+    let h = 4.0 + 60.0 * rng.uniform();
+    let x1 = 1000.0 * rng.uniform();
+    let y1 = 1000.0 * rng.uniform();
+    (x1, y1, w, h)
+}
+
 /// `stress()` of tests/reference/metrics_reference.py: objects with 0-2 jittered detections each (10 % with
 /// a random class), plus 0-2 random false positives per image.
 fn stress(seed: u64, n_images: usize, n_classes: u64) -> Vec<ImageEval> {
@@ -45,10 +55,7 @@ fn stress(seed: u64, n_images: usize, n_classes: u64) -> Vec<ImageEval> {
     for _ in 0..n_images {
         let mut im = ImageEval::default();
         for _ in 0..rng.below(6) {
-            let w = 4.0 + 60.0 * rng.uniform();
-            let h = 4.0 + 60.0 * rng.uniform();
-            let x1 = 1000.0 * rng.uniform();
-            let y1 = 1000.0 * rng.uniform();
+            let (x1, y1, w, h) = random_box(&mut rng);
             let c = rng.below(n_classes) as u32;
             im.truth.push([x1, y1, x1 + w, y1 + h]);
             im.truth_class.push(c);
@@ -72,10 +79,7 @@ fn stress(seed: u64, n_images: usize, n_classes: u64) -> Vec<ImageEval> {
             }
         }
         for _ in 0..rng.below(3) {
-            let w = 4.0 + 60.0 * rng.uniform();
-            let h = 4.0 + 60.0 * rng.uniform();
-            let x1 = 1000.0 * rng.uniform();
-            let y1 = 1000.0 * rng.uniform();
+            let (x1, y1, w, h) = random_box(&mut rng);
             let dc = rng.below(n_classes) as u32;
             let score = 0.6 * rng.uniform();
             im.detections

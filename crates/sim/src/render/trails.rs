@@ -5,27 +5,14 @@
 //! jitter shift (the truth's `jitter_mean_px`, which the FITS WCS includes) moves it where the
 //! WCS puts it.
 
-use serde::Serialize;
-
 use super::Jitter;
 use super::sources::{Path, for_each_source};
 use crate::scene::Scene;
 use crate::sensor::Sensor;
 
-/// One star's predicted path in the original image (pixel centres at integers).
-#[derive(Clone, Debug, Serialize)]
-pub struct PredictedTrail {
-    pub ra_deg: f64,
-    pub dec_deg: f64,
-    pub mag: f64,
-    /// Positions at the renderer's time nodes while the star is near the image (one node for a
-    /// star under fixed pointing); linear in between.
-    pub nodes: Vec<[f64; 2]>,
-    /// Each node's time from the exposure's start, seconds.
-    pub times_s: Vec<f64>,
-    /// Expected photo-electrons over those nodes' share of the exposure.
-    pub expected_electrons: f64,
-}
+/// One star's predicted path in the original image, at the renderer's time nodes (its
+/// expected electrons always known).
+pub use soig_image::hint::PredictedTrail;
 
 /// Every star of `scene` that can put light in the image, as the renderer traces it, shifted by
 /// the image's mean jitter `jitter_mean_px`.
@@ -64,15 +51,13 @@ pub fn star_trails(
     traced
         .into_iter()
         .zip(paths)
-        .map(
-            |(star, (nodes, times_s, expected_electrons))| PredictedTrail {
-                ra_deg: star.ra_deg,
-                dec_deg: star.dec_deg,
-                mag: star.mag,
-                nodes,
-                times_s,
-                expected_electrons,
-            },
-        )
+        .map(|(star, (nodes, times_s, electrons))| PredictedTrail {
+            ra_deg: star.ra_deg,
+            dec_deg: star.dec_deg,
+            mag: star.mag,
+            nodes,
+            times_s,
+            electrons: Some(electrons),
+        })
         .collect()
 }
