@@ -5,7 +5,7 @@ use super::components::Component;
 use super::explain::{Dropped, Reason, Seeds};
 use super::full_lines::MIN_LENGTH_PX;
 use super::maps::Maps;
-use super::refine::{Ends, Seed, refine};
+use super::refine::{Regime, Seed, refine};
 use super::segment::Seg;
 
 /// The fragments of the components `comps` (each with the filter length it came from, in
@@ -19,12 +19,12 @@ pub(super) fn fragments(
     is_star: &dyn Fn(&Seg) -> bool,
 ) -> (Vec<Seg>, Vec<Dropped>) {
     let p = maps.p;
-    // The full-line stage's streaks are too faint per sample for change points.
-    let ends = match seeds {
-        Seeds::FullLine => Ends::BestStretch {
+    // The full-line stage's streaks are each far below the noise sample by sample.
+    let regime = match seeds {
+        Seeds::FullLine => Regime::SubNoise {
             min: (MIN_LENGTH_PX / 2.0) as usize,
         },
-        Seeds::Local | Seeds::LongLine => Ends::ChangePoint,
+        Seeds::Local | Seeds::LongLine => Regime::Resolved,
     };
     let (mut frags, mut dropped) = (Vec::new(), Vec::new());
     for &(ref c, kmax) in comps {
@@ -37,7 +37,7 @@ pub(super) fn fragments(
             shrink,
             ext: kmax,
             contrast,
-            ends,
+            regime,
         };
         let Some(s) = refine(maps, &seed) else {
             dropped.push(Dropped::of_axis((c.cx, c.cy), c.theta, c.half_len, seeds));

@@ -17,9 +17,9 @@
 //! background, and in units of the spread of all its parallels' contrasts (measured).
 
 use super::components::Component;
-use super::radon::bin;
+use super::radon::binned_unit;
 use super::segment::angle_diff_deg;
-use super::stats::{map_stats, median_of};
+use super::stats::median_of;
 
 /// Block size of the binned map: a streak's cross-section (PSF sigma 1.4 px, smoothed again by
 /// step 2) falls within one 4-pixel offset bin or two neighbours, whose sum is also tried.
@@ -54,13 +54,9 @@ pub(super) fn full_line_components(
     if (bw.max(bh) as f64) < min_len || bw < 2 || bh < 2 {
         return Vec::new();
     }
-    let mut map = bin(zc, w, BIN, bw, bh);
-    let sd = map_stats(&map, bw, bh).1;
-    if sd.is_nan() || sd <= 0.0 {
+    let Some(map) = binned_unit(zc, w, BIN, bw, bh) else {
         return Vec::new();
-    }
-    let inv = (1.0 / sd) as f32;
-    map.iter_mut().for_each(|v| *v *= inv);
+    };
     let grid = Grid::new(map, bw, bh);
     let shears: Vec<Shear> = Shear::all(bw, bh)
         .into_iter()
@@ -72,7 +68,7 @@ pub(super) fn full_line_components(
     lines
         .iter()
         .filter_map(|l| best_segment(&grid, &shears[l.shear], &sums[l.shear], l, min_len))
-        // Step 5 looks for the ends along the whole line (`Ends::BestStretch`): the segment
+        // Step 5 looks for the ends along the whole line (`Regime::SubNoise`): the segment
         // found here on the binned map ends within a few bins of them, but not always.
         .map(|c| (c, (w + h) as f64))
         .collect()

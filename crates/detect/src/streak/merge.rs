@@ -2,7 +2,7 @@
 
 use super::maps::Maps;
 use super::params::Sanitized;
-use super::refine::{Ends, Seed, refine};
+use super::refine::{Regime, Seed, refine};
 use super::segment::{Seg, angle_diff_deg};
 
 /// Merge collinear fragments until none merge. Fragments join `done`, in which no two
@@ -61,7 +61,7 @@ fn joined(maps: &Maps, a: &Seg, b: &Seg) -> Option<Seg> {
             shrink: 0.0,
             ext: 4.0 * maps.p.psf_sigma + 4.0,
             contrast: a.contrast || b.contrast,
-            ends: Ends::ChangePoint,
+            regime: Regime::Resolved,
         },
     )
 }

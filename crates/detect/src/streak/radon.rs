@@ -46,15 +46,9 @@ pub(super) fn long_line_components(
         if bw < MIN_SIDE || bh < MIN_SIDE {
             continue;
         }
-        let mut map = bin(zc, w, b, bw, bh);
-        // Unit robust noise, so the white-noise model of the line sums is the right floor.
-        let sd = map_stats(&map, bw, bh).1;
-        // A constant map (sd 0) or a NaN has no noise to scale to.
-        if sd.is_nan() || sd <= 0.0 {
+        let Some(map) = binned_unit(zc, w, b, bw, bh) else {
             continue;
-        }
-        let inv = (1.0 / sd) as f32;
-        map.iter_mut().for_each(|v| *v *= inv);
+        };
         let q = binned_params(p, b);
         let noise = LineNoise::measure_at(&map, bw, bh, &q, NOISE_SAMPLES);
         let (best, arg) = line_filter(&map, bw, bh, &q, &noise);
@@ -74,8 +68,28 @@ pub(super) fn long_line_components(
     out
 }
 
+/// The `bw` x `bh` block means of `b` x `b` pixels of `zc` scaled to unit robust noise, so
+/// that the white-noise model of line sums on it is the right floor; `None` for a map with no
+/// noise to scale to (constant, sd 0, or NaN).
+pub(super) fn binned_unit(
+    zc: &[f32],
+    w: usize,
+    b: usize,
+    bw: usize,
+    bh: usize,
+) -> Option<Vec<f32>> {
+    let mut map = bin(zc, w, b, bw, bh);
+    let sd = map_stats(&map, bw, bh).1;
+    if sd.is_nan() || sd <= 0.0 {
+        return None;
+    }
+    let inv = (1.0 / sd) as f32;
+    map.iter_mut().for_each(|v| *v *= inv);
+    Some(map)
+}
+
 /// Block means of `b` x `b` pixels (the last partial blocks left out).
-pub(super) fn bin(zc: &[f32], w: usize, b: usize, bw: usize, bh: usize) -> Vec<f32> {
+fn bin(zc: &[f32], w: usize, b: usize, bw: usize, bh: usize) -> Vec<f32> {
     let mut out = vec![0f32; bw * bh];
     let inv = 1.0 / (b * b) as f32;
     for by in 0..bh {

@@ -19,27 +19,31 @@ pub(super) struct Seed {
     pub(super) ext: f64,
     /// Read the profile as the contrast instead of the mean of z (see [`refine`]).
     pub(super) contrast: bool,
-    /// How the ends are found on the profile.
-    pub(super) ends: Ends,
+    /// How bright its samples are against the noise: how it is searched, its ends found and
+    /// its SNR read.
+    pub(super) regime: Regime,
 }
 
 /// A full-line streak's samples are clipped to this many times their noise before their mean
 /// (see [`refine`]'s SNR).
 const SAMPLE_CLIP: f64 = 3.0;
 
-/// How [`refine`] finds a segment's ends on the profile along its axis.
+/// How a seed's streak stands against the noise, sample by sample along its axis, and so how
+/// [`refine`] searches its axis, finds its ends and reads its SNR.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub(super) enum Ends {
-    /// The change points of the half-level excess from the centre, each sample capped at 1.5
-    /// times the level (a star on the axis moves no end).
-    ChangePoint,
-    /// The stretch of the profile whose sum is the most significant (sum / sqrt(samples)), at
-    /// least `min` samples long: the matched filter's own ends. For streaks whose samples are
-    /// each far below the noise (the full-line stage's), where the cap clips the noise's upper
-    /// half and the capped excess of a faint streak falls below zero, which pulled the ends of
-    /// a 1089-pixel streak at line SNR 11.8 in to 700 pixels (development image 34 of
-    /// `scripts/faint-limit-dev.sh`).
-    BestStretch { min: usize },
+pub(super) enum Regime {
+    /// Samples at or above the noise (steps 3 and 3b's seeds): the axis searched widely; the
+    /// ends at the change points of the half-level excess from the centre, each sample capped
+    /// at 1.5 times the level (a star on the axis moves no end); the level from the median.
+    Resolved,
+    /// Each sample far below the noise (the full-line stage's seeds, whose axis is known to a
+    /// fraction of a degree): the axis searched narrowly; the ends those of the stretch of
+    /// the profile whose sum is the most significant (sum / sqrt(samples)), at least `min`
+    /// samples long, the matched filter's own ends (the cap clips the noise's upper half, and
+    /// the capped excess of a faint streak falls below zero, which pulled the ends of a
+    /// 1089-pixel streak at line SNR 11.8 in to 700 pixels: development image 34 of
+    /// `scripts/faint-limit-dev.sh`); the level from a clipped mean.
+    SubNoise { min: usize },
 }
 
 /// For the axes of orientation `theta` through (cx, cy) + k du n, k = -nu..=nu (n the
@@ -91,12 +95,12 @@ pub(super) fn refine(maps: &Maps, seed: &Seed) -> Option<Seg> {
     // `clip_sigma` (bright stars are masked already): the core of a bright streak, not a
     // flat clipped band, sets the axis.
     let clip = 4.0 * p.clip;
-    // A full-line seed (`Ends::BestStretch`) knows its axis to a fraction of a degree and a
+    // A full-line seed (`Regime::SubNoise`) knows its axis to a fraction of a degree and a
     // few pixels: searched as widely as a local one, a star trail through its centre (17
     // degrees off a streak at line SNR 11, development image 7) took the axis.
-    let first = match seed.ends {
-        Ends::ChangePoint => (step / 4.0, 8i32, 0.5, 4i32),
-        Ends::BestStretch { .. } => (step / 16.0, 2, 0.5, 4),
+    let first = match seed.regime {
+        Regime::Resolved => (step / 4.0, 8i32, 0.5, 4i32),
+        Regime::SubNoise { .. } => (step / 16.0, 2, 0.5, 4),
     };
     for (dth, nth, du, nu) in [
         first,
@@ -152,9 +156,9 @@ pub(super) fn refine(maps: &Maps, seed: &Seed) -> Option<Seg> {
     if level <= 0.0 {
         return None;
     }
-    let (s, e) = match seed.ends {
-        Ends::ChangePoint => change_points(&prof, ta, tb, level),
-        Ends::BestStretch { min } => best_stretch(&prof, ta, min).unwrap_or((0, 0)),
+    let (s, e) = match seed.regime {
+        Regime::Resolved => change_points(&prof, ta, tb, level),
+        Regime::SubNoise { min } => best_stretch(&prof, ta, min).unwrap_or((0, 0)),
     };
     // Robust SNR: the median contrast over the segment times its sample count, so that a
     // bright star on the axis does not make a streak, nor a raised patch of background.
@@ -169,13 +173,13 @@ pub(super) fn refine(maps: &Maps, seed: &Seed) -> Option<Seg> {
         })
         .collect();
     let n = seg_vals.len();
-    let level = match seed.ends {
-        Ends::ChangePoint => median_of(&mut seg_vals),
+    let level = match seed.regime {
+        Regime::Resolved => median_of(&mut seg_vals),
         // Each sample of a full-line streak is far below the noise, where the median keeps
         // only 0.8 of the mean's SNR (sqrt(2 / pi)); the mean of the samples clipped to
         // `SAMPLE_CLIP` of their noise keeps nearly all of it, and a star on the axis adds
         // at most that clip over its few samples.
-        Ends::BestStretch { .. } => {
+        Regime::SubNoise { .. } => {
             let c = SAMPLE_CLIP * maps.contrast_sum_sd(&taps, th, 1);
             seg_vals.iter().map(|v| v.clamp(-c, c)).sum::<f64>() / n.max(1) as f64
         }

@@ -13,7 +13,7 @@ use super::noise::LineNoise;
 use super::output::candidate;
 use super::params::{Sanitized, StreakParams};
 use super::reach::reach;
-use super::refine::{Ends, Seed, refine};
+use super::refine::{Regime, Seed, refine};
 use super::seeds::{line_noise, local_seeds};
 use super::segment::Seg;
 use super::star_test::StarTest;
@@ -97,7 +97,7 @@ fn refined(maps: &Maps) -> Option<Seg> {
             shrink: 10.0,
             ext: 51.0,
             contrast: true,
-            ends: Ends::ChangePoint,
+            regime: Regime::Resolved,
         },
     )
 }
