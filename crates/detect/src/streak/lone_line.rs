@@ -47,7 +47,7 @@ const LONG_AT_EDGE: f64 = 3.0;
 /// few degrees off them (`NEAR_DEG`: the first pass drops lines within 5 degrees and a short
 /// line's orientation uncertainty), unevenly lit: a piece above `PAIR_HIGH` of its level or
 /// below `PIECE_LOW` (pairs 1.32-14 / 0.80 and below; debris 1.02-1.25 / 0.77 and above).
-const PAIR_LONGEST: f64 = 2.5;
+pub(super) const PAIR_LONGEST: f64 = 2.5;
 pub(super) const NEAR_DEG: f64 = 8.0;
 const PAIR_HIGH: f64 = 1.3;
 /// The fewest lines along the trails whose median length is the trails' length.
@@ -149,14 +149,30 @@ impl Seams {
 /// The mean of `z` at -1, 0 and 1 px across the line `c`, every pixel along it from end to end
 /// (the ends are in pixel-edge coordinates, `z`'s pixel centres at integers).
 pub(super) fn profile(c: &Candidate, z: &[f32], w: usize, h: usize) -> Vec<f64> {
-    let [[x0, y0], [x1, y1]] = c.ends;
-    let (x0, y0, x1, y1) = (x0 - 0.5, y0 - 0.5, x1 - 0.5, y1 - 0.5);
+    let [a, b] = c.ends;
+    profile_at(a, b, 0.0, 0.0, z, w, h)
+}
+
+/// The profile from `a` to `b` (pixel-edge coordinates) along a run shifted `offset` px across
+/// it and turned by `slope` (lateral px per px along) about its midpoint: the mean of `z` at
+/// -1, 0 and 1 px across the run, every pixel along it.
+pub(super) fn profile_at(
+    a: [f64; 2],
+    b: [f64; 2],
+    offset: f64,
+    slope: f64,
+    z: &[f32],
+    w: usize,
+    h: usize,
+) -> Vec<f64> {
+    let (x0, y0, x1, y1) = (a[0] - 0.5, a[1] - 0.5, b[0] - 0.5, b[1] - 0.5);
     let len = (x1 - x0).hypot(y1 - y0).max(1.0);
     let (ux, uy) = ((x1 - x0) / len, (y1 - y0) / len);
     (0..len as usize)
         .map(|i| {
             let t = i as f64 + 0.5;
-            let (x, y) = (x0 + t * ux, y0 + t * uy);
+            let o = offset + slope * (t - 0.5 * len);
+            let (x, y) = (x0 + t * ux - o * uy, y0 + t * uy + o * ux);
             [-1.0, 0.0, 1.0]
                 .iter()
                 .map(|o| bilinear(z, w, h, x - o * uy, y + o * ux) as f64)

@@ -126,6 +126,7 @@ mod refine;
 mod runs;
 mod seam_cut;
 mod seeds;
+mod slant;
 mod segment;
 mod sky;
 mod smooth;
@@ -310,10 +311,13 @@ fn along_own_trails(
             (piece, star)
         })
         .filter(|(c, star)| {
+            // Two trails side by side whose light runs along the trails' direction in each
+            // half are no debris, however evenly lit (`slant`).
+            let pair = |s: &Seams| slant::side_by_side(c, s, m.angle_deg, &z, (w, h));
             if *star {
-                seams(c).is_some_and(|s| s.lone())
+                seams(c).is_some_and(|s| s.lone() && !pair(&s))
             } else {
-                !near(c) || !seams(c).is_some_and(|s| s.pair())
+                !near(c) || !seams(c).is_some_and(|s| s.pair() || pair(&s))
             }
         })
         .map(|(c, _)| c)
