@@ -311,18 +311,21 @@ fn along_own_trails(
             (piece, star)
         })
         .filter(|(c, star)| {
-            // Two trails side by side whose light runs along the trails' direction in each
-            // half are no debris, however evenly lit (`slant`).
-            let pair = |s: &Seams| slant::side_by_side(c, s, m.angle_deg, &z, (w, h));
             if *star {
-                seams(c).is_some_and(|s| s.lone() && !pair(&s))
+                seams(c).is_some_and(|s| s.lone())
             } else {
-                !near(c) || !seams(c).is_some_and(|s| s.pair() || pair(&s))
+                !near(c) || !seams(c).is_some_and(|s| s.pair())
             }
         })
         .map(|(c, _)| c)
         .collect();
-    union(first, debris, trail, p)
+    // Two trails side by side whose light runs along the trails' direction in each half are
+    // no debris, however evenly lit and at whatever angle the pass found their chord (`slant`).
+    let mut out = union(first, debris, trail, p);
+    out.retain(|c| {
+        !seams(c).is_some_and(|s| slant::side_by_side(c, &s, m.angle_deg, &z, (w, h)))
+    });
+    out
 }
 
 /// The most lines along the trails that the star-aware pass keeps when told of none (a
