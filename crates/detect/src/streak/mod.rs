@@ -217,7 +217,8 @@ pub fn detect_streaks_among_stars(
 /// share a direction, the first pass runs along it, and the star-aware pass, with no trail
 /// predicted, finds every line along the trails; of those, the lines off the direction that
 /// most of them share (`TrailModel::settle`, `explains`), or along it but no trail's
-/// (`lone_line`), join the first pass's. Where they share none (point stars), as
+/// (`lone_line`), join the first pass's; a box whose halves' light runs along the trails is
+/// two trails side by side (`slant`). Where they share none (point stars), as
 /// [`detect_streaks`], unchanged. A direction or trails given: as
 /// [`detect_streaks_among_stars`], and nothing measured (None).
 pub fn detect_streaks_on_frame(
