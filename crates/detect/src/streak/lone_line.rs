@@ -52,6 +52,27 @@ pub(super) const NEAR_DEG: f64 = 8.0;
 const PAIR_HIGH: f64 = 1.3;
 /// The fewest lines along the trails whose median length is the trails' length.
 const MIN_LINES: usize = 3;
+/// A line with this many others along the trails of its own length (within `ALIKE_LOW` to
+/// `ALIKE_HIGH` of it) is a star's trail like them, however long against the trails' median:
+/// in soig's survey frames the trails drift 400-1000 px, most are cut by the frame's edge or
+/// broken, and the median of the lines along them (308 px in one frame whose whole trails were
+/// 670-720) made whole trails "lone" (`python3 scripts/catalog-robustness.py --images 40
+/// --seed 7001`, no catalogue: 24 false boxes, 2 before the lone rule). On the development
+/// SatSim frames (seeds 3-6, 11, 12) no debris line kept as lone had more than one other line
+/// within 0.85-1.2 of its length.
+const MIN_ALIKE: usize = 2;
+const ALIKE_LOW: f64 = 0.85;
+const ALIKE_HIGH: f64 = 1.2;
+
+/// Whether `MIN_ALIKE` lines of `along` other than `c` (by its ends) are about as long as it.
+pub(super) fn like_others(c: &Candidate, along: &[&Candidate]) -> bool {
+    along
+        .iter()
+        .filter(|o| o.ends != c.ends)
+        .filter(|o| (ALIKE_LOW..=ALIKE_HIGH).contains(&(o.length_px / c.length_px.max(1.0))))
+        .count()
+        >= MIN_ALIKE
+}
 
 /// The trails' length: the median length of the lines `along` them (most are single trails),
 /// where at least `MIN_LINES`.
@@ -373,6 +394,22 @@ pub(super) mod tests {
         // Two trail lengths long, it may be two trails side by side: the bump still counts.
         let z = crossed(200, 400);
         assert!(Seams::of(&line(200.0, 400.0, 20.0), 100.0, &z, 600, 40).pair());
+    }
+
+    #[test]
+    fn a_line_as_long_as_two_others_is_a_trail_like_them() {
+        let (a, b, c, d) = (
+            line(0.0, 700.0, 5.0),
+            line(0.0, 680.0, 15.0),
+            line(0.0, 720.0, 25.0),
+            line(0.0, 300.0, 35.0),
+        );
+        assert!(like_others(&a, &[&a, &b, &c, &d]));
+        // One other of its length is not enough (a chain of trails beside debris).
+        assert!(!like_others(&a, &[&a, &b, &d]));
+        // Nor others much shorter or longer.
+        let e = line(0.0, 900.0, 45.0);
+        assert!(!like_others(&a, &[&a, &d, &e]));
     }
 
     #[test]

@@ -148,7 +148,7 @@ mod unit_noise;
 mod unlisted;
 
 pub use explain::{Dropped, Reason, Seeds};
-use lone_line::{NEAR_DEG, Seams, trail_length};
+use lone_line::{NEAR_DEG, Seams, like_others, trail_length};
 pub use output::Candidate;
 pub use own_trails::{OwnTrails, TrailModel};
 use own_trails::{from_lines, own_trails};
@@ -294,6 +294,8 @@ fn along_own_trails(
         .map(|s| s.0)
         .collect();
     let trail_px = trail_length(&along);
+    // A line as long as two others along the trails is a trail like them (`like_others`).
+    let alike: Vec<bool> = second.iter().map(|c| like_others(c, &along)).collect();
     // A line's seams are read only where a rule asks for them (a profile along it each).
     let seams = |c: &Candidate| trail_px.map(|t| Seams::of(c, t, &z, w, h));
     // A few degrees off the trails, a line joined to a trail at an end is first cut at the
@@ -303,22 +305,22 @@ fn along_own_trails(
     let near = |c: &Candidate| angle_diff_deg(c.orientation_deg, m.angle_deg) <= NEAR_DEG;
     let debris = second
         .into_iter()
-        .zip(star)
-        .map(|(c, star)| {
+        .zip(star.into_iter().zip(alike))
+        .map(|(c, (star, alike))| {
             let piece = match trail_px {
                 Some(t) if !star && near(&c) => seam_cut::cut(&c, t, &z, (w, h), p).unwrap_or(c),
                 _ => c,
             };
-            (piece, star)
+            (piece, star, alike)
         })
-        .filter(|(c, star)| {
+        .filter(|(c, star, alike)| {
             if *star {
-                seams(c).is_some_and(|s| s.lone())
+                !alike && seams(c).is_some_and(|s| s.lone())
             } else {
                 !near(c) || !seams(c).is_some_and(|s| s.pair())
             }
         })
-        .map(|(c, _)| c)
+        .map(|(c, _, _)| c)
         .collect();
     // Two trails side by side whose light runs along the trails' direction in each half are
     // no debris, however evenly lit and at whatever angle the pass found their chord (`slant`).
