@@ -126,6 +126,7 @@ mod refine;
 mod runs;
 mod seam_cut;
 mod seeds;
+mod slant;
 mod segment;
 mod sky;
 mod smooth;
@@ -147,7 +148,7 @@ mod unit_noise;
 mod unlisted;
 
 pub use explain::{Dropped, Reason, Seeds};
-use lone_line::{NEAR_DEG, Seams, trail_length};
+use lone_line::{NEAR_DEG, Seams, like_others, trail_length};
 pub use output::Candidate;
 pub use own_trails::{OwnTrails, TrailModel};
 use own_trails::{from_lines, own_trails};
@@ -216,7 +217,8 @@ pub fn detect_streaks_among_stars(
 /// share a direction, the first pass runs along it, and the star-aware pass, with no trail
 /// predicted, finds every line along the trails; of those, the lines off the direction that
 /// most of them share (`TrailModel::settle`, `explains`), or along it but no trail's
-/// (`lone_line`), join the first pass's. Where they share none (point stars), as
+/// (`lone_line`), join the first pass's; a box whose halves' light runs along the trails is
+/// two trails side by side (`slant`). Where they share none (point stars), as
 /// [`detect_streaks`], unchanged. A direction or trails given: as
 /// [`detect_streaks_among_stars`], and nothing measured (None).
 pub fn detect_streaks_on_frame(
@@ -292,6 +294,8 @@ fn along_own_trails(
         .map(|s| s.0)
         .collect();
     let trail_px = trail_length(&along);
+    // A line as long as two others along the trails is a trail like them (`like_others`).
+    let alike: Vec<bool> = second.iter().map(|c| like_others(c, &along)).collect();
     // A line's seams are read only where a rule asks for them (a profile along it each).
     let seams = |c: &Candidate| trail_px.map(|t| Seams::of(c, t, &z, w, h));
     // A few degrees off the trails, a line joined to a trail at an end is first cut at the
@@ -301,24 +305,30 @@ fn along_own_trails(
     let near = |c: &Candidate| angle_diff_deg(c.orientation_deg, m.angle_deg) <= NEAR_DEG;
     let debris = second
         .into_iter()
-        .zip(star)
-        .map(|(c, star)| {
+        .zip(star.into_iter().zip(alike))
+        .map(|(c, (star, alike))| {
             let piece = match trail_px {
                 Some(t) if !star && near(&c) => seam_cut::cut(&c, t, &z, (w, h), p).unwrap_or(c),
                 _ => c,
             };
-            (piece, star)
+            (piece, star, alike)
         })
-        .filter(|(c, star)| {
+        .filter(|(c, star, alike)| {
             if *star {
-                seams(c).is_some_and(|s| s.lone())
+                !alike && seams(c).is_some_and(|s| s.lone())
             } else {
                 !near(c) || !seams(c).is_some_and(|s| s.pair())
             }
         })
-        .map(|(c, _)| c)
+        .map(|(c, _, _)| c)
         .collect();
-    union(first, debris, trail, p)
+    // Two trails side by side whose light runs along the trails' direction in each half are
+    // no debris, however evenly lit and at whatever angle the pass found their chord (`slant`).
+    let mut out = union(first, debris, trail, p);
+    out.retain(|c| {
+        !seams(c).is_some_and(|s| slant::side_by_side(c, &s, m.angle_deg, &z, (w, h)))
+    });
+    out
 }
 
 /// The most lines along the trails that the star-aware pass keeps when told of none (a
