@@ -126,9 +126,9 @@ mod refine;
 mod runs;
 mod seam_cut;
 mod seeds;
-mod slant;
 mod segment;
 mod sky;
+mod slant;
 mod smooth;
 mod star_test;
 mod stars;
@@ -325,9 +325,7 @@ fn along_own_trails(
     // Two trails side by side whose light runs along the trails' direction in each half are
     // no debris, however evenly lit and at whatever angle the pass found their chord (`slant`).
     let mut out = union(first, debris, trail, p);
-    out.retain(|c| {
-        !seams(c).is_some_and(|s| slant::side_by_side(c, &s, m.angle_deg, &z, (w, h)))
-    });
+    out.retain(|c| !seams(c).is_some_and(|s| slant::side_by_side(c, &s, m.angle_deg, &z, (w, h))));
     out
 }
 

@@ -106,7 +106,10 @@ mod tests {
         let (z, trail_deg) = pair_map();
         let c = line(50.0, 220.0, 20.0);
         let [a, b] = halves(&c, trail_deg, &z, 400, 40);
-        assert!(a.unwrap() >= SLANT_MIN && b.unwrap() >= SLANT_MIN, "{a:?} {b:?}");
+        assert!(
+            a.unwrap() >= SLANT_MIN && b.unwrap() >= SLANT_MIN,
+            "{a:?} {b:?}"
+        );
         assert!(judged(&c, &z, trail_deg));
         // Told that the trails run along the line, the two directions are one: no pair.
         assert!(!judged(&c, &z, 0.0));
