@@ -111,14 +111,17 @@ fn follow(maps: &Maps, e: Point, u: (f64, f64), level: f64) -> Point {
         let across = (ACROSS_PX * (1.0 + missed)).min(MAX_ACROSS_PX);
         let n_across = (across / ACROSS_STEP_PX).round() as i64;
         let offsets = (-n_across..=n_across).map(|j| off + j as f64 * ACROSS_STEP_PX);
+        let means: Vec<(f64, f64)> = offsets.clone().map(|o| (o, mean(o))).collect();
+        // The mean on the followed line itself (the centre offset, `j` 0) ...
+        let on_line = means[n_across as usize].1;
+        // ... and the best of them, which the walk follows.
         let (o_best, m) =
-            offsets
-                .clone()
-                .map(|o| (o, mean(o)))
-                .fold(
-                    (off, f64::NEG_INFINITY),
-                    |b, c| if c.1 > b.1 { c } else { b },
-                );
+            means.iter().fold(
+                (off, f64::NEG_INFINITY),
+                |b, &c| {
+                    if c.1 > b.1 { c } else { b }
+                },
+            );
         // Hidden where the trails hide any line the streak may take (whole pixels apart).
         let hidden = offsets.step_by((1.0 / ACROSS_STEP_PX) as usize).any(|o| {
             let mut removed: Vec<f64> = (0..n).map(|k| removed_at(maps, at(o, k))).collect();
@@ -126,11 +129,12 @@ fn follow(maps: &Maps, e: Point, u: (f64, f64), level: f64) -> Point {
         });
         // A seen piece's gain is read on the line the streak is followed along, not on the
         // best of the offsets searched, which noise alone lifts: on the original
-        // semisynthetic development row (seed 777) that reading carried two streaks' ends 175
-        // and 240 px past their true ends (`reach_does_not_follow_noise_beyond_the_end`). Under a hidden piece the
-        // followed line has no fair reading (the subtraction took the streak's light with
-        // the trail's), so the best offset stays, and only light counts there.
-        let read = if hidden { m } else { mean(off) };
+        // semisynthetic development row (seed 777) that reading carried two streaks' ends
+        // 175 and 240 px past their true ends (`reach_does_not_follow_noise_beyond_the_end`).
+        // Under a hidden piece the followed line has no fair reading (the subtraction took
+        // the streak's light with the trail's), so the best offset stays, and only light
+        // counts there.
+        let read = if hidden { m } else { on_line };
         let gain = (read.min(cap) - 0.5 * level) * PIECE_PX;
         if !hidden && m >= 0.5 * level {
             (off, missed) = (o_best, 0.0);

@@ -16,6 +16,7 @@ use super::reach::reach;
 use super::refine::{Regime, Seed, refine};
 use super::seeds::{line_noise, local_seeds};
 use super::segment::Seg;
+use super::smooth::{gaussian_kernel, smooth};
 use super::star_test::StarTest;
 use super::unit_noise::unit_noise_map;
 use crate::Detection;
@@ -358,35 +359,15 @@ pub(super) fn cand(x0: f64, y0: f64, x1: f64, y1: f64, score: f64) -> Candidate 
     }
 }
 
-/// Unit-variance noise smoothed as the detector's map is (a Gaussian of the PSF's sigma),
-/// from `seed`.
+/// Unit-variance noise smoothed as the detector's map is (step 2's Gaussian of the PSF's
+/// sigma), from `seed`.
 fn smoothed_noise(seed: u64) -> Vec<f32> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let n = Normal::new(0.0, 1.0).unwrap();
-    let white: Vec<f64> = (0..W * H).map(|_| n.sample(&mut rng)).collect();
-    let s = params().psf_sigma;
-    let r = (3.0 * s).ceil() as i64;
-    let k: Vec<f64> = (-r..=r)
-        .map(|d| (-(d * d) as f64 / (2.0 * s * s)).exp())
-        .collect();
-    let blur = |src: &[f64], dx: usize, dy: usize| -> Vec<f64> {
-        let mut out = vec![0.0; W * H];
-        for y in 0..H {
-            for x in 0..W {
-                out[y * W + x] = (-r..=r)
-                    .map(|d| {
-                        let xx = (x as i64 + d * dx as i64).clamp(0, W as i64 - 1) as usize;
-                        let yy = (y as i64 + d * dy as i64).clamp(0, H as i64 - 1) as usize;
-                        k[(d + r) as usize] * src[yy * W + xx]
-                    })
-                    .sum();
-            }
-        }
-        out
-    };
-    let z = blur(&blur(&white, 1, 0), 0, 1);
-    let sd = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
-    z.iter().map(|v| (v / sd) as f32).collect()
+    let n = Normal::new(0.0f32, 1.0).unwrap();
+    let white: Vec<f32> = (0..W * H).map(|_| n.sample(&mut rng)).collect();
+    let z = smooth(&white, W, H, &gaussian_kernel(params().psf_sigma));
+    let sd = (z.iter().map(|&v| (v as f64).powi(2)).sum::<f64>() / z.len() as f64).sqrt();
+    z.iter().map(|&v| (v as f64 / sd) as f32).collect()
 }
 
 /// `reach` in the star-aware pass, nothing hidden: a faint streak whose refined segment already
