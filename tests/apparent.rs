@@ -54,7 +54,10 @@ fn apparent_switch_moves_the_debris_against_the_stars() {
     let on = rendered(&campaign("apparent_positions = true\n"), 3);
     for (a, b) in off.iter().zip(&on) {
         let (sa, sb) = (&a.scene, &b.scene);
-        assert_eq!((sa.debris_index, sa.start), (sb.debris_index, sb.start));
+        assert_eq!(
+            (sa.object.debris_index, sa.exposure.start),
+            (sb.object.debris_index, sb.exposure.start)
+        );
         let ea = a.exposure.truth.ephemeris.expect("ephemeris in the truth");
         let eb = b.exposure.truth.ephemeris.expect("ephemeris in the truth");
         // Off: the recorded place is the geometric direction of the recorded states.
@@ -62,7 +65,8 @@ fn apparent_switch_moves_the_debris_against_the_stars() {
         let [ra, dec] = ea.debris_radec_mid_deg;
         assert!(angle_deg(radec_unit(ra, dec), u) * 3600.0 < 1e-6);
         // On: planetary aberration, first order in v/c (second order: ~0.004 arcsec).
-        let mid = sa.start + hifitime::Duration::from_seconds(sa.exposure_s / 2.0);
+        let mid =
+            sa.exposure.start + hifitime::Duration::from_seconds(sa.exposure.exposure_s / 2.0);
         let ve = earth_velocity_km_s(mid);
         let v = eb.debris_gcrs_km_s;
         let w = scale([v[0] + ve[0], v[1] + ve[1], v[2] + ve[2]], 1.0 / C_KM_S);
@@ -74,7 +78,10 @@ fn apparent_switch_moves_the_debris_against_the_stars() {
         assert!(miss < 0.005, "{miss} arcsec of a {shift} arcsec shift");
         assert!((2.0..35.0).contains(&shift), "{shift}");
         // The boresight follows the debris (to the TAN curvature over the placement, ~1e-3).
-        let (pa, pb) = (boresight(&sa.pointing), boresight(&sb.pointing));
+        let (pa, pb) = (
+            boresight(&sa.exposure.pointing),
+            boresight(&sb.exposure.pointing),
+        );
         let moved = angle_deg(radec_unit(pa.0, pa.1), radec_unit(pb.0, pb.1)) * 3600.0;
         assert!((moved - shift).abs() < 0.01 * shift, "{moved} vs {shift}");
     }

@@ -50,18 +50,18 @@ fn frames_of_a_collect_share_its_draw_and_plan() {
                     })
                 );
                 assert_eq!(image.exposure.truth.collect, s.collect);
-                assert_eq!(s.debris_index, first.debris_index);
-                assert_eq!(s.exposure_s, first.exposure_s);
+                assert_eq!(s.object.debris_index, first.object.debris_index);
+                assert_eq!(s.exposure.exposure_s, first.exposure.exposure_s);
                 // Frame f starts f (exposure + gap) after the first, to the microsecond of
                 // hifitime's arithmetic on a 2022 epoch (nanoseconds, 1e-6 s is slack).
-                let dt = (s.start - first.start).to_seconds();
-                let want = f as f64 * (first.exposure_s + 10.0);
+                let dt = (s.exposure.start - first.exposure.start).to_seconds();
+                let want = f as f64 * (first.exposure.exposure_s + 10.0);
                 assert!((dt - want).abs() < 1e-6, "{mode} {k}/{f}: {dt} vs {want}");
-                match (&first.pointing, &s.pointing) {
+                match (&first.exposure.pointing, &s.exposure.pointing) {
                     // One inertial direction for the whole collect.
                     (Pointing::Fixed { .. }, p) => assert_eq!(
                         p.mid_radec_deg(),
-                        first.pointing.mid_radec_deg(),
+                        first.exposure.pointing.mid_radec_deg(),
                         "fixed {k}/{f}"
                     ),
                     // The first frame's attitude rotation, run on to this frame's middle.
@@ -83,8 +83,8 @@ fn frames_of_a_collect_share_its_draw_and_plan() {
                     }
                     // The object held on the first frame's pixel (0.01 px, as tests/track.rs).
                     (Pointing::Track(_), Pointing::Track(_)) => {
-                        let home = first.trajectory[first.trajectory.len() / 2];
-                        for p in &s.trajectory {
+                        let home = first.object.trajectory[first.object.trajectory.len() / 2];
+                        for p in &s.object.trajectory {
                             let d = (p.x_px - home.x_px).hypot(p.y_px - home.y_px);
                             assert!(d < 0.01, "track {k}/{f}: {d} px");
                         }

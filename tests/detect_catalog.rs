@@ -62,7 +62,7 @@ fn write_catalog_as(
     let inputs = experiment::inputs(c).unwrap();
     let scene = soig::scene::draw(&x.scene, &x.sensor, &inputs, x.seed, index).unwrap();
     let mut csv = String::from("ra,dec,mag\n");
-    for (k, s) in scene.stars.iter().enumerate() {
+    for (k, s) in scene.exposure.stars.iter().enumerate() {
         let Some((ra, dec)) = listed(k, s.ra_deg, s.dec_deg) else {
             continue;
         };

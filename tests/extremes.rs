@@ -99,7 +99,7 @@ fn pole_fields_are_valid_images() {
         let tan = s.projection(&sensor_of(&c));
         // The streak passes within a pixel of the pole (the image centre is on or near it):
         // pixel -> sky -> pixel is the identity along it, though RA jumps by up to 180 deg.
-        for p in &s.trajectory {
+        for p in &s.object.trajectory {
             let (x, y) = tan.pixel(p.ra_deg, p.dec_deg).unwrap();
             assert!(
                 (x - p.x_px).abs() < 1e-6 && (y - p.y_px).abs() < 1e-6,
@@ -212,7 +212,7 @@ fn ra_seam_is_continuous() {
         2.0,
     );
     let tan = s.projection(&sensor_of(&c));
-    let inside = stars_in_image(&tan, &s.stars, w);
+    let inside = stars_in_image(&tan, &s.exposure.stars, w);
     let e = render_scene(&c, &s, 2);
     all_finite(&e);
     let (east, west): (Vec<&Placed>, Vec<_>) = inside.iter().partition(|(st, _)| st.ra_deg < 180.0);
@@ -305,7 +305,7 @@ fn exposures_of_10_ms_and_600_s() {
             ),
         );
         for (s, e) in draw_and_render(&c, 1) {
-            assert_eq!(s.exposure_s, t);
+            assert_eq!(s.exposure.exposure_s, t);
             let n = e.adu.len() as f64;
             let debris_adu = e.truth.seen.rendered_debris_electrons as f64 / 1.6;
             let stars_adu = (e.electrons.iter().map(|&v| v as f64).sum::<f64>()
@@ -315,7 +315,7 @@ fn exposures_of_10_ms_and_600_s() {
             let expected = 200.0 * t / 5.0 + 2.5 + (debris_adu + stars_adu) / n;
             // Consecutive in-image samples at most two PSF sigmas apart: a streak, not dots (the
             // 600 s trajectory is resampled from 2000 to tens of thousands of samples).
-            let spacing_px = scene::max_sample_spacing_px(&sensor_of(&c), &s.trajectory);
+            let spacing_px = scene::max_sample_spacing_px(&sensor_of(&c), &s.object.trajectory);
             let psf_px = 1.0 / 3600.0 / sensor_of(&c).pixel_scale_deg();
             assert!(
                 spacing_px <= 2.2 * psf_px,
@@ -325,7 +325,7 @@ fn exposures_of_10_ms_and_600_s() {
                 "{t} s: mean ADU {mean:.3} (Eq. 11: {expected:.3}), debris {} e- rendered of {:.1} expected, snr {:.2}, sample spacing {spacing_px:.1} px, streak {:?} -> {:?}",
                 e.truth.seen.rendered_debris_electrons,
                 e.truth.seen.expected_debris_electrons,
-                s.snr,
+                s.object.snr.judged,
                 e.truth.streak.start_px,
                 e.truth.streak.end_px
             );
@@ -337,9 +337,9 @@ fn exposures_of_10_ms_and_600_s() {
                 // The LEO debris crosses the whole field in under a second: the trajectory is
                 // resampled at least tenfold (the scene drawn under the paper's gate: 18-fold).
                 assert!(
-                    s.trajectory.len() > 10 * 2000,
+                    s.object.trajectory.len() > 10 * 2000,
                     "{} samples",
-                    s.trajectory.len()
+                    s.object.trajectory.len()
                 );
                 let b = e.truth.label_box_px.expect("debris in the image");
                 assert!((b.x_max - b.x_min).max(b.y_max - b.y_min) > 100.0, "{b:?}");
@@ -524,12 +524,13 @@ fn streak_leaving_the_image() {
     assert!(e.truth.streak.end_px[0] > 300.0);
     // The SNR of the leaving streak is that of its in-image part alone.
     let inside: Vec<TrajectorySample> = s
+        .object
         .trajectory
         .iter()
         .copied()
         .filter(|p| p.x_px < 127.5)
         .collect();
-    let full = scene::expected_snr(&sensor_of(&c), &s.trajectory, sigma);
+    let full = scene::expected_snr(&sensor_of(&c), &s.object.trajectory, sigma);
     assert!(
         full > 0.0
             && (full - scene::expected_snr(&sensor_of(&c), &inside, sigma)).abs() < 1e-12 * full
@@ -537,7 +538,7 @@ fn streak_leaving_the_image() {
     // Wholly outside: SNR 0, below any gate; rendered anyway, no label.
     let out = streak(((200.0, 64.0), (400.0, 64.0)));
     assert_eq!(
-        scene::expected_snr(&sensor_of(&c), &out.trajectory, sigma),
+        scene::expected_snr(&sensor_of(&c), &out.object.trajectory, sigma),
         0.0
     );
     let e = render_scene(&c, &out, 8);

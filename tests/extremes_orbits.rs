@@ -33,13 +33,17 @@ fn geo_and_highly_eccentric_debris() {
     // GEO: range from a 800 km LEO observer to the geostationary ring.
     let geo = campaign(&tle_object(40989), &extra);
     for (s, _) in draw_and_render(&geo, 2) {
-        let r = s.geometry.range_km;
+        let r = s.object.geometry.range_km;
         assert!((28_000.0..50_000.0).contains(&r), "GEO range {r} km");
     }
     // GTO-like: perigee ~220 km, apogee ~14,000 km altitude.
     let gto = campaign(&tle_object(40386), &extra);
     for (s, _) in draw_and_render(&gto, 2) {
-        assert!(s.geometry.range_km < 30_000.0, "{}", s.geometry.range_km);
+        assert!(
+            s.object.geometry.range_km < 30_000.0,
+            "{}",
+            s.object.geometry.range_km
+        );
     }
     // Molniya: 12 h, 63.4 deg, perigee 600 km, apogee 39,700 km.
     let molniya = campaign(
@@ -47,7 +51,11 @@ fn geo_and_highly_eccentric_debris() {
         &extra,
     );
     for (s, _) in draw_and_render(&molniya, 2) {
-        assert!(s.geometry.range_km < 60_000.0, "{}", s.geometry.range_km);
+        assert!(
+            s.object.geometry.range_km < 60_000.0,
+            "{}",
+            s.object.geometry.range_km
+        );
     }
 }
 
@@ -322,16 +330,23 @@ fn near_perigee_at_high_speed() {
     assert!(speed > 9.0 && norm(d0) < 6378.0 + 1600.0 && angle_deg(d0, r) < 2.0);
     let scale = sensor_of(&c).pixel_scale_deg();
     for (s, e) in draw_and_render(&c, 2) {
-        let (first, last) = (s.trajectory.first().unwrap(), s.trajectory.last().unwrap());
+        let (first, last) = (
+            s.object.trajectory.first().unwrap(),
+            s.object.trajectory.last().unwrap(),
+        );
         let moved = angle_deg(
             radec_unit(first.ra_deg, first.dec_deg),
             radec_unit(last.ra_deg, last.dec_deg),
         );
         eprintln!(
             "range {:.0} km, {moved:.3} deg in {:.1} s, attempts {}, rejections {:?}, label {:?}",
-            s.geometry.range_km, s.exposure_s, s.attempts, s.rejections, e.truth.label_box_px
+            s.object.geometry.range_km,
+            s.exposure.exposure_s,
+            s.attempts,
+            s.rejections,
+            e.truth.label_box_px
         );
-        assert!(s.geometry.range_km < 3000.0);
+        assert!(s.object.geometry.range_km < 3000.0);
         // Several field widths per exposure: the streak enters and leaves the image.
         assert!(moved > 4.0 * 128.0 * scale, "moved {moved} deg");
         let inside = |p: &TrajectorySample| {

@@ -24,17 +24,17 @@ fn survey_star_trails_are_parallel_and_horizontal_after_rotation() {
     let sensor = soig::experiment::of(&c).sensor;
     for image in rendered(&c, 4) {
         let s = image.scene;
-        let Pointing::Survey(track) = s.pointing else {
+        let Pointing::Survey(track) = s.exposure.pointing else {
             panic!("survey scene expected")
         };
         let frame = Frame::new(FrameKind::Rotated, 512, 512, 0, track.trail_angle_deg);
         let tan = s.projection(&sensor);
         let at = |t: f64, ra: f64, dec: f64| s.pixel_at(&tan, t, ra, dec);
         let mut n = 0;
-        for star in s.stars.iter().take(200) {
+        for star in s.exposure.stars.iter().take(200) {
             let (Some(p), Some(q)) = (
                 at(0.0, star.ra_deg, star.dec_deg),
-                at(s.exposure_s, star.ra_deg, star.dec_deg),
+                at(s.exposure.exposure_s, star.ra_deg, star.dec_deg),
             ) else {
                 continue;
             };
@@ -51,10 +51,10 @@ fn survey_star_trails_are_parallel_and_horizontal_after_rotation() {
         assert!(n > 10);
         // The trail is as long as the drift says.
         let drift_px = track.drift_deg / sensor.pixel_scale_deg();
-        let (ra, dec) = (s.stars[0].ra_deg, s.stars[0].dec_deg);
+        let (ra, dec) = (s.exposure.stars[0].ra_deg, s.exposure.stars[0].dec_deg);
         let (p, q) = (
             at(0.0, ra, dec).unwrap(),
-            at(s.exposure_s, ra, dec).unwrap(),
+            at(s.exposure.exposure_s, ra, dec).unwrap(),
         );
         let len = (q.0 - p.0).hypot(q.1 - p.1);
         assert!(
@@ -104,7 +104,7 @@ fn label_box_is_the_tight_box_of_the_streak_in_every_frame() {
                 Frame::new(FrameKind::Original, 512, 512, 0, 0.0),
                 Frame::new(FrameKind::Padded, 512, 512, 32, 0.0),
             ];
-            if let Pointing::Survey(t) = s.pointing {
+            if let Pointing::Survey(t) = s.exposure.pointing {
                 frames.push(Frame::new(
                     FrameKind::Rotated,
                     512,
@@ -163,7 +163,7 @@ fn semisynthetic_background_has_the_real_frames_noise_scaled_by_exposure() {
     let real = soig::background::RealFrame::load(&frame).unwrap();
     for image in rendered(&c, 3) {
         let (s, e) = (image.scene, image.exposure);
-        assert!(s.background.is_some());
+        assert!(s.exposure.background.is_some());
         // Background = ADU - electrons / gain - bias (uniform 2..3, mean 2.5).
         let bg: Vec<f32> = e
             .adu
@@ -172,7 +172,7 @@ fn semisynthetic_background_has_the_real_frames_noise_scaled_by_exposure() {
             .map(|(&a, &el)| a - el as f32 / 1.6 - 2.5)
             .collect();
         let (median, sigma) = soig::imaging::robust_stats(&bg);
-        let k = s.exposure_s / real.exposure_s;
+        let k = s.exposure.exposure_s / real.exposure_s;
         let expected_sigma = ((real.sigma * k).powi(2) + 1.0 / 12.0).sqrt();
         assert!(
             (sigma - expected_sigma).abs() < 0.03 * expected_sigma,

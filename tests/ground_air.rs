@@ -128,8 +128,8 @@ fn the_sky_of_each_image_is_the_sites_toward_its_boresight() {
         let t = &image.exposure.truth;
         let v = t.sky_v_mag_per_arcsec2.expect("the sky in the truth");
         // The site's model at the boresight and mid-exposure, as the scene drew it.
-        let mid = image.scene.start + hifitime::Duration::from_seconds(t.exposure_s / 2.0);
-        let (ra, dec) = image.scene.pointing.mid_radec_deg();
+        let mid = image.scene.exposure.start + hifitime::Duration::from_seconds(t.exposure_s / 2.0);
+        let (ra, dec) = image.scene.exposure.pointing.mid_radec_deg();
         let (again, g) = gate.sky(mid, soig::sky::radec_unit(ra, dec)).unwrap();
         assert_eq!(v, again);
         // A night sky: the Sun below the night's -12 deg, and K&S's sky no darker than the
@@ -181,18 +181,21 @@ fn scintillation_scales_each_objects_flux_by_a_factor_of_the_formulas_spread() {
         let a = soig::scene::draw(&x_off.scene, &x_off.sensor, &in_off, x_off.seed, i).unwrap();
         let b = soig::scene::draw(&x_on.scene, &x_on.sensor, &in_on, x_on.seed, i).unwrap();
         // The same scene: scintillation draws from a stream of its own.
-        assert_eq!((a.debris_index, a.start), (b.debris_index, b.start));
+        assert_eq!(
+            (a.object.debris_index, a.exposure.start),
+            (b.object.debris_index, b.exposure.start)
+        );
         assert!(a.scintillation.is_none());
         let s = b.scintillation.expect("scintillated");
         // The object's flux, every trajectory sample, times the factor.
-        for (p, q) in a.trajectory.iter().zip(&b.trajectory) {
+        for (p, q) in a.object.trajectory.iter().zip(&b.object.trajectory) {
             assert!(
                 (q.expected_electrons - p.expected_electrons * s.factor).abs()
                     <= 1e-12 * p.expected_electrons
             );
         }
         // Sigma is the formula's at the object's airmass, this exposure and the site's height.
-        let v = scintillation_variance(1.5, 0.1, s.airmass, 1165.0, b.exposure_s);
+        let v = scintillation_variance(1.5, 0.1, s.airmass, 1165.0, b.exposure.exposure_s);
         assert!(
             (s.sigma - v.sqrt()).abs() < 1e-15,
             "{} vs {}",

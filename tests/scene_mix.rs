@@ -53,8 +53,12 @@ fn realised_mix_of_400_scenes_is_uniform_within_binomial_noise() {
             let s = scene::draw(&x.scene, &x.sensor, &inputs, x.seed, i)
                 .unwrap_or_else(|e| panic!("{e}"));
             // The paper's gate judged it: signal over the noise level, at least 0.15.
-            assert!(s.snr == s.snr_noise_level && s.snr >= 0.15, "{}", s.snr);
-            s.debris_index
+            assert!(
+                s.object.snr.judged == s.object.snr.noise_level && s.object.snr.judged >= 0.15,
+                "{}",
+                s.object.snr.judged
+            );
+            s.object.debris_index
         })
         .collect();
     let mut counts = [0usize; 4];
@@ -133,15 +137,25 @@ fn background_share_puts_that_share_of_images_on_frames() {
             .collect()
     };
     let (u, h) = (draw(&uniform), draw(&half));
-    let on_frames = h.iter().filter(|s| s.background.is_some()).count();
+    let on_frames = h.iter().filter(|s| s.exposure.background.is_some()).count();
     // Binomial(200, 0.5): sd 7.1; 76..=124 is 3.4 sd either side (a correct draw falls
     // outside for one seed in ~1500).
     assert!((76..=124).contains(&on_frames), "{on_frames} of 200");
     for (a, b) in u.iter().zip(&h) {
-        if b.background.is_none() {
+        if b.exposure.background.is_none() {
             assert_eq!(
-                (a.debris_index, a.start, a.exposure_s, a.attempts),
-                (b.debris_index, b.start, b.exposure_s, b.attempts)
+                (
+                    a.object.debris_index,
+                    a.exposure.start,
+                    a.exposure.exposure_s,
+                    a.attempts
+                ),
+                (
+                    b.object.debris_index,
+                    b.exposure.start,
+                    b.exposure.exposure_s,
+                    b.attempts
+                )
             );
         }
     }

@@ -106,7 +106,7 @@ fn predicted_star_trails_lie_on_the_rendered_starlight() {
             assert!(
                 inside >= 0.99 * total,
                 "image {}: {inside} of {total} electrons near a predicted trail",
-                image.scene.image_index
+                image.scene.exposure.image_index
             );
             // 2. Without jitter, across the trail: the light's centroid within 3 PSF sigmas of
             // each of the three brightest trails is on the path to 0.2 px (a trail of 3000 or
@@ -170,7 +170,7 @@ fn predicted_star_trails_lie_on_the_rendered_starlight() {
                 assert!(
                     centroid.abs() < 0.2,
                     "image {}: trail of magnitude {:.2} off by {centroid:.3} px",
-                    image.scene.image_index,
+                    image.scene.exposure.image_index,
                     t.mag
                 );
             }

@@ -35,9 +35,9 @@ fn the_tracked_object_stays_on_its_pixel() {
         let psf = sensor.psf_sigma_px();
         for image in rendered(&c, 4) {
             let s = &image.scene;
-            assert!(matches!(s.pointing, Pointing::Track(_)));
+            assert!(matches!(s.exposure.pointing, Pointing::Track(_)));
             let tan = s.projection(&sensor);
-            let mid = s.trajectory[s.trajectory.len() / 2];
+            let mid = s.object.trajectory[s.object.trajectory.len() / 2];
             let home = if centred {
                 (tan.cx, tan.cy)
             } else {
@@ -47,11 +47,16 @@ fn the_tracked_object_stays_on_its_pixel() {
             // interpolated: the model errs by micro-pixels; 0.01 px still catches a camera
             // that lags the object by a millisecond of a LEO pass (~0.1 px).
             let off = s
+                .object
                 .trajectory
                 .iter()
                 .map(|p| (p.x_px - home.0).hypot(p.y_px - home.1))
                 .fold(0.0, f64::max);
-            assert!(off < 0.01, "image {}: {off} px from home", s.image_index);
+            assert!(
+                off < 0.01,
+                "image {}: {off} px from home",
+                s.exposure.image_index
+            );
             // The label box (99% of the rendered flux) is a point's: 2 x 2.81 PSF sigmas plus
             // the jitter's wander about its mean (the paper's 0.0002 deg/sqrt(s): ~1 px per
             // sqrt(s), a few px in these 1-10 s exposures), far from the 100+ px streaks.
@@ -60,13 +65,13 @@ fn the_tracked_object_stays_on_its_pixel() {
             assert!(
                 w < 2.0 * 2.81 * psf + 12.0 && h < 2.0 * 2.81 * psf + 12.0,
                 "image {}: box {w} x {h} px",
-                s.image_index
+                s.exposure.image_index
             );
             let j = image.exposure.truth.jitter_mean_px;
             assert!(
                 b.x_min <= home.0 + j[0] + 0.5 && home.0 + j[0] - 0.5 <= b.x_max,
                 "image {}: box {b:?} misses x {}",
-                s.image_index,
+                s.exposure.image_index,
                 home.0
             );
             assert!(b.y_min <= home.1 + j[1] + 0.5 && home.1 + j[1] - 0.5 <= b.y_max);
@@ -86,11 +91,11 @@ fn star_trails_match_the_tracking_rate() {
     let mut pinned = Vec::new();
     for image in rendered(&c, 4) {
         let s = &image.scene;
-        let Pointing::Track(t) = &s.pointing else {
+        let Pointing::Track(t) = &s.exposure.pointing else {
             panic!("track pointing expected")
         };
         let tan = s.projection(&sensor);
-        let e = s.ephemeris.expect("an ephemeris");
+        let e = s.object.ephemeris.expect("an ephemeris");
         let [ra0, dec0] = e.debris_radec_start_deg;
         let [ra1, dec1] = e.debris_radec_end_deg;
         let (a, b) = (tan.pixel(ra0, dec0).unwrap(), tan.pixel(ra1, dec1).unwrap());
@@ -98,7 +103,7 @@ fn star_trails_match_the_tracking_rate() {
         // The star at the mid-exposure boresight, as the renderer places it.
         let (p, q) = (
             s.pixel_at(&tan, 0.0, t.mid_ra_deg, t.mid_dec_deg).unwrap(),
-            s.pixel_at(&tan, s.exposure_s, t.mid_ra_deg, t.mid_dec_deg)
+            s.pixel_at(&tan, s.exposure.exposure_s, t.mid_ra_deg, t.mid_dec_deg)
                 .unwrap(),
         );
         let got = (q.0 - p.0, q.1 - p.1);
@@ -109,7 +114,7 @@ fn star_trails_match_the_tracking_rate() {
         assert!(
             (len(got) / len(expected) - 1.0).abs() < 1e-3 && d_ang.abs() < 0.05,
             "image {}: trail {got:?} vs {expected:?}",
-            s.image_index
+            s.exposure.image_index
         );
         // The recorded direction and drift say the same.
         let d_rec = (t.trail_angle_deg - ang(expected) + 540.0).rem_euclid(360.0) - 180.0;

@@ -223,9 +223,9 @@ pub fn provenance_cards(
     // A moving camera's WCS at the exposure's start and end (alternates S and E), so that a
     // reader of the FITS alone can place the stars over the exposure (`soig detect --catalog`).
     cards.extend(crate::fits::cards_of(crate::sky::motion::cards(
-        &scene.pointing,
+        &scene.exposure.pointing,
         &scene.projection(sensor).shifted(jx, jy),
-        scene.exposure_s,
+        scene.exposure.exposure_s,
     )));
     cards
 }
@@ -254,7 +254,7 @@ fn identity_cards(push: &mut Push, p: &Provenance, scene: &Scene) {
     push("SEED", Card::Int(p.seed as i64), "campaign seed");
     push(
         "IMGINDEX",
-        Card::Int(scene.image_index as i64),
+        Card::Int(scene.exposure.image_index as i64),
         "image index in the campaign",
     );
 }
@@ -271,7 +271,10 @@ fn objects_cards(push: &mut Push, scene: &Scene, t: &Truth) {
             );
         }
         Some(placed) => {
-            let names: Vec<&str> = placed.iter().map(|s| s.debris_name.as_str()).collect();
+            let names: Vec<&str> = placed
+                .iter()
+                .map(|s| s.object.debris_name.as_str())
+                .collect();
             // A FITS string holds 68 characters.
             let object = match names.join(", ") {
                 n if n.is_empty() => "none".to_string(),
@@ -321,7 +324,7 @@ fn observation_cards(push: &mut Push, p: &Provenance, scene: &Scene, t: &Truth) 
     push("TIMESYS", Card::Str("UTC".into()), "");
     push(
         "MJD-OBS",
-        Card::Real(scene.start.to_mjd_utc_days()),
+        Card::Real(scene.exposure.start.to_mjd_utc_days()),
         "[d] UTC start of exposure",
     );
     // Mid-exposure and end: seconds after the start, and what each is.
@@ -329,7 +332,7 @@ fn observation_cards(push: &mut Push, p: &Provenance, scene: &Scene, t: &Truth) 
         ("AVG", t.exposure_s / 2.0, "UTC mid-exposure"),
         ("END", t.exposure_s, "UTC end of exposure"),
     ];
-    let after = |s: f64| scene.start + hifitime::Duration::from_seconds(s);
+    let after = |s: f64| scene.exposure.start + hifitime::Duration::from_seconds(s);
     for (k, s, what) in instants {
         push(&format!("DATE-{k}"), Card::Str(iso_utc(after(s))), what);
     }
@@ -368,7 +371,7 @@ fn observation_cards(push: &mut Push, p: &Provenance, scene: &Scene, t: &Truth) 
 fn pointing_cards(push: &mut Push, sensor: &Sensor, scene: &Scene) {
     push("GAIN", Card::Real(sensor.gain_e_per_adu), "[e-/ADU]");
     // A moving pointing: its name, what it does, its star trails' direction and its drift.
-    let (mode, how, angle_deg, angle_note, drift_deg, drift_note) = match &scene.pointing {
+    let (mode, how, angle_deg, angle_note, drift_deg, drift_note) = match &scene.exposure.pointing {
         Pointing::Fixed { .. } => {
             push("POINTING", Card::Str("fixed".into()), "fixed or survey");
             return;

@@ -60,15 +60,15 @@ pub fn csv(objects: &[&Scene]) -> anyhow::Result<Vec<u8>> {
 }
 
 fn rows(w: &mut csv::Writer<Vec<u8>>, scene: &Scene) -> anyhow::Result<()> {
-    let slice_s = scene.exposure_s / scene.trajectory.len() as f64;
-    for (k, s) in scene.trajectory.iter().enumerate() {
+    let slice_s = scene.exposure.exposure_s / scene.object.trajectory.len() as f64;
+    for (k, s) in scene.object.trajectory.iter().enumerate() {
         w.serialize(Row {
-            image: scene.image_index,
-            object: &scene.debris_name,
-            norad: scene.norad,
+            image: scene.exposure.image_index,
+            object: &scene.object.debris_name,
+            norad: scene.object.norad,
             sample: k,
             t_s: s.t_s,
-            utc: iso_utc(scene.start + Duration::from_seconds(s.t_s)),
+            utc: iso_utc(scene.exposure.start + Duration::from_seconds(s.t_s)),
             magnitude: s.mag,
             electrons_per_s: s.expected_electrons / slice_s,
             electrons: s.expected_electrons,

@@ -12,8 +12,9 @@ use soig_sim::scene::Scene;
 
 /// The site's cards and the pointing's altitude, azimuth and airmass at mid-exposure.
 pub fn site_cards(site: &Site, scene: &Scene) -> Vec<(String, Card, String)> {
-    let mid = scene.start + hifitime::Duration::from_seconds(scene.exposure_s / 2.0);
-    let (ra, dec) = scene.pointing.mid_radec_deg();
+    let mid =
+        scene.exposure.start + hifitime::Duration::from_seconds(scene.exposure.exposure_s / 2.0);
+    let (ra, dec) = scene.exposure.pointing.mid_radec_deg();
     let (alt, az) = site.alt_az_deg(mid, radec_unit(ra, dec));
     let seen = alt + refraction_deg(alt, STANDARD_PRESSURE_HPA, STANDARD_TEMPERATURE_C);
     let card = |k: &str, v: f64, c: &str| (k.to_string(), Card::Real(v), c.to_string());

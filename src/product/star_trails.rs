@@ -38,7 +38,7 @@ pub fn of_image(
     let scene = scene::draw(&x.scene, &x.sensor, inputs, x.seed, index)
         .map_err(|e| anyhow::anyhow!("image {index}: the scene cannot be drawn again: {e}"))?;
     let frame = x.product.as_ref().map(|p| {
-        let angle = scene.pointing.trail_angle_deg().unwrap_or(0.0);
+        let angle = scene.exposure.pointing.trail_angle_deg().unwrap_or(0.0);
         Frame::new(
             p.frame,
             x.sensor.width_px,

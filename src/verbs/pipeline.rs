@@ -504,21 +504,21 @@ fn render(
             )?;
             let conversion_s = products.product.as_ref().map_or(0.0, |p| p.seconds)
                 + image.png.as_ref().map_or(0.0, |p| p.seconds);
-            let trail_angle_deg: Option<f64> = match (&products.scene.pointing, plan.frame) {
+            let trail_angle_deg: Option<f64> = match (&products.scene.exposure.pointing, plan.frame) {
                 (Pointing::Fixed { .. }, _) => None,
                 (_, FrameKind::Rotated) => Some(0.0),
                 (p, _) => p.trail_angle_deg(),
             };
             let record = Record {
                 index: i,
-                debris_index: products.scene.debris_index,
+                debris_index: products.scene.object.debris_index,
                 // A catalogue scene's objects are in its truth, not the campaign's debris.
                 objects: products
                     .scene
                     .placed
                     .as_ref()
                     .filter(|_| products.scene.unseen.is_none())
-                    .map(|placed| placed.iter().map(|s| s.debris_index).collect()),
+                    .map(|placed| placed.iter().map(|s| s.object.debris_index).collect()),
                 files: journal::hash_files(dir, &image.files)?,
                 png: image
                     .png

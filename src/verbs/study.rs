@@ -308,7 +308,7 @@ fn measure(
     let (mut centroid_err, mut box_err) = (Vec::new(), Vec::new());
     let mut times = Vec::new();
     let seed = s.x.seed;
-    let frame = inputs.frame(scene.background);
+    let frame = inputs.frame(scene.exposure.background);
     for k in 0..seeds as u64 {
         // Photon seeds apart from the campaign's images: (seed + 1 + k, image).
         let t = Instant::now();
@@ -320,12 +320,12 @@ fn measure(
             jitter,
             &mut pixel_stream(
                 seed.wrapping_add(1 + k),
-                scene.image_index,
+                scene.exposure.image_index,
                 PixelPurpose::Photons,
             ),
             &mut pixel_stream(
                 seed.wrapping_add(1 + k),
-                scene.image_index,
+                scene.exposure.image_index,
                 PixelPurpose::Noise,
             ),
             None,

@@ -67,8 +67,8 @@ pub fn render_scene(c: &Campaign, s: &Scene, seed: u64) -> Exposure {
         &x.render,
         s,
         None,
-        &mut pixel_stream(seed, s.image_index, PixelPurpose::Photons),
-        &mut pixel_stream(seed, s.image_index, PixelPurpose::Noise),
+        &mut pixel_stream(seed, s.exposure.image_index, PixelPurpose::Photons),
+        &mut pixel_stream(seed, s.exposure.image_index, PixelPurpose::Noise),
     )
 }
 
@@ -80,7 +80,7 @@ pub fn draw_and_render(c: &Campaign, n: u64) -> Vec<(Scene, Exposure)> {
         .map(|i| {
             let s = scene::draw(&x.scene, &x.sensor, &inputs, c.resolved.seed, i)
                 .unwrap_or_else(|e| panic!("{e}"));
-            for p in &s.trajectory {
+            for p in &s.object.trajectory {
                 assert!(p.expected_electrons.is_finite() && p.expected_electrons >= 0.0);
                 assert!(p.ra_deg.is_finite() && p.dec_deg.is_finite());
             }

@@ -68,7 +68,7 @@ pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProduct
         &x.sensor,
         &x.render,
         &scene,
-        inputs.frame(scene.background),
+        inputs.frame(scene.exposure.background),
         &jitter,
         photons,
         &mut pixel_stream(seed, index, PixelPurpose::Noise),
@@ -77,7 +77,7 @@ pub fn image(x: &Experiment, inputs: &Inputs, index: u64) -> Result<ImageProduct
     let product = x.product.as_ref().map(|p| {
         let started = Instant::now();
         let (w, h) = (exposure.width, exposure.height);
-        let trail_angle_deg = scene.pointing.trail_angle_deg().unwrap_or(0.0);
+        let trail_angle_deg = scene.exposure.pointing.trail_angle_deg().unwrap_or(0.0);
         let frame = Frame::new(p.frame, w, h, p.pad_px, trail_angle_deg);
         // The debris alone is warped like the image, so the label is the tight box of the
         // rendered streak in the final frame.

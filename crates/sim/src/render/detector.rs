@@ -21,7 +21,7 @@ pub(super) fn adu(
 ) -> Vec<f32> {
     let s = sensor;
     let (width, height) = (s.width_px, s.height_px);
-    let t_exp = scene.exposure_s;
+    let t_exp = scene.exposure.exposure_s;
     // A physical detector has its own sky (validation keeps real frames to the paper's model).
     if let Noise::Physical(p) = &s.noise {
         return p.adu(
@@ -30,14 +30,14 @@ pub(super) fn adu(
             height,
             t_exp,
             s.gain_e_per_adu,
-            scene.image_index,
+            scene.exposure.image_index,
         );
     }
     let (b_lo, b_hi) = (s.bias.min_adu, s.bias.max_adu);
     let uniform = |r: &mut PixelRng, lo: f64, hi: f64| {
         if hi > lo { r.random_range(lo..hi) } else { lo }
     };
-    match (frame, scene.background) {
+    match (frame, scene.exposure.background) {
         (Some(f), Some(choice)) => {
             let bg = f.background(width, height, t_exp, choice.offset, noise_rng);
             electrons

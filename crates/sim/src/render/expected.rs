@@ -113,6 +113,7 @@ pub fn expected_flux(sensor: &Sensor, scene: &Scene, jitter: &Jitter) -> Flux {
 /// The debris' expected photo-electrons of a scene for a jitter path ([`DebrisFlux`]).
 pub fn debris_flux(sensor: &Sensor, scene: &Scene, jitter: &Jitter) -> DebrisFlux {
     let samples: Vec<(f64, f64, f64)> = scene
+        .object
         .trajectory
         .iter()
         .map(|p| {

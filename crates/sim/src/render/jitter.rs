@@ -26,7 +26,7 @@ impl Jitter {
         Jitter::draw(
             rng,
             sensor.jitter_deg_per_sqrt_s,
-            scene.exposure_s,
+            scene.exposure.exposure_s,
             settings.jitter_steps,
             scene.projection(sensor).scale_deg,
         )

@@ -133,6 +133,7 @@ pub fn render(
 /// its mean by 12 standard deviations plus 12 with a chance below 1e-25.
 fn singles_only(scene: &Scene, merge_threshold: u64) -> bool {
     let most = scene
+        .object
         .trajectory
         .iter()
         .map(|p| p.expected_electrons)
@@ -156,16 +157,17 @@ pub fn render_with_jitter(
     object_photons: Option<&dyn Fn(u64) -> PixelRng>,
 ) -> Exposure {
     // A ground site's sky for this image, in the detector's noise and the truth's sigma.
-    let sensor = &*sensor.under_sky(scene.sky_v_mag_per_arcsec2);
+    let sensor = &*sensor.under_sky(scene.exposure.sky_v_mag_per_arcsec2);
     let (width, height) = (sensor.width_px, sensor.height_px);
     let unrendered;
     let own = match &scene.placed {
         Some(_) => {
-            unrendered = Scene {
-                trajectory: Vec::new(),
+            let mut bare = Scene {
                 placed: None,
                 ..scene.clone()
             };
+            bare.object.trajectory = Vec::new();
+            unrendered = bare;
             &unrendered
         }
         None => scene,
@@ -250,7 +252,8 @@ fn photons(
     };
     // The debris' trajectory samples share one source's packet budget (2000 samples of a
     // magnitude -1 debris would otherwise trace 2e9 packets).
-    let debris_packets = (MAX_PACKETS_PER_SOURCE / scene.trajectory.len().max(1) as u64).max(1);
+    let debris_packets =
+        (MAX_PACKETS_PER_SOURCE / scene.object.trajectory.len().max(1) as u64).max(1);
     let debris_flux = expected::debris_flux(sensor, scene, jitter);
     // Where no trajectory sample can be merged into packets, all its photons are single and
     // drawn per pixel from the debris' expected flux: the same distribution as tracing them
@@ -302,9 +305,10 @@ fn truth_of(
     debris_flux: &expected::DebrisFlux,
     stars_traced: usize,
 ) -> Truth {
-    let t_exp = scene.exposure_s;
+    let t_exp = scene.exposure.exposure_s;
     let jitter_mean = jitter.mean();
     let (expected_debris, mag_min, mag_max) = scene
+        .object
         .trajectory
         .iter()
         .fold((0.0, f64::INFINITY, f64::NEG_INFINITY), |(e, lo, hi), p| {
@@ -318,9 +322,9 @@ fn truth_of(
         })
     };
     let sigma_adu = sensor.background_sigma_adu(t_exp, frame);
-    let first = at(scene.trajectory.first());
-    let last = at(scene.trajectory.last());
-    let g = &scene.geometry;
+    let first = at(scene.object.trajectory.first());
+    let last = at(scene.object.trajectory.last());
+    let g = &scene.object.geometry;
     // The FITS WCS: the mid-exposure projection moved by the mean jitter (artifacts).
     let wcs = scene
         .projection(sensor)
@@ -331,7 +335,7 @@ fn truth_of(
             [ra, dec]
         })
     };
-    let coordinates = match scene.pointing {
+    let coordinates = match scene.exposure.pointing {
         crate::scene::Pointing::Survey(_) => {
             format!("{} {}", truth::COORDINATES, truth::SURVEY_COORDINATES)
         }
@@ -342,12 +346,12 @@ fn truth_of(
     };
     Truth {
         coordinates,
-        image_index: scene.image_index,
-        object: scene.debris_name.clone(),
-        norad: scene.norad,
-        start_utc: iso_utc(scene.start),
+        image_index: scene.exposure.image_index,
+        object: scene.object.debris_name.clone(),
+        norad: scene.object.norad,
+        start_utc: iso_utc(scene.exposure.start),
         exposure_s: t_exp,
-        pointing: scene.pointing.clone(),
+        pointing: scene.exposure.pointing.clone(),
         jitter_mean_px: [jitter_mean.0, jitter_mean.1],
         streak: StreakEnds {
             start_px: first.unwrap_or([f64::NAN; 2]),
@@ -362,31 +366,31 @@ fn truth_of(
             magnitude: g.magnitude,
             magnitude_min: mag_min,
             magnitude_max: mag_max,
-            area_m2: scene.area_m2,
+            area_m2: scene.object.area_m2,
             range_km: g.range_km,
             phase_angle_deg: g.phase_angle_deg,
             earth_angle_deg: g.earth_angle_deg,
             sun_angle_deg: g.sun_angle_deg,
             moon_angle_deg: g.moon_angle_deg,
-            tumble: scene.tumble,
+            tumble: scene.object.tumble,
             expected_debris_electrons: expected_debris,
             rendered_debris_electrons: debris_total,
-            snr: scene.snr,
-            snr_noise_level: scene.snr_noise_level,
-            snr_noise_sigma: scene.snr_noise_sigma,
+            snr: scene.object.snr.judged,
+            snr_noise_level: scene.object.snr.noise_level,
+            snr_noise_sigma: scene.object.snr.noise_sigma,
         },
         snr_matched_filter: debris_flux.matched_filter_snr(sensor.gain_e_per_adu, sigma_adu),
-        stars_in_cone: scene.stars.len(),
+        stars_in_cone: scene.exposure.stars.len(),
         stars_traced,
         background_sigma_adu: sigma_adu,
         background_frame: frame.map(|f| f.name.clone()),
         background_frame_sha256: frame.map(|f| f.sha256.clone()),
         attempts: scene.attempts,
         rejections: scene.rejections.clone(),
-        ephemeris: scene.ephemeris,
+        ephemeris: scene.object.ephemeris,
         collect: scene.collect,
-        seeing: scene.seeing,
+        seeing: scene.exposure.seeing,
         scintillation: scene.scintillation,
-        sky_v_mag_per_arcsec2: scene.sky_v_mag_per_arcsec2,
+        sky_v_mag_per_arcsec2: scene.exposure.sky_v_mag_per_arcsec2,
     }
 }

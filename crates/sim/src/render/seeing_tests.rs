@@ -46,7 +46,7 @@ fn point_scene(sensor: &Sensor, seeing: Seeing, mag: f64) -> Scene {
         ((10.0, 10.0), (12.0, 10.0)),
         5.0,
     );
-    s.seeing = Some(seeing);
+    s.exposure.seeing = Some(seeing);
     s
 }
 
@@ -176,7 +176,7 @@ fn without_seeing_the_psf_is_the_sensors_gaussian() {
         },
         12.0,
     );
-    scene.seeing = None;
+    scene.exposure.seeing = None;
     let psf = scene.psf(&sensor);
     assert!(psf.is_gaussian());
     assert_eq!(psf.components(), &[(1.0, sensor.psf_sigma_px())]);

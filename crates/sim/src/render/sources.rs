@@ -90,7 +90,7 @@ pub(super) fn for_each_source(
     // The core's sigma: a seeing PSF's wing beyond 8 of them (3.4 FWHM) holds at most 2 % of
     // a star's light (beta 2.5; 0.01 % at 4.765), and the star is outside the image.
     let psf_px = scene.psf(sensor).core_sigma_px();
-    let t_exp = scene.exposure_s;
+    let t_exp = scene.exposure.exposure_s;
     let jitter_mean = jitter.mean();
 
     // Stars too far outside the image for any photon to land are skipped, and in survey
@@ -123,10 +123,10 @@ pub(super) fn for_each_source(
             debris: false,
         });
     };
-    match &scene.pointing {
+    match &scene.exposure.pointing {
         Pointing::Fixed { .. } => {
             // Fixed on the sky, photons uniform over the exposure.
-            for star in &scene.stars {
+            for star in &scene.exposure.stars {
                 let Some((x0, y0)) = tan.pixel(star.ra_deg, star.dec_deg) else {
                     continue;
                 };
@@ -146,13 +146,13 @@ pub(super) fn for_each_source(
             let step = t_exp / (nodes - 1) as f64;
             let mut trail = vec![(f64::NAN, f64::NAN); nodes];
             // A tracking camera's turn at each node, once for all stars.
-            let turns: Option<Vec<_>> = match &scene.pointing {
+            let turns: Option<Vec<_>> = match &scene.exposure.pointing {
                 Pointing::Track(t) => {
                     Some((0..nodes).map(|i| t.turn_at(i as f64 * step)).collect())
                 }
                 _ => None,
             };
-            for star in &scene.stars {
+            for star in &scene.exposure.stars {
                 let (mut first, mut last) = (None, None);
                 for (i, node) in trail.iter_mut().enumerate() {
                     *node = match &turns {
@@ -188,7 +188,7 @@ pub(super) fn for_each_source(
     }
 
     // Debris: each trajectory sample is a source whose photons arrive at its time.
-    for p in &scene.trajectory {
+    for p in &scene.object.trajectory {
         if near(p.x_px, p.y_px) {
             add(&Source {
                 expected: p.expected_electrons,

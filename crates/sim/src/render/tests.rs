@@ -186,7 +186,12 @@ fn debris_drawn_per_pixel_is_distributed_as_its_photons_traced() {
         "the jitter path moves the streak"
     );
     let flux = expected::debris_flux(&c.sensor, &s, &jitter);
-    let lambda: f64 = s.trajectory.iter().map(|p| p.expected_electrons).sum();
+    let lambda: f64 = s
+        .object
+        .trajectory
+        .iter()
+        .map(|p| p.expected_electrons)
+        .sum();
     assert!(
         (flux.total() / lambda - 1.0).abs() < 1e-9,
         "{} of {lambda}",
@@ -473,7 +478,7 @@ fn noise_level_is_the_mean_the_detector_adds() {
         // Magnitude 60: 1e-15 e-/s, no debris photon.
         let mut s = scene(c, vec![], 60.0, t);
         if f.is_some() {
-            s.background = Some(FrameChoice {
+            s.exposure.background = Some(FrameChoice {
                 frame: 0,
                 offset: (100, 37),
             });

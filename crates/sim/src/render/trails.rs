@@ -21,7 +21,7 @@ pub fn star_trails(
     scene: &Scene,
     jitter_mean_px: [f64; 2],
 ) -> Vec<PredictedTrail> {
-    let still = Jitter::still(scene.exposure_s);
+    let still = Jitter::still(scene.exposure.exposure_s);
     let [jx, jy] = jitter_mean_px;
     let mut paths: Vec<(Vec<[f64; 2]>, Vec<f64>, f64)> = Vec::new();
     let traced = for_each_source(sensor, scene, &still, |source| {
@@ -29,7 +29,10 @@ pub fn star_trails(
             return;
         }
         let (nodes, times) = match source.path {
-            Path::Still { x, y } => (vec![[x + jx, y + jy]], vec![0.5 * scene.exposure_s]),
+            Path::Still { x, y } => (
+                vec![[x + jx, y + jy]],
+                vec![0.5 * scene.exposure.exposure_s],
+            ),
             Path::Trail { nodes, step } => {
                 // The source's photons arrive over [t_a, t_b], which are node times.
                 let a = (source.t_a / step).round() as usize;

@@ -197,7 +197,7 @@ impl<'a> FrameTruth<'a> {
     ) -> Self {
         let placed = scene.placed.as_deref().unwrap_or_default();
         let source = |k: usize, s: &crate::scene::Scene| {
-            Some(match (&scene.unseen, k, scene.norad) {
+            Some(match (&scene.unseen, k, scene.object.norad) {
                 // `[objects]`: turned into the field, not where its orbit puts it.
                 (None, _, _) => "placed",
                 // NORAD 0: a stare, which points at no object.
@@ -212,7 +212,7 @@ impl<'a> FrameTruth<'a> {
             objects
                 .zip(placed)
                 .enumerate()
-                .map(|(k, (t, s))| (t, s.debris_index, source(k, s))),
+                .map(|(k, (t, s))| (t, s.object.debris_index, source(k, s))),
         );
         truth.unseen = scene.unseen.as_deref();
         truth

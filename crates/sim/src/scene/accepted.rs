@@ -54,66 +54,33 @@ pub struct Geometry {
     pub magnitude: f64,
 }
 
-/// An accepted scene: everything the renderer needs.
-#[derive(Clone, Debug, Serialize)]
+/// An accepted scene: everything the renderer needs. Its object in its exposure, as the draw
+/// saw them, with what the draw and the frame add to them.
+#[derive(Clone, Debug)]
 pub struct Scene {
-    pub image_index: u64,
-    pub debris_index: usize,
-    pub debris_name: String,
-    pub norad: u64,
-    pub start: Epoch,
-    pub exposure_s: f64,
-    pub pointing: Pointing,
-    pub area_m2: f64,
-    pub tumble: Option<Tumble>,
-    pub geometry: Geometry,
-    /// The debris' place at start, middle and end and the states at mid-exposure (None for a
-    /// hand-made scene).
-    pub ephemeris: Option<Ephemeris>,
-    pub trajectory: Vec<TrajectorySample>,
-    pub stars: Vec<Star>,
-    /// The real background frame of a semisynthetic image.
-    pub background: Option<FrameChoice>,
-    /// The signal-to-noise ratio the gate judged, by its definition (one of the two below).
-    pub snr: f64,
-    /// Expected debris ADU per footprint pixel over the mean level of background plus bias
-    /// (`SnrDefinition::NoiseLevel`), and over their standard deviation (`NoiseSigma`).
-    pub snr_noise_level: f64,
-    pub snr_noise_sigma: f64,
+    pub exposure: Exposure,
+    pub object: Object,
     /// Draws tried, and why the rejected ones were rejected.
     pub attempts: u32,
     pub rejections: BTreeMap<Rejection, u32>,
     /// Its place in a multi-frame collect (None: a single image).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub collect: Option<CollectFrame>,
     /// The objects of an image of a campaign with `[objects]` (possibly none), each a scene of
     /// its own with this one's time, pointing and background and no stars; this scene's own
     /// object then only chose the pointing and is not rendered. None: this scene's object is
     /// the image's one object.
-    #[serde(skip)]
     pub placed: Option<Vec<Scene>>,
     /// In a catalogue scene (`catalogue`): the population's objects in the field that the
     /// checks rejected, with the reason; None in any other scene.
-    #[serde(skip)]
     pub unseen: Option<Vec<super::Unseen>>,
     /// A generated object of a catalogue scene's population (a breakup fragment).
-    #[serde(skip)]
     pub generated: bool,
     /// The observer's GCRS state (km, km/s) at mid-exposure where the scene has no
     /// ephemeris of its own to state it (a catalogue stare): the FITS `OBSPOS-*`, `OBSVEL-*`.
-    #[serde(skip)]
     pub observer_gcrs: Option<(soig_sky::Vec3, soig_sky::Vec3)>,
-    /// A ground site's seeing over the exposure (None: the sensor's Gaussian PSF).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub seeing: Option<Seeing>,
     /// A ground site's scintillation of this object in this exposure (`scintillation`), its
     /// factor already in the trajectory's expected electrons.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub scintillation: Option<Scintillation>,
-    /// A ground site's sky toward the boresight, V mag/arcsec^2 (`GroundGate::sky`): the
-    /// physical noise model's sky for this image.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub sky_v_mag_per_arcsec2: Option<f64>,
 }
 
 /// A frame's place in its collect, recorded in the truth: the object keeps its `track_id`
@@ -131,12 +98,12 @@ impl Scene {
     /// The PSF the renderer draws: the seeing's Moffat where the exposure has seeing, else
     /// the sensor's Gaussian.
     pub fn psf(&self, sensor: &Sensor) -> Psf {
-        psf_of(sensor, self.seeing)
+        psf_of(sensor, self.exposure.seeing)
     }
 
     /// The projection at mid-exposure: the one the FITS WCS describes.
     pub fn projection(&self, sensor: &Sensor) -> Tan {
-        let (ra, dec) = self.pointing.mid_radec_deg();
+        let (ra, dec) = self.exposure.pointing.mid_radec_deg();
         sensor.projection(ra, dec)
     }
 
@@ -219,7 +186,7 @@ impl Scene {
 
     /// Pixel coordinates of a sky position with the pointing of `t_s` seconds after the start.
     pub fn pixel_at(&self, tan: &Tan, t_s: f64, ra_deg: f64, dec_deg: f64) -> Option<(f64, f64)> {
-        match &self.pointing {
+        match &self.exposure.pointing {
             Pointing::Fixed { .. } => tan.pixel(ra_deg, dec_deg),
             Pointing::Survey(track) => {
                 let (ra, dec) = track.to_mid_frame(t_s, ra_deg, dec_deg);
@@ -243,14 +210,19 @@ pub fn psf_of(sensor: &Sensor, seeing: Option<Seeing>) -> Psf {
 
 /// The exposure a scene's object is seen in: which image, when, how long, where the sensor
 /// points, its field stars and its real background frame.
-pub(super) struct Exposure {
+#[derive(Clone, Debug)]
+pub struct Exposure {
     pub image_index: u64,
     pub start: Epoch,
     pub exposure_s: f64,
     pub pointing: Pointing,
     pub stars: Vec<Star>,
+    /// The real background frame of a semisynthetic image.
     pub background: Option<FrameChoice>,
+    /// A ground site's seeing over the exposure (None: the sensor's Gaussian PSF).
     pub seeing: Option<Seeing>,
+    /// A ground site's sky toward the boresight, V mag/arcsec^2 (`GroundGate::sky`): the
+    /// physical noise model's sky for this image.
     pub sky_v_mag_per_arcsec2: Option<f64>,
 }
 
@@ -259,27 +231,25 @@ impl Exposure {
     /// time, pointing and background; its stars stay with the frame's own scene.
     pub(super) fn of_frame(at: &Scene) -> Exposure {
         Exposure {
-            image_index: at.image_index,
-            start: at.start,
-            exposure_s: at.exposure_s,
-            pointing: at.pointing.clone(),
+            pointing: at.exposure.pointing.clone(),
             stars: Vec::new(),
-            background: at.background,
-            seeing: at.seeing,
-            sky_v_mag_per_arcsec2: at.sky_v_mag_per_arcsec2,
+            ..at.exposure
         }
     }
 }
 
 /// A scene's object as one draw saw it: which debris, its own draws, and what the visibility
 /// checks and the signal-to-noise gate measured.
-pub(super) struct Object {
+#[derive(Clone, Debug)]
+pub struct Object {
     pub debris_index: usize,
     pub debris_name: String,
     pub norad: u64,
     pub area_m2: f64,
     pub tumble: Option<Tumble>,
     pub geometry: Geometry,
+    /// The debris' place at start, middle and end and the states at mid-exposure (None for a
+    /// hand-made scene).
     pub ephemeris: Option<Ephemeris>,
     pub trajectory: Vec<TrajectorySample>,
     pub snr: Snr,
@@ -315,23 +285,8 @@ impl Scene {
     /// (no draws counted, no collect, nothing placed in it: `accept` adds those).
     pub(super) fn assemble(exposure: Exposure, object: Object) -> Scene {
         Scene {
-            image_index: exposure.image_index,
-            debris_index: object.debris_index,
-            debris_name: object.debris_name,
-            norad: object.norad,
-            start: exposure.start,
-            exposure_s: exposure.exposure_s,
-            pointing: exposure.pointing,
-            area_m2: object.area_m2,
-            tumble: object.tumble,
-            geometry: object.geometry,
-            ephemeris: object.ephemeris,
-            trajectory: object.trajectory,
-            stars: exposure.stars,
-            background: exposure.background,
-            snr: object.snr.judged,
-            snr_noise_level: object.snr.noise_level,
-            snr_noise_sigma: object.snr.noise_sigma,
+            exposure,
+            object,
             attempts: 0,
             rejections: BTreeMap::new(),
             collect: None,
@@ -339,9 +294,7 @@ impl Scene {
             unseen: None,
             generated: false,
             observer_gcrs: None,
-            seeing: exposure.seeing,
             scintillation: None,
-            sky_v_mag_per_arcsec2: exposure.sky_v_mag_per_arcsec2,
         }
     }
 

@@ -85,8 +85,8 @@ pub(super) fn in_field(
 /// meets the field's half-diagonal, widened by the boresight's own motion and a margin, about
 /// the mid-exposure boresight. All in TEME, the observer by SGP4.
 fn candidates(sensor: &Sensor, inputs: &Inputs, at: &Scene) -> Vec<usize> {
-    let h = at.exposure_s / 2.0;
-    let mid = at.start + Duration::from_seconds(h);
+    let h = at.exposure.exposure_s / 2.0;
+    let mid = at.exposure.start + Duration::from_seconds(h);
     // A population is seen from a satellite (`validate` refuses a ground site with it).
     let Some(Ok((observer_km, observer_km_s))) = inputs
         .observer
@@ -95,14 +95,14 @@ fn candidates(sensor: &Sensor, inputs: &Inputs, at: &Scene) -> Vec<usize> {
     else {
         return Vec::new();
     };
-    let (ra, dec) = at.pointing.mid_radec_deg();
+    let (ra, dec) = at.exposure.pointing.mid_radec_deg();
     // GCRS -> TEME is the transpose of the rotation.
     let m = teme_to_gcrs_matrix(mid);
     let b = radec_unit(ra, dec);
     let boresight = [0, 1, 2].map(|k| m[0][k] * b[0] + m[1][k] * b[1] + m[2][k] * b[2]);
     let half_diag_deg =
         sensor.pixel_scale_deg() * (sensor.width_px as f64).hypot(sensor.height_px as f64) / 2.0;
-    let pointing_reach_deg = match &at.pointing {
+    let pointing_reach_deg = match &at.exposure.pointing {
         Pointing::Fixed { .. } => 0.0,
         Pointing::Survey(t) => t.drift_deg / 2.0,
         Pointing::Track(t) => t.reach_deg(),
@@ -164,7 +164,7 @@ fn sight_object(
     index: usize,
 ) -> Option<Result<Scene, Rejection>> {
     let body = &inputs.population[index];
-    let (start, exposure_s) = (at.start, at.exposure_s);
+    let (start, exposure_s) = (at.exposure.start, at.exposure.exposure_s);
     let mid = start + Duration::from_seconds(exposure_s / 2.0);
     let sighting = Sighting::new(
         inputs.observer.viewpoint(),
@@ -193,8 +193,8 @@ fn sight_object(
     let sight = sighting.at(mid)?;
     let judged =
         visibility(spec, sensor, &sight, (sun, mid), area_m2, true).and_then(|(geometry, _)| {
-            let frame = inputs.frame(at.background);
-            let sensor = sensor.under_sky(at.sky_v_mag_per_arcsec2);
+            let frame = inputs.frame(at.exposure.background);
+            let sensor = sensor.under_sky(at.exposure.sky_v_mag_per_arcsec2);
             let snr = gate_snr(spec, &sensor, &trajectory, exposure_s, frame, true)?;
             Ok((geometry, snr))
         });
@@ -212,7 +212,7 @@ fn sight_object(
         snr,
     );
     // Across a collect's frames an object keeps its NORAD number as its track id.
-    let collect = CollectFrame::of(spec, at.image_index, body.norad);
+    let collect = CollectFrame::of(spec, at.exposure.image_index, body.norad);
     let mut scene = Scene::assemble(exposure, object).accept(1, BTreeMap::new(), collect, None);
     scene.generated = body.generated.is_some();
     Some(Ok(scene))

@@ -136,7 +136,7 @@ fn with_population(
     seed: u64,
     scene: Scene,
 ) -> Scene {
-    let (mut seen, unseen) = in_field(spec, sensor, inputs, seed, &scene, Some(scene.norad));
+    let (mut seen, unseen) = in_field(spec, sensor, inputs, seed, &scene, Some(scene.object.norad));
     seen.insert(0, scene.clone());
     Scene {
         placed: Some(seen),
@@ -380,7 +380,7 @@ fn boresight(
         around_debris.cy - placement.1 * half_h,
     );
     match plan {
-        Plan::Later { first, .. } => match &first.pointing {
+        Plan::Later { first, .. } => match &first.exposure.pointing {
             Pointing::Fixed { ra_deg, dec_deg } => (*ra_deg, *dec_deg),
             Pointing::Survey(t0) => t0.radec_at(t0.t_mid_s + offset_s),
             Pointing::Track(_) => placed,

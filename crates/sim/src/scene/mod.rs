@@ -28,7 +28,9 @@ mod spec;
 mod trajectory;
 mod visibility;
 
-pub use accepted::{CollectFrame, Geometry, Scene, TrajectorySample, Tumble, psf_of};
+pub use accepted::{
+    CollectFrame, Exposure, Geometry, Object, Scene, TrajectorySample, Tumble, psf_of,
+};
 pub use catalogue::Unseen;
 pub use draw::{choose_debris, draw};
 pub use place::object_track_id;
@@ -42,7 +44,7 @@ pub use trajectory::{
     MAX_SAMPLE_SPACING_PSF_SIGMAS, MAX_TRAJECTORY_SAMPLES, max_sample_spacing_px, sample_time_s,
     slice_count,
 };
-pub use visibility::expected_snr;
+pub use visibility::{Snr, expected_snr};
 
 /// Most objects an image may show (each is drawn, traced and labelled: the cost grows with it).
 /// The campaign's validation refuses more.

@@ -39,7 +39,7 @@ pub(super) fn place(
     (first, later): (&Scene, Option<&Scene>),
     k: u64,
 ) -> Result<Scene, NoScene> {
-    let image = later.unwrap_or(first).image_index;
+    let image = later.unwrap_or(first).exposure.image_index;
     let (collect, _) = spec.collect_of(image);
     let rng = &mut object_stream(seed, collect, k, Purpose::ObjectScene);
     let mut rejections: BTreeMap<Rejection, u32> = BTreeMap::new();
@@ -141,7 +141,7 @@ fn try_place(
     } = *draws;
     // The first frame is judged; a later one (another scene) follows it.
     let gated = std::ptr::eq(first, at);
-    let mid_of = |s: &Scene| s.start + Duration::from_seconds(s.exposure_s / 2.0);
+    let mid_of = |s: &Scene| s.exposure.start + Duration::from_seconds(s.exposure.exposure_s / 2.0);
     let sighting_at = |mid: Epoch| {
         Sighting::new(
             inputs.observer.viewpoint(),
@@ -163,7 +163,7 @@ fn try_place(
     // The camera's mid-exposure frame is the sky's in fixed pointing, and survey pointing is
     // at its mid-exposure attitude then: the place is the same direction in both.
     let turn = Turn::between(unit(sight.direction), radec_unit(ra_t, dec_t));
-    let (start, exposure_s, mid) = (at.start, at.exposure_s, mid_of(at));
+    let (start, exposure_s, mid) = (at.exposure.start, at.exposure.exposure_s, mid_of(at));
     let (sighting, sight) = if gated {
         (first_sighting, sight)
     } else {
@@ -185,10 +185,10 @@ fn try_place(
     )?;
     let snr = gate_snr(
         spec,
-        &sensor.under_sky(at.sky_v_mag_per_arcsec2),
+        &sensor.under_sky(at.exposure.sky_v_mag_per_arcsec2),
         &trajectory,
         exposure_s,
-        inputs.frame(at.background),
+        inputs.frame(at.exposure.background),
         gated,
     )?;
     let exposure = Exposure::of_frame(at);

@@ -20,17 +20,18 @@ pub(super) fn scintillate(spec: &Spec, seed: u64, mut scene: Scene) -> Scene {
         return scene;
     };
     let apply = |k: u64, s: &mut Scene| {
-        let Some(middle) = s.trajectory.get(s.trajectory.len() / 2) else {
+        let Some(middle) = s.object.trajectory.get(s.object.trajectory.len() / 2) else {
             return;
         };
-        let mid = s.start + Duration::from_seconds(s.exposure_s / 2.0);
+        let mid = s.exposure.start + Duration::from_seconds(s.exposure.exposure_s / 2.0);
         let dir = radec_unit(middle.ra_deg, middle.dec_deg);
-        let Some((variance, airmass)) = gate.scintillation(mid, dir, s.exposure_s) else {
+        let Some((variance, airmass)) = gate.scintillation(mid, dir, s.exposure.exposure_s) else {
             return;
         };
-        let rng = &mut object_stream(seed, s.image_index, k, Purpose::Scintillation);
+        let rng = &mut object_stream(seed, s.exposure.image_index, k, Purpose::Scintillation);
         let factor = scintillation_factor(variance, rng.sample(StandardNormal));
-        s.trajectory
+        s.object
+            .trajectory
             .iter_mut()
             .for_each(|p| p.expected_electrons *= factor);
         s.scintillation = Some(Scintillation {

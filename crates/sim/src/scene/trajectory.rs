@@ -43,11 +43,11 @@ impl<'a> Shot<'a> {
         shadowed: bool,
     ) -> Self {
         Shot {
-            exposure_s: at.exposure_s,
+            exposure_s: at.exposure.exposure_s,
             sun,
             area_m2,
             tumble,
-            pointing: &at.pointing,
+            pointing: &at.exposure.pointing,
             mid_tan: at.projection(sensor),
             shadowed,
             extinction: spec.ground.as_ref().and_then(|g| g.extinction(mid)),

@@ -124,7 +124,7 @@ pub(super) fn in_sight(
 
 /// An object's expected signal-to-noise ratios (`expected_snr`).
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Snr {
+pub struct Snr {
     /// The one the gate judges, by its definition (one of the two below).
     pub judged: f64,
     /// Over the mean level of background plus bias, and over their standard deviation.
