@@ -9,6 +9,9 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+mod common;
+use common::{CampaignToml, ELEMENTS_40649};
+
 fn soig(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_soig"))
         .args(args)
@@ -18,21 +21,16 @@ fn soig(args: &[&str]) -> Output {
 }
 
 /// A small campaign with orbits given as elements (no TLE file), rendered but not detected.
-const BASE: &str = r#"
-name = "tiny"
-seed = 7
-images = 3
-stages = ["render", "enhance", "dataset"]
-[observer]
-norad = 1
-elements = { period_min = 100.0, inclination_deg = 98.6, apogee_km = 800.0, perigee_km = 790.0 }
-[[debris]]
-norad = 40649
-elements = { period_min = 375.48, inclination_deg = 52.78, apogee_km = 20490.0, perigee_km = 1235.0 }
-"#;
+fn base() -> String {
+    CampaignToml::new("tiny", 7, 3)
+        .stages(&["render", "enhance", "dataset"])
+        .observer("norad = 1\nelements = { period_min = 100.0, inclination_deg = 98.6, apogee_km = 800.0, perigee_km = 790.0 }")
+        .debris(ELEMENTS_40649)
+        .text()
+}
 
 fn experiment(dir: &Path, file: &str, axes: &str) -> String {
-    std::fs::write(dir.join("base.toml"), BASE).unwrap();
+    std::fs::write(dir.join("base.toml"), base()).unwrap();
     let path = dir.join(file);
     std::fs::write(
         &path,
