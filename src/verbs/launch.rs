@@ -587,22 +587,17 @@ mod tests {
         for f in ["array.sbatch", "merge.sbatch"] {
             assert!(text(&files, f).contains(lines), "{}", text(&files, f));
         }
+        let with_time = |time: &str| SlurmResources {
+            time: Some(time.into()),
+            ..Default::default()
+        };
         for time in ["30", "30:00", "1-12", "1-12:30", "2-00:00:00"] {
-            let r = SlurmResources {
-                time: Some(time.into()),
-                ..Default::default()
-            };
+            let r = with_time(time);
             assert_eq!(sbatch_options(&r).unwrap(), [format!("--time={time}")]);
         }
         let bad = [
-            SlurmResources {
-                time: Some("1h".into()),
-                ..Default::default()
-            },
-            SlurmResources {
-                time: Some("1:2:3:4".into()),
-                ..Default::default()
-            },
+            with_time("1h"),
+            with_time("1:2:3:4"),
             SlurmResources {
                 mem: Some("4GB".into()),
                 ..Default::default()
