@@ -7,7 +7,8 @@
 //! a trail, or shorter with both ends inside the frame).
 //!
 //! Measured with `python3 scripts/catalog-robustness.py --images 40 --seed 7001` (40 images of
-//! paper-survey-original, a development seed; results/catalog-robustness.md).
+//! paper-survey-original, a development seed; results/catalog-robustness.md); the rules for
+//! where a trail really ends (`TrailShape::of`, `EDGE_MARGIN_PX`, `goes_on`) on seeds 7001 and 7002 (50).
 
 use super::lone_line::{profile, profile_at};
 use super::output::Candidate;
