@@ -352,11 +352,21 @@ fn two_passes(
         along: Some(trail),
         ..p.clone()
     };
-    let mut second = pass(pixels, w, h, &along, bg, z, Some(trail), Some(stars)).0;
+    let mut second = pass(
+        pixels,
+        w,
+        h,
+        &along,
+        bg,
+        z.clone(),
+        Some(trail),
+        Some(stars),
+    )
+    .0;
     // What the catalogue does not explain but has a star trail's shape is a star it did not
     // list, or misplaced (`unlisted`).
     let shape = TrailShape::of(stars, trail, w, h);
-    second.retain(|c| !shape.fits(c, p.psf_sigma, w, h));
+    second.retain(|c| !shape.fits(c, p.psf_sigma, &z, w, h));
     union(first, second, trail, p)
 }
 
