@@ -152,14 +152,15 @@ impl TrailShape {
         }
         let [a, b] = c.ends;
         let m = EDGE_MARGIN_PX;
-        let cut = runs_out(a, b, w, h, m) || runs_out(b, a, w, h, m) || goes_on(c, z, w, h);
+        // Read only where the length leaves it open: `goes_on` reads two profiles on the map.
+        let cut = || runs_out(a, b, w, h, m) || runs_out(b, a, w, h, m) || goes_on(c, z, w, h);
         match self.length_px {
             Some(l) => {
                 let tol = LENGTH_SHARE * l + 4.0 * psf_sigma;
-                c.length_px <= l + tol && (cut || c.length_px >= l - tol)
+                c.length_px <= l + tol && (c.length_px >= l - tol || cut())
             }
             // Every trail runs off the frame: a star's line has an end at its edge.
-            None => cut,
+            None => cut(),
         }
     }
 }
