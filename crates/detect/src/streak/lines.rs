@@ -129,17 +129,21 @@ fn sweep(halves: &[usize], dirs: &[Dir], src: &[f32], rows: usize, m: usize, bes
                 // Steps up to c + hk: the window centred on row c.
                 while win.next <= c + hk {
                     let i = win.next;
-                    if i < rows {
-                        let o = shift[i];
-                        for (a, &v) in win.acc[o..o + m].iter_mut().zip(row(i)) {
-                            *a += v;
+                    let add = (i < rows).then(|| (shift[i], row(i)));
+                    let sub = (i >= k && i - k < rows).then(|| (shift[i - k], row(i - k)));
+                    match (add, sub) {
+                        (Some((oa, ra)), Some((os, rs))) => add_sub(&mut win.acc, oa, ra, os, rs),
+                        (Some((o, r)), None) => {
+                            for (a, &v) in win.acc[o..o + m].iter_mut().zip(r) {
+                                *a += v;
+                            }
                         }
-                    }
-                    if i >= k && i - k < rows {
-                        let o = shift[i - k];
-                        for (a, &v) in win.acc[o..o + m].iter_mut().zip(row(i - k)) {
-                            *a -= v;
+                        (None, Some((o, r))) => {
+                            for (a, &v) in win.acc[o..o + m].iter_mut().zip(r) {
+                                *a -= v;
+                            }
                         }
+                        (None, None) => {}
                     }
                     win.next += 1;
                 }
@@ -152,6 +156,52 @@ fn sweep(halves: &[usize], dirs: &[Dir], src: &[f32], rows: usize, m: usize, bes
                     *b = b.max(r);
                 }
             }
+        }
+    }
+}
+
+/// `acc[oa..][..m] += ra`, then `acc[os..][..m] -= rs` (`m` the rows' common length), in one
+/// pass over `acc`: each value gets the same add, then the same subtraction, as in two
+/// passes (the same bits), where the two ranges overlap read and written once.
+#[inline(always)]
+fn add_sub(acc: &mut [f32], oa: usize, ra: &[f32], os: usize, rs: &[f32]) {
+    let m = ra.len();
+    // The overlap [lo, hi) of the two ranges (empty when they lie apart).
+    let (lo, hi) = (oa.max(os), (oa + m).min(os + m));
+    if lo >= hi {
+        for (a, &v) in acc[oa..oa + m].iter_mut().zip(ra) {
+            *a += v;
+        }
+        for (a, &v) in acc[os..os + m].iter_mut().zip(rs) {
+            *a -= v;
+        }
+        return;
+    }
+    // Before the overlap: one range only.
+    if oa < lo {
+        for (a, &v) in acc[oa..lo].iter_mut().zip(ra) {
+            *a += v;
+        }
+    } else {
+        for (a, &v) in acc[os..lo].iter_mut().zip(rs) {
+            *a -= v;
+        }
+    }
+    for ((a, &x), &y) in acc[lo..hi]
+        .iter_mut()
+        .zip(&ra[lo - oa..hi - oa])
+        .zip(&rs[lo - os..hi - os])
+    {
+        *a = (*a + x) - y;
+    }
+    // After it: one range only.
+    if oa + m > hi {
+        for (a, &v) in acc[hi..oa + m].iter_mut().zip(&ra[hi - oa..]) {
+            *a += v;
+        }
+    } else {
+        for (a, &v) in acc[hi..os + m].iter_mut().zip(&rs[hi - os..]) {
+            *a -= v;
         }
     }
 }
