@@ -12,9 +12,13 @@ pub fn bilinear(img: &[f32], width: usize, height: usize, x: f64, y: f64) -> f32
     let y = y.clamp(0.0, (height - 1) as f64);
     // Truncation is the floor here (x, y >= 0 after the clamp; NaN gives 0 either way), and
     // needs no call to libm's floor, which the default x86-64 target has no instruction for.
-    let (i, j) = (x as usize, y as usize);
+    // Through i64, not straight to usize: x86-64 converts f64 to and from signed 64-bit
+    // integers in one instruction, to and from unsigned ones only by a sequence of them
+    // (the same values here, where 0 <= x < 2^53).
+    let (xi, yi) = (x as i64, y as i64);
+    let (fx, fy) = ((x - xi as f64) as f32, (y - yi as f64) as f32);
+    let (i, j) = (xi as usize, yi as usize);
     let (i1, j1) = ((i + 1).min(width - 1), (j + 1).min(height - 1));
-    let (fx, fy) = ((x - i as f64) as f32, (y - j as f64) as f32);
     let at = |a: usize, b: usize| img[b * width + a];
     let top = at(i, j) * (1.0 - fx) + at(i1, j) * fx;
     let bottom = at(i, j1) * (1.0 - fx) + at(i1, j1) * fx;
