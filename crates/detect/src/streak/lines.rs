@@ -129,20 +129,12 @@ fn sweep(halves: &[usize], dirs: &[Dir], src: &[f32], rows: usize, m: usize, bes
                 // Steps up to c + hk: the window centred on row c.
                 while win.next <= c + hk {
                     let i = win.next;
-                    let add = (i < rows).then(|| (shift[i], row(i)));
-                    let sub = (i >= k && i - k < rows).then(|| (shift[i - k], row(i - k)));
-                    match (add, sub) {
+                    let added = (i < rows).then(|| (shift[i], row(i)));
+                    let taken = (i >= k && i - k < rows).then(|| (shift[i - k], row(i - k)));
+                    match (added, taken) {
                         (Some((oa, ra)), Some((os, rs))) => add_sub(&mut win.acc, oa, ra, os, rs),
-                        (Some((o, r)), None) => {
-                            for (a, &v) in win.acc[o..o + m].iter_mut().zip(r) {
-                                *a += v;
-                            }
-                        }
-                        (None, Some((o, r))) => {
-                            for (a, &v) in win.acc[o..o + m].iter_mut().zip(r) {
-                                *a -= v;
-                            }
-                        }
+                        (Some((o, r)), None) => add(&mut win.acc[o..o + m], r),
+                        (None, Some((o, r))) => sub(&mut win.acc[o..o + m], r),
                         (None, None) => {}
                     }
                     win.next += 1;
@@ -169,23 +161,15 @@ fn add_sub(acc: &mut [f32], oa: usize, ra: &[f32], os: usize, rs: &[f32]) {
     // The overlap [lo, hi) of the two ranges (empty when they lie apart).
     let (lo, hi) = (oa.max(os), (oa + m).min(os + m));
     if lo >= hi {
-        for (a, &v) in acc[oa..oa + m].iter_mut().zip(ra) {
-            *a += v;
-        }
-        for (a, &v) in acc[os..os + m].iter_mut().zip(rs) {
-            *a -= v;
-        }
+        add(&mut acc[oa..oa + m], ra);
+        sub(&mut acc[os..os + m], rs);
         return;
     }
     // Before the overlap: one range only.
     if oa < lo {
-        for (a, &v) in acc[oa..lo].iter_mut().zip(ra) {
-            *a += v;
-        }
+        add(&mut acc[oa..lo], ra);
     } else {
-        for (a, &v) in acc[os..lo].iter_mut().zip(rs) {
-            *a -= v;
-        }
+        sub(&mut acc[os..lo], rs);
     }
     for ((a, &x), &y) in acc[lo..hi]
         .iter_mut()
@@ -196,13 +180,24 @@ fn add_sub(acc: &mut [f32], oa: usize, ra: &[f32], os: usize, rs: &[f32]) {
     }
     // After it: one range only.
     if oa + m > hi {
-        for (a, &v) in acc[hi..oa + m].iter_mut().zip(&ra[hi - oa..]) {
-            *a += v;
-        }
+        add(&mut acc[hi..oa + m], &ra[hi - oa..]);
     } else {
-        for (a, &v) in acc[hi..os + m].iter_mut().zip(&rs[hi - os..]) {
-            *a -= v;
-        }
+        sub(&mut acc[hi..os + m], &rs[hi - os..]);
+    }
+}
+
+/// `acc += r` and `acc -= r`, value by value over `acc`'s length (`r` may be longer).
+#[inline(always)]
+fn add(acc: &mut [f32], r: &[f32]) {
+    for (a, &v) in acc.iter_mut().zip(r) {
+        *a += v;
+    }
+}
+
+#[inline(always)]
+fn sub(acc: &mut [f32], r: &[f32]) {
+    for (a, &v) in acc.iter_mut().zip(r) {
+        *a -= v;
     }
 }
 
