@@ -103,16 +103,16 @@ pub(super) fn refine(maps: &Maps, seed: &Seed) -> Option<Seg> {
     // A full-line seed (`Regime::SubNoise`) knows its axis to a fraction of a degree and a
     // few pixels: searched as widely as a local one, a star trail through its centre (17
     // degrees off a streak at line SNR 11, development image 7) took the axis.
-    let first = match seed.regime {
-        Regime::Resolved => (step / 4.0, 8i32, 0.5, 4i32),
-        Regime::SubNoise { .. } => (step / 16.0, 2, 0.5, 4),
-    };
     // Each level reads every `stride`-th sample along its axes: z is smoothed by the PSF
     // (its noise correlated over about 2 psf_sigma), so the coarse levels, which only centre
     // the next, lose little by it; the finest reads every sample. With every sample at every
     // level the search was about a fifth of the detector's time on survey frames (perf).
+    let first = match seed.regime {
+        Regime::Resolved => (step / 4.0, 8i32, 0.5, 4i32, 4usize),
+        Regime::SubNoise { .. } => (step / 16.0, 2, 0.5, 4, 4),
+    };
     for (dth, nth, du, nu, stride) in [
-        (first.0, first.1, first.2, first.3, 4),
+        first,
         (step / 16.0, 3, 0.25, 2, 2),
         (step / 64.0, 3, 0.125, 2, 2),
         (step / 256.0, 3, 0.125, 1, 1),
