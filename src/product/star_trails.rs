@@ -112,29 +112,85 @@ pub fn pointing_offset(trails: &[StarTrail], pixels: &[u8], w: usize, h: usize) 
     if samples.is_empty() {
         return (0.0, 0.0);
     }
-    let grey: Vec<f32> = pixels.iter().map(|&v| v as f32).collect();
     // Beyond the image counts as black, so a shift off the frame gains nothing.
-    let light = |dx: f64, dy: f64| -> f64 {
-        samples
+    let r = SEARCH_PX;
+    let whole: Vec<f64> = (-r..=r).map(|d| d as f64).collect();
+    let (cx, cy) = best_shift(&samples, pixels, w, h, &whole, &whole);
+    let k = (1.0 / FINE_STEP_PX).round() as i32;
+    let fine = |c: f64| -> Vec<f64> { (-k..=k).map(|i| c + i as f64 * FINE_STEP_PX).collect() };
+    best_shift(&samples, pixels, w, h, &fine(cx), &fine(cy))
+}
+
+/// Where a sample lands along one axis under one shift: the pixel (column, or row start) at
+/// and after it and the fraction between them, as `imaging::bilinear` finds them; `None` off
+/// the image.
+type Axis = Option<(usize, usize, f32)>;
+
+/// Each sample's `Axis` for each shift in `offsets` (shift-major): `coord` shifted, within
+/// `0..=max`, its pixel and the next (the last pixel's next is itself) times `stride`.
+fn axis(
+    coords: impl Iterator<Item = f64> + Clone,
+    offsets: &[f64],
+    max: usize,
+    stride: usize,
+) -> Vec<Axis> {
+    let top = max as i64 as f64;
+    offsets
+        .iter()
+        .flat_map(|&d| {
+            coords.clone().map(move |c| {
+                let v = c + d;
+                (v >= 0.0 && v <= top).then(|| {
+                    let vi = v as i64;
+                    let i = vi as usize;
+                    (
+                        i * stride,
+                        (i + 1).min(max) * stride,
+                        (v - vi as f64) as f32,
+                    )
+                })
+            })
+        })
+        .collect()
+}
+
+/// The shift of the grid `xs` x `ys` (rows `ys`, each over `xs`; the first of equals) with
+/// the most light under the shifted `samples`: the sum, in the samples' order, of the image's
+/// grey levels interpolated as `imaging::bilinear` does, over the shifted samples inside the
+/// image. Each sample's pixels and fractions are found once per shift along each axis, not at
+/// each of the grid's points (the same values).
+fn best_shift(
+    samples: &[(f64, f64)],
+    pixels: &[u8],
+    w: usize,
+    h: usize,
+    xs: &[f64],
+    ys: &[f64],
+) -> (f64, f64) {
+    let n = samples.len();
+    let cols = axis(samples.iter().map(|s| s.0), xs, w - 1, 1);
+    let rows = axis(samples.iter().map(|s| s.1), ys, h - 1, w);
+    let at = |k: usize| pixels[k] as f32;
+    let light = |a: usize, b: usize| -> f64 {
+        cols[a * n..(a + 1) * n]
             .iter()
-            .map(|&(x, y)| (x + dx, y + dy))
-            .filter(|&(x, y)| inside(x, y))
-            .map(|(x, y)| soig_image::imaging::bilinear(&grey, w, h, x, y) as f64)
+            .zip(&rows[b * n..(b + 1) * n])
+            .filter_map(|(c, r)| {
+                let ((i, i1, fx), (j, j1, fy)) = ((*c)?, (*r)?);
+                let top = at(j + i) * (1.0 - fx) + at(j + i1) * fx;
+                let bottom = at(j1 + i) * (1.0 - fx) + at(j1 + i1) * fx;
+                Some((top * (1.0 - fy) + bottom * fy) as f64)
+            })
             .sum()
     };
-    let best_of = |grid: &mut dyn Iterator<Item = (f64, f64)>| {
-        grid.map(|(dx, dy)| (light(dx, dy), dx, dy))
-            .fold(
-                (f64::NEG_INFINITY, 0.0, 0.0),
-                |m, c| if c.0 > m.0 { c } else { m },
-            )
-    };
-    let r = SEARCH_PX;
-    let (_, cx, cy) =
-        best_of(&mut (-r..=r).flat_map(|dy| (-r..=r).map(move |dx| (dx as f64, dy as f64))));
-    let k = (1.0 / FINE_STEP_PX).round() as i32;
-    let (_, fx, fy) = best_of(&mut (-k..=k).flat_map(|j| {
-        (-k..=k).map(move |i| (cx + i as f64 * FINE_STEP_PX, cy + j as f64 * FINE_STEP_PX))
-    }));
-    (fx, fy)
+    let mut best = (f64::NEG_INFINITY, 0.0, 0.0);
+    for (b, &dy) in ys.iter().enumerate() {
+        for (a, &dx) in xs.iter().enumerate() {
+            let l = light(a, b);
+            if l > best.0 {
+                best = (l, dx, dy);
+            }
+        }
+    }
+    (best.1, best.2)
 }
