@@ -25,6 +25,14 @@ use soig_image::imaging::bilinear;
 /// A lone line is at least this many trail lengths long (debris found at 1.74; two trails end
 /// to end with a seam too faint to see reach 2).
 const LONGER: f64 = 1.6;
+/// Down to this many trail lengths a line within the trails' tolerance of their direction is
+/// still looked at (`Seams::short_lone`), where its light runs along its own direction
+/// (`slant::own_way`): on SatSim seeds 7 and 8 two debris streaks 1.25-2.1 degrees off the
+/// trails were 1.30 and 1.37 trail lengths long, evenly lit (pieces 0.97-1.01), one-line gain
+/// 130 and 174; of the 28 other lines of 1.1-1.6 trail lengths along the trails (not
+/// `like_others`), the evenly lit ones had gains of -22 to 27 (and the 27 a slant of 1.08 and
+/// 1.02).
+const SHORT_LONGER: f64 = 1.2;
 /// Pieces of half a trail's length each lie within these fractions of the line's median level
 /// (debris along the trails: 0.85-1.17 inside the frame; chains of trails with a one-line gain
 /// of `EVEN_GAIN` or more: 0.79-1.17, at the frame's edge or shorter than `LONGER`, and one at
@@ -153,6 +161,17 @@ impl Seams {
     pub(super) fn lone(&self) -> bool {
         self.ratio >= LONGER
             && (self.inside || self.ratio >= LONG_AT_EDGE)
+            && self.even(PIECE_HIGH)
+            && self.gain >= EVEN_GAIN
+    }
+
+    /// A line along the trails but shorter than `LONGER` trail lengths that may still be no
+    /// star's: `SHORT_LONGER` lengths or more, inside the frame, evenly lit and fitted better
+    /// by one even line than by two trails from its ends (`lone` but for its length); whether
+    /// its light runs along its own direction is `slant::own_way`'s to say.
+    pub(super) fn short_lone(&self) -> bool {
+        (SHORT_LONGER..LONGER).contains(&self.ratio)
+            && self.inside
             && self.even(PIECE_HIGH)
             && self.gain >= EVEN_GAIN
     }

@@ -315,7 +315,10 @@ fn along_own_trails(
         })
         .filter(|(c, star, alike)| {
             if *star {
-                !alike && seams(c).is_some_and(|s| s.lone())
+                !alike
+                    && seams(c).is_some_and(|s| {
+                        s.lone() || (s.short_lone() && slant::own_way(c, m.angle_deg, &z, (w, h)))
+                    })
             } else {
                 !near(c) || !seams(c).is_some_and(|s| s.pair())
             }

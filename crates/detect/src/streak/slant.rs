@@ -39,6 +39,21 @@ pub(super) fn side_by_side(
             .all(|r| r.is_some_and(|r| r >= SLANT_MIN))
 }
 
+/// Both halves of a debris streak a degree or more off the trails gather at most this share of
+/// their light along the trails' direction (SatSim seeds 7 and 8: 0.93 and 0.93, 0.98 and
+/// 0.97, 1.25-2.1 degrees off at 164-178 px); a star's own trail, whose direction lies within
+/// the frame's spread (0.1-0.4 degrees) of the trails', gathers as much either way (1 within
+/// a percent: its lateral drift over a half is a few tenths of a pixel).
+const OWN_WAY_MAX: f64 = 0.985;
+
+/// Whether the light of both halves of `c` runs along its own direction rather than the
+/// trails' `trail_deg` (`halves` below `OWN_WAY_MAX`).
+pub(super) fn own_way(c: &Candidate, trail_deg: f64, z: &[f32], (w, h): (usize, usize)) -> bool {
+    halves(c, trail_deg, z, w, h)
+        .iter()
+        .all(|r| r.is_some_and(|r| r < OWN_WAY_MAX))
+}
+
 /// The lateral offsets tried for each direction, pixels either side of the axis, in steps of
 /// `STEP_PX` (a trail's centre lies within a few pixels of the chord of a pair).
 const REACH_PX: f64 = 4.0;
