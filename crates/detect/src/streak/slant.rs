@@ -146,6 +146,21 @@ mod tests {
     }
 
     #[test]
+    fn a_short_line_off_the_trails_runs_its_own_way() {
+        // Evenly lit, 1.3 trails of 100 px long: 2 degrees off the trails, its light runs
+        // along its own direction in each half; along them, both directions are one.
+        let z = map(400, 40, &[flat(50, 180, 20.0, 4.0)]);
+        let c = line(50.0, 180.0, 20.0);
+        let s = Seams::of(&c, 100.0, &z, 400, 40);
+        assert!(s.short_lone() && !s.lone(), "{s:?}");
+        assert!(own_way(&c, 2.0, &z, (400, 40)));
+        assert!(!own_way(&c, 0.0, &z, (400, 40)));
+        // A trail's length (1.1 of the median) is not looked at.
+        let c = line(50.0, 160.0, 20.0);
+        assert!(!Seams::of(&c, 100.0, &z, 400, 40).short_lone());
+    }
+
+    #[test]
     fn a_line_longer_than_two_trails_is_no_pair() {
         // Three trails of 100 px at 4 degrees in a row: the chord is 2.7 trail lengths, beyond
         // `PAIR_LONGEST`, though every half's light runs along the trails.
