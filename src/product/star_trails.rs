@@ -194,3 +194,57 @@ fn best_shift(
     }
     (best.1, best.2)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::best_shift;
+
+    /// `best_shift` reads pixels and fractions as `imaging::bilinear` does, by a copy of its
+    /// arithmetic (for speed): it must find the shift the plain search finds, bilinear over an
+    /// f32 copy at every grid point, the first of equal maxima, rows outer. (Checked to fail
+    /// with one pixel of the interpolation read from the wrong row.)
+    #[test]
+    fn best_shift_finds_the_plain_search_s_shift() {
+        let (w, h) = (61usize, 47usize);
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as u32
+        };
+        let whole: Vec<f64> = (-8..=8).map(|d| d as f64).collect();
+        let fine: Vec<f64> = (-4..=4).map(|i| 3.0 + i as f64 * 0.25).collect();
+        for _ in 0..20 {
+            let pixels: Vec<u8> = (0..w * h).map(|_| (next() % 256) as u8).collect();
+            let samples: Vec<(f64, f64)> = (0..40)
+                .map(|_| {
+                    let x = (next() % 6000) as f64 / 100.0;
+                    (x, (next() % 4600) as f64 / 100.0)
+                })
+                .collect();
+            let grey: Vec<f32> = pixels.iter().map(|&v| v as f32).collect();
+            let (xm, ym) = ((w - 1) as f64, (h - 1) as f64);
+            let plain = |xs: &[f64], ys: &[f64]| {
+                let mut best = (f64::NEG_INFINITY, 0.0, 0.0);
+                for &dy in ys {
+                    for &dx in xs {
+                        let l: f64 = samples
+                            .iter()
+                            .map(|&(x, y)| (x + dx, y + dy))
+                            .filter(|&(x, y)| x >= 0.0 && y >= 0.0 && x <= xm && y <= ym)
+                            .map(|(x, y)| soig_image::imaging::bilinear(&grey, w, h, x, y) as f64)
+                            .sum();
+                        if l > best.0 {
+                            best = (l, dx, dy);
+                        }
+                    }
+                }
+                (best.1, best.2)
+            };
+            for (xs, ys) in [(&whole, &whole), (&fine, &whole), (&whole, &fine)] {
+                assert_eq!(best_shift(&samples, &pixels, w, h, xs, ys), plain(xs, ys));
+            }
+        }
+    }
+}
