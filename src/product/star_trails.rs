@@ -76,7 +76,7 @@ pub fn of_image(
 /// (a trail's light is highest on its path; a shift across it loses it, and along it the
 /// trail's ends). (0, 0) where no trail is bright and long enough to fit.
 pub fn pointing_offset(trails: &[StarTrail], pixels: &[u8], w: usize, h: usize) -> (f64, f64) {
-    // The bounds converted once, not at each of the fit's million points.
+    // The bounds converted once, not at each trail point.
     let (x_max, y_max) = ((w - 1) as f64, (h - 1) as f64);
     let inside = |x: f64, y: f64| x >= 0.0 && y >= 0.0 && x <= x_max && y <= y_max;
     // Each trail's points 1 px apart inside the image.

@@ -273,7 +273,8 @@ fn parallels_sd(
     if t.len() < PARALLELS {
         return modelled;
     }
-    let m = median_of(&mut t.clone());
+    // The spread's median deviation does not depend on the order `median_of` leaves.
+    let m = median_of(&mut t);
     let mut dev: Vec<f64> = t.iter().map(|v| (v - m).abs()).collect();
     let spread = 1.4826 * median_of(&mut dev);
     white(n) * spread.clamp(1.0, ratio)
