@@ -92,10 +92,18 @@ fn main() -> anyhow::Result<()> {
         } else {
             Stars::told(trail_png, Some(&stars))
         };
+        // As the run's record gives it: the original image's outline in a rotated or padded
+        // frame (the truth holds the frame, and the run's sensor its original size).
+        let footprint =
+            match serde_json::from_value::<soig::geometry::Frame>(truth["frame"].clone()) {
+                Ok(f) => f.footprint(x.sensor.width_px, x.sensor.height_px),
+                Err(_) => None,
+            };
         let frame = Frame {
             pixels: &pixels,
             width: w,
             height: h,
+            footprint,
         };
         let (cands, _) = detector.detect_measuring(frame, told);
         ms.push(t.elapsed().as_secs_f64() * 1e3);

@@ -103,6 +103,10 @@ pub struct Record {
     pub png: Option<PngRecord>,
     /// `f64::to_bits` of the direction of star trails in the PNG (survey pointing).
     pub trail_angle_bits: Option<u64>,
+    /// `f64::to_bits` of the original image's outline in the PNG's frame (rotated and padded
+    /// frames; `geometry::Frame::footprint`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub footprint_bits: Option<[[u64; 2]; 4]>,
     /// FITS -> PNG conversion time, seconds (a timing: kept out of anything hashed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub conversion_s: Option<f64>,
@@ -370,6 +374,7 @@ mod tests {
                 more_label_bits: Vec::new(),
             }),
             trail_angle_bits: None,
+            footprint_bits: None,
             conversion_s: Some(0.5),
         }
     }

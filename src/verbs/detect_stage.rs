@@ -14,6 +14,7 @@ use rayon::prelude::*;
 use crate::artifacts::WrittenPng;
 use crate::dataset::Subset;
 use crate::detect::detector::Frame;
+use crate::detect::streak::Footprint;
 use crate::detect::yolo::YoloDetector;
 use crate::detect::{Detection, Detector, Found, Stars, StreakDetector};
 use crate::observations::Line;
@@ -31,6 +32,8 @@ pub(crate) struct Written {
     pub conversion_s: Option<f64>,
     /// Direction of star trails in the PNG (survey), degrees.
     pub trail_angle_deg: Option<f64>,
+    /// Where the PNG holds the image (a rotated or padded frame), for the streak detector.
+    pub footprint: Option<Footprint>,
 }
 
 /// Run the detectors on the test split (every image when there is no split) and write the
@@ -112,6 +115,7 @@ struct TestFrame {
     png: std::path::PathBuf,
     width: usize,
     height: usize,
+    footprint: Option<Footprint>,
 }
 
 impl TestFrame {
@@ -121,6 +125,7 @@ impl TestFrame {
             pixels,
             width: self.width,
             height: self.height,
+            footprint: self.footprint,
         }
     }
 
@@ -130,6 +135,7 @@ impl TestFrame {
             png: png.path.clone(),
             width: png.width,
             height: png.height,
+            footprint: w.footprint,
         }
     }
 }

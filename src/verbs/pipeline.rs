@@ -264,6 +264,11 @@ pub(crate) fn record_check<'p>(
         {
             return Err(format!("image {}: its trail angle is not finite", r.index));
         }
+        if r.footprint_bits
+            .is_some_and(|f| f.iter().flatten().any(|&b| !f64::from_bits(b).is_finite()))
+        {
+            return Err(format!("image {}: its footprint is not finite", r.index));
+        }
         Ok(())
     }
 }
@@ -524,6 +529,11 @@ fn render(
                     .png
                     .map(|p| PngRecord::new(p.width, p.height, &p.labels)),
                 trail_angle_bits: trail_angle_deg.map(f64::to_bits),
+                footprint_bits: products
+                    .product
+                    .as_ref()
+                    .and_then(|p| p.frame.footprint(products.exposure.width, products.exposure.height))
+                    .map(|f| f.map(|c| c.map(f64::to_bits))),
                 conversion_s: Some(conversion_s),
             };
             journal.append(&record)?;
@@ -560,6 +570,7 @@ pub(crate) fn written(plan: &Plan, dir: &Path, records: &[Record]) -> Vec<Writte
                 }),
                 conversion_s: r.conversion_s,
                 trail_angle_deg: r.trail_angle_bits.map(f64::from_bits),
+                footprint: r.footprint_bits.map(|f| f.map(|c| c.map(f64::from_bits))),
             }
         })
         .collect()

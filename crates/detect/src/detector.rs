@@ -4,7 +4,7 @@
 //! sees an 8-bit frame and, at most, what is known of its stars: never a truth file.
 
 use crate::Detection;
-use crate::streak::{self, Candidate, OwnTrails, StarTrail, StreakParams};
+use crate::streak::{self, Candidate, Footprint, OwnTrails, Sanitized, StarTrail, StreakParams};
 use crate::yolo::YoloDetector;
 
 /// An 8-bit frame: `pixels` row-major, `width * height` values.
@@ -13,6 +13,22 @@ pub struct Frame<'a> {
     pub pixels: &'a [u8],
     pub width: usize,
     pub height: usize,
+    /// Where the frame holds data (the original image inside a rotated or padded frame, as the
+    /// conversion put it); `None`: all of it. The streak detector ends a streak that runs on to
+    /// its outline there; YOLO ignores it.
+    pub footprint: Option<Footprint>,
+}
+
+impl<'a> Frame<'a> {
+    /// A frame that holds data everywhere.
+    pub fn new(pixels: &'a [u8], width: usize, height: usize) -> Frame<'a> {
+        Frame {
+            pixels,
+            width,
+            height,
+            footprint: None,
+        }
+    }
 }
 
 /// What a detector is told of a frame's stars. The streak detector reads it; YOLO learned the
@@ -100,24 +116,15 @@ impl StreakDetector {
             pixels,
             width,
             height,
+            footprint,
         } = frame;
-        let p = &self.params;
+        let p = &Sanitized::new(&self.params).within(footprint);
         match stars {
-            Stars::Unknown => streak::detect_streaks_on_frame(pixels, width, height, p, None, None),
-            Stars::Points => (streak::detect_streaks(pixels, width, height, p, None), None),
-            Stars::Along(a) => (
-                streak::detect_streaks(pixels, width, height, p, Some(a)),
-                None,
-            ),
+            Stars::Unknown => streak::on_frame(pixels, width, height, p, None, None),
+            Stars::Points => (streak::explained(pixels, width, height, p, None).0, None),
+            Stars::Along(a) => (streak::explained(pixels, width, height, p, Some(a)).0, None),
             Stars::Catalogue { angle_deg, trails } => (
-                streak::detect_streaks_among_stars(
-                    pixels,
-                    width,
-                    height,
-                    p,
-                    Some(angle_deg),
-                    Some(trails),
-                ),
+                streak::among_stars(pixels, width, height, p, Some(angle_deg), Some(trails)),
                 None,
             ),
         }
@@ -176,11 +183,7 @@ mod tests {
             pixels[(y + 1) * w + x] = 120;
         }
         let params = StreakParams::default();
-        let frame = Frame {
-            pixels: &pixels,
-            width: w,
-            height: h,
-        };
+        let frame = Frame::new(&pixels, w, h);
         let boxes = |found: Vec<Found>| -> Vec<Detection> {
             found.iter().map(|f| *f.detection()).collect()
         };

@@ -126,6 +126,26 @@ impl Frame {
         )
     }
 
+    /// The outline of the original `width` x `height` image in this frame (its pixels' outer
+    /// edges, in pixel-centre coordinates, corners in order around it): where the frame holds
+    /// the image and not the conversion's fill. None in the original frame.
+    pub fn footprint(&self, width: usize, height: usize) -> Option<[[f64; 2]; 4]> {
+        if self.is_identity() {
+            return None;
+        }
+        let (w, h) = (width as f64 - 0.5, height as f64 - 0.5);
+        let corner = |x: f64, y: f64| {
+            let (u, v) = self.map(x, y);
+            [u, v]
+        };
+        Some([
+            corner(-0.5, -0.5),
+            corner(w, -0.5),
+            corner(w, h),
+            corner(-0.5, h),
+        ])
+    }
+
     pub fn is_identity(&self) -> bool {
         self.kind == FrameKind::Original
     }

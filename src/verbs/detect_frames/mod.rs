@@ -403,11 +403,7 @@ fn detect_frame(
     let mut own_trails = None;
     let (ox, oy) = (frame.region.x0 as f64, frame.region.y0 as f64);
     let shift = |d: &Detection| [d.x1 + ox, d.y1 + oy, d.x2 + ox, d.y2 + oy];
-    let image = DetectorFrame {
-        pixels: &enhanced.pixels,
-        width: rw,
-        height: rh,
-    };
+    let image = DetectorFrame::new(&enhanced.pixels, rw, rh);
     if opts.which != Which::Yolo {
         let params = StreakParams {
             psf_sigma_px,

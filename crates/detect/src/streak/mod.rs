@@ -152,8 +152,8 @@ use lone_line::{NEAR_DEG, Seams, like_others, trail_length};
 pub use output::Candidate;
 pub use own_trails::{OwnTrails, TrailModel};
 use own_trails::{from_lines, own_trails};
-use params::Sanitized;
-pub use params::StreakParams;
+pub(crate) use params::Sanitized;
+pub use params::{Footprint, StreakParams};
 use pass::pass;
 use segment::angle_diff_deg;
 pub use sky::StarTrail;
@@ -194,9 +194,22 @@ pub fn detect_streaks_among_stars(
     star_trail_angle_deg: Option<f64>,
     stars: Option<&[StarTrail]>,
 ) -> Vec<Candidate> {
+    let p = Sanitized::new(params);
+    among_stars(pixels, width, height, &p, star_trail_angle_deg, stars)
+}
+
+/// [`detect_streaks_among_stars`] with its parameters sanitized (and a footprint).
+pub(crate) fn among_stars(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    p: &Sanitized,
+    star_trail_angle_deg: Option<f64>,
+    stars: Option<&[StarTrail]>,
+) -> Vec<Candidate> {
     let trail = star_trail_angle_deg.filter(|a| a.is_finite());
     let (Some(stars), Some(trail)) = (stars, trail) else {
-        return detect_streaks_explained(pixels, width, height, params, star_trail_angle_deg).0;
+        return explained(pixels, width, height, p, star_trail_angle_deg).0;
     };
     assert_eq!(
         pixels.len(),
@@ -206,10 +219,9 @@ pub fn detect_streaks_among_stars(
     if width < 2 || height < 2 {
         return Vec::new();
     }
-    let p = Sanitized::new(params);
     // Both passes start from the same background and unit-noise map.
-    let (bg, z) = unit_noise_map(pixels, width, height, &p);
-    two_passes(pixels, width, height, &p, (bg, z), trail, stars)
+    let (bg, z) = unit_noise_map(pixels, width, height, p);
+    two_passes(pixels, width, height, p, (bg, z), trail, stars)
 }
 
 /// Detect streaks in a frame told nothing of its stars: with no trail direction and no
@@ -229,10 +241,22 @@ pub fn detect_streaks_on_frame(
     star_trail_angle_deg: Option<f64>,
     stars: Option<&[StarTrail]>,
 ) -> (Vec<Candidate>, Option<OwnTrails>) {
+    let p = Sanitized::new(params);
+    on_frame(pixels, width, height, &p, star_trail_angle_deg, stars)
+}
+
+/// [`detect_streaks_on_frame`] with its parameters sanitized (and a footprint).
+pub(crate) fn on_frame(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    p: &Sanitized,
+    star_trail_angle_deg: Option<f64>,
+    stars: Option<&[StarTrail]>,
+) -> (Vec<Candidate>, Option<OwnTrails>) {
     let told = star_trail_angle_deg.is_some_and(f64::is_finite) || stars.is_some();
     if told || width < 2 || height < 2 {
-        let found =
-            detect_streaks_among_stars(pixels, width, height, params, star_trail_angle_deg, stars);
+        let found = among_stars(pixels, width, height, p, star_trail_angle_deg, stars);
         return (found, None);
     }
     assert_eq!(
@@ -240,20 +264,19 @@ pub fn detect_streaks_on_frame(
         width * height,
         "pixels.len() must be width * height"
     );
-    let p = Sanitized::new(params);
-    let (bg, z) = unit_noise_map(pixels, width, height, &p);
+    let (bg, z) = unit_noise_map(pixels, width, height, p);
     let (w, h) = (width, height);
     let mut own = own_trails(&z, w, h);
     if let OwnTrails::Common(m) = &mut own {
-        let found = along_own_trails(pixels, w, h, &p, (bg, z), m);
+        let found = along_own_trails(pixels, w, h, p, (bg, z), m);
         return (found, Some(own));
     }
     // Too few bright features: the lines a pass told of no trails finds may still share a
     // direction (a frame whose trails are faint but for one or two).
-    let found = pass(pixels, w, h, &p, bg.clone(), z.clone(), None, None).0;
+    let found = pass(pixels, w, h, p, bg.clone(), z.clone(), None, None).0;
     match from_lines(&found, p.psf_sigma) {
         Some(mut m) => {
-            let found = along_own_trails(pixels, w, h, &p, (bg, z), &mut m);
+            let found = along_own_trails(pixels, w, h, p, (bg, z), &mut m);
             (found, Some(OwnTrails::Common(m)))
         }
         None => (found, Some(own)),
@@ -382,6 +405,18 @@ pub fn detect_streaks_explained(
     params: &StreakParams,
     star_trail_angle_deg: Option<f64>,
 ) -> (Vec<Candidate>, Vec<Dropped>) {
+    let p = Sanitized::new(params);
+    explained(pixels, width, height, &p, star_trail_angle_deg)
+}
+
+/// [`detect_streaks_explained`] with its parameters sanitized (and a footprint).
+pub(crate) fn explained(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    p: &Sanitized,
+    star_trail_angle_deg: Option<f64>,
+) -> (Vec<Candidate>, Vec<Dropped>) {
     assert_eq!(
         pixels.len(),
         width * height,
@@ -390,7 +425,6 @@ pub fn detect_streaks_explained(
     if width < 2 || height < 2 {
         return (Vec::new(), Vec::new());
     }
-    let p = Sanitized::new(params);
-    let (bg, z) = unit_noise_map(pixels, width, height, &p);
-    pass(pixels, width, height, &p, bg, z, star_trail_angle_deg, None)
+    let (bg, z) = unit_noise_map(pixels, width, height, p);
+    pass(pixels, width, height, p, bg, z, star_trail_angle_deg, None)
 }

@@ -272,9 +272,14 @@ impl StreakParams {
     }
 }
 
-/// Parameters checked and converted once.
+/// Where a frame holds data: the original image's outline in a rotated or padded frame (the
+/// conversion's fill outside it is noise with no streak in it), its four corners in order around
+/// it, in the frame's pixel-centre coordinates.
+pub type Footprint = [[f64; 2]; 4];
+
+/// Parameters checked and converted once, and where the frame holds data.
 #[derive(Clone)]
-pub(super) struct Sanitized {
+pub(crate) struct Sanitized {
     pub(super) mesh: usize,
     pub(super) mesh_clip: f64,
     pub(super) min_sigma: f64,
@@ -312,10 +317,17 @@ pub(super) struct Sanitized {
     /// The pass along the frame's own trails (no trail predicted): the gap test reads each
     /// sample's contrast against its quieter side band (see `accept::gap`).
     pub(super) quiet_side: bool,
+    /// Where the frame holds data ([`Footprint`]); `None`: all of it.
+    pub(super) footprint: Option<Footprint>,
 }
 
 impl Sanitized {
-    pub(super) fn new(p: &StreakParams) -> Self {
+    /// These parameters on a frame that holds data only inside `footprint`.
+    pub(crate) fn within(self, footprint: Option<Footprint>) -> Self {
+        Sanitized { footprint, ..self }
+    }
+
+    pub(crate) fn new(p: &StreakParams) -> Self {
         // Non-finite values fall back to the defaults.
         let d = StreakParams::default();
         let fin = |v: f64, d: f64| if v.is_finite() { v } else { d };
@@ -364,6 +376,7 @@ impl Sanitized {
             calibrate_noise: p.calibrate_noise,
             along: None,
             quiet_side: false,
+            footprint: None,
         }
     }
 

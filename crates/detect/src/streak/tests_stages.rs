@@ -403,3 +403,53 @@ fn reach_does_not_follow_noise_beyond_the_end() {
         .count();
     assert!(moved <= 3, "the end moved on {moved} of 60 seeds");
 }
+
+/// A horizontal segment along row 64 from x = 10 to 110, as refined.
+fn across(snr: f64) -> Seg {
+    Seg {
+        cx: 60.0,
+        cy: 64.0,
+        theta: 0.0,
+        length: 100.0,
+        snr,
+        flux: 100.0,
+        elongation: 20.0,
+        contrast: false,
+    }
+}
+
+/// Step 7 in a rotated or padded frame: a streak running on to the footprint's outline ends
+/// there, whatever the map shows beyond it (here the same streak goes on to the border).
+#[test]
+fn the_box_ends_at_the_footprint_outline() {
+    let mut world = World::new(streak_map(3.0, 64.0, 0, W - 1));
+    let plain = candidate(&world.maps(), &across(20.0), 0.9).detection;
+    assert_eq!(plain.x2, W as f64, "{plain:?}");
+    // The original image's outline: x from -0.5 to 90.5.
+    world.p = params().within(Some([
+        [-0.5, -0.5],
+        [90.5, -0.5],
+        [90.5, H as f64 - 0.5],
+        [-0.5, H as f64 - 0.5],
+    ]));
+    let framed = candidate(&world.maps(), &across(20.0), 0.9).detection;
+    // The streak's light stops at the outline (pixel edge 91); its 99 % box ends within the
+    // PSF's reach of it.
+    assert!((framed.x2 - 91.0).abs() <= 2.0, "{framed:?}");
+    assert_eq!(framed.x1, plain.x1, "the other end is the image's border");
+}
+
+/// Step 7 at the border: the last 12 px of a streak dark before the border are noise on a
+/// faint streak (it leaves the frame, `EXIT_ODDS`) and the streak's own end on a bright one.
+#[test]
+fn a_dark_stretch_at_the_border_ends_only_a_bright_streak() {
+    let end = W - 1 - 12;
+    let faint = World::new(streak_map(0.8, 64.0, 0, end));
+    let c = candidate(&faint.maps(), &across(8.0), 0.9).detection;
+    // On to the border; the box's last 2 px are the 0.5 % of the flux it leaves out, dimmer
+    // there than along the rest of the streak.
+    assert!(c.x2 >= W as f64 - 3.0, "{c:?}");
+    let bright = World::new(streak_map(6.0, 64.0, 0, end));
+    let c = candidate(&bright.maps(), &across(60.0), 0.9).detection;
+    assert!((c.x2 - (end as f64 + 1.0)).abs() <= 2.0, "{c:?}");
+}

@@ -334,3 +334,28 @@ fn flux_box_holds_the_flux() {
         )
     );
 }
+
+#[test]
+fn the_footprint_is_the_original_images_outline() {
+    assert_eq!(Frame::original(64, 48).footprint(64, 48), None);
+    let padded = Frame::padded(64, 48, 10).footprint(64, 48).unwrap();
+    assert_eq!(
+        padded,
+        [[9.5, 9.5], [73.5, 9.5], [73.5, 57.5], [9.5, 57.5]],
+        "the pad's inner edge"
+    );
+    let f = Frame::rotated(1024, 768, 33.0);
+    let corners = f.footprint(1024, 768).unwrap();
+    let outer = [[-0.5, -0.5], [1023.5, -0.5], [1023.5, 767.5], [-0.5, 767.5]];
+    for (c, o) in corners.iter().zip(outer) {
+        let (x, y) = f.unmap(c[0], c[1]);
+        assert!(
+            (x - o[0]).abs() < 1e-9 && (y - o[1]).abs() < 1e-9,
+            "{c:?} {o:?}"
+        );
+        assert!(
+            c.iter().all(|&v| (0.0..f.width as f64).contains(&v)),
+            "{c:?}"
+        );
+    }
+}

@@ -252,8 +252,9 @@ pub fn fill_masked(pixels: &mut [f32], mask: &[bool], width: usize, height: usiz
             let u = x + rng.random_range(-FILL_RADIUS_PX..=FILL_RADIUS_PX);
             let v = y + rng.random_range(-FILL_RADIUS_PX..=FILL_RADIUS_PX);
             let inside = u >= 0 && v >= 0 && (u as usize) < width && (v as usize) < height;
-            let j = v as usize * width + u as usize;
-            (inside && !mask[j]).then_some(j)
+            // The index only inside: off the image it would overflow (a debug build panics).
+            let j = inside.then(|| v as usize * width + u as usize)?;
+            (!mask[j]).then_some(j)
         });
         let j = near.unwrap_or_else(|| clean[rng.random_range(0..clean.len())]);
         pixels[i] = source[j];
