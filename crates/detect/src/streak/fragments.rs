@@ -3,7 +3,6 @@
 
 use super::components::Component;
 use super::explain::{Dropped, Reason, Seeds};
-use super::full_lines::MIN_LENGTH_PX;
 use super::maps::Maps;
 use super::refine::{Regime, Seed, refine};
 use super::segment::Seg;
@@ -19,13 +18,7 @@ pub(super) fn fragments(
     is_star: &dyn Fn(&Seg) -> bool,
 ) -> (Vec<Seg>, Vec<Dropped>) {
     let p = maps.p;
-    // The full-line stage's streaks are each far below the noise sample by sample.
-    let regime = match seeds {
-        Seeds::FullLine => Regime::SubNoise {
-            min: (MIN_LENGTH_PX / 2.0) as usize,
-        },
-        Seeds::Local | Seeds::LongLine => Regime::Resolved,
-    };
+    let regime = Regime::of(seeds);
     let (mut frags, mut dropped) = (Vec::new(), Vec::new());
     for &(ref c, kmax) in comps {
         let shrink = (kmax / 2.0).min(c.half_len / 2.0);

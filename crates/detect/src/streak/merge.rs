@@ -7,9 +7,20 @@ use super::segment::{Seg, angle_diff_deg};
 
 /// Merge collinear fragments until none merge. Fragments join `done`, in which no two
 /// merge, one at a time: each is tried against `done` in order, and a merge product is
-/// tried again from the start. Linear in merges times fragments, where restarting a scan of
+/// tried again from the start. A merge is refined in the `regime` of the fragments' stage:
+/// two full-line fragments of one sub-noise streak refined as a resolved one collapsed to
+/// 37 px (development image 68 of `scripts/faint-limit-dev.sh`, line SNR 10). Development
+/// sets (`sky_eval` + `soig eval`, mAP50-95, resolved -> the stage's regime): original
+/// semisynthetic (seed 778, 300 images) 0.8777 -> 0.8796, rotated semisynthetic (778, 150)
+/// 0.8814 -> 0.8821, rotated synthetic (778, 150) 0.9621 -> 0.9633, original synthetic (777,
+/// 100) 0.9440 the same. Linear in merges times fragments, where restarting a scan of
 /// every pair after each merge was cubic (minutes on a real frame's thousands of fragments).
-pub(super) fn merge(maps: &Maps, segs: Vec<Seg>, aligned: &dyn Fn(&Seg) -> bool) -> Vec<Seg> {
+pub(super) fn merge(
+    maps: &Maps,
+    segs: Vec<Seg>,
+    regime: Regime,
+    aligned: &dyn Fn(&Seg) -> bool,
+) -> Vec<Seg> {
     // Orientations further apart than `merge_angle` never merge: a dot product rules them
     // out before the offsets and gap are measured.
     let cos_max = maps.p.merge_angle.to_radians().cos();
@@ -22,7 +33,7 @@ pub(super) fn merge(maps: &Maps, segs: Vec<Seg>, aligned: &dyn Fn(&Seg) -> bool)
                 if (u.0 * v.0 + u.1 * v.1).abs() < cos_max || !collinear(maps.p, &d, &s) {
                     continue;
                 }
-                if let Some(m) = joined(maps, &d, &s)
+                if let Some(m) = joined(maps, &d, &s, regime)
                     && !aligned(&m)
                 {
                     done.remove(k);
@@ -38,7 +49,7 @@ pub(super) fn merge(maps: &Maps, segs: Vec<Seg>, aligned: &dyn Fn(&Seg) -> bool)
 }
 
 /// `a` and `b` refined as one segment spanning their two farthest ends, if it refines.
-fn joined(maps: &Maps, a: &Seg, b: &Seg) -> Option<Seg> {
+fn joined(maps: &Maps, a: &Seg, b: &Seg, regime: Regime) -> Option<Seg> {
     let (a0, a1) = a.ends();
     let (b0, b1) = b.ends();
     let pts = [a0, a1, b0, b1];
@@ -61,7 +72,7 @@ fn joined(maps: &Maps, a: &Seg, b: &Seg) -> Option<Seg> {
             shrink: 0.0,
             ext: 4.0 * maps.p.psf_sigma + 4.0,
             contrast: a.contrast || b.contrast,
-            regime: Regime::Resolved,
+            regime,
         },
     )
 }

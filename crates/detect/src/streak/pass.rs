@@ -14,6 +14,7 @@ use super::output::{Candidate, candidate};
 use super::params::Sanitized;
 use super::radon::long_line_components;
 use super::reach::reach;
+use super::refine::Regime;
 use super::seeds::{line_noise, local_seeds};
 use super::segment::Seg;
 use super::sky::{Sky, StarTrail};
@@ -80,17 +81,17 @@ pub(super) fn pass(
     // one (the same streak, its ends less sharp) would otherwise re-refine it into a segment
     // that can fail where the local one passed. Where both find a streak, explaining away
     // keeps the better scoring one.
-    let mut merged: Vec<(Seg, Seeds)> = merge(&maps, local_frags, &is_star)
+    let mut merged: Vec<(Seg, Seeds)> = merge(&maps, local_frags, Regime::Resolved, &is_star)
         .into_iter()
         .map(|s| (s, Seeds::Local))
         .collect();
     merged.extend(
-        merge(&maps, long_frags, &is_star)
+        merge(&maps, long_frags, Regime::Resolved, &is_star)
             .into_iter()
             .map(|s| (s, Seeds::LongLine)),
     );
     merged.extend(
-        merge(&maps, full_frags, &is_star)
+        merge(&maps, full_frags, Regime::of(Seeds::FullLine), &is_star)
             .into_iter()
             .map(|s| (s, Seeds::FullLine)),
     );

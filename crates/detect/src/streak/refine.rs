@@ -4,6 +4,8 @@
 
 use std::f64::consts::PI;
 
+use super::explain::Seeds;
+use super::full_lines::MIN_LENGTH_PX;
 use super::maps::Maps;
 use super::segment::{Point, Seg, point_segment_distance};
 use super::stats::median_of;
@@ -44,6 +46,19 @@ pub(super) enum Regime {
     /// 1089-pixel streak at line SNR 11.8 in to 700 pixels: development image 34 of
     /// `scripts/faint-limit-dev.sh`); the level from a clipped mean.
     SubNoise { min: usize },
+}
+
+impl Regime {
+    /// The regime of a stage's seeds: the full-line stage's streaks are each far below the
+    /// noise sample by sample.
+    pub(super) fn of(seeds: Seeds) -> Regime {
+        match seeds {
+            Seeds::FullLine => Regime::SubNoise {
+                min: (MIN_LENGTH_PX / 2.0) as usize,
+            },
+            Seeds::Local | Seeds::LongLine => Regime::Resolved,
+        }
+    }
 }
 
 /// For the axes of orientation `theta` through (cx, cy) + k du n, k = -nu..=nu (n the

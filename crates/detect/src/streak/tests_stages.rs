@@ -217,10 +217,52 @@ fn merge_joins_collinear_pieces() {
     let merged = merge(
         &world.maps(),
         vec![piece(45.0, 30.0), piece(78.0, 24.0)],
+        Regime::Resolved,
         &no_star,
     );
     assert_eq!(merged.len(), 1, "{merged:?}");
     assert!(merged[0].length > 55.0, "{merged:?}");
+}
+
+/// Step 6 for the full-line stage: two fragments of one streak far below the noise sample by
+/// sample merge into one segment along all of it, its ends found as the full-line stage finds
+/// them (`Regime::SubNoise`), not as a resolved streak's half-level change points.
+#[test]
+fn merge_keeps_a_sub_noise_streak_whole() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let unit = Normal::new(0.0, 1.0).unwrap();
+    let mut z = streak_map(0.35, 64.0, 4, 123);
+    for v in &mut z {
+        *v += unit.sample(&mut rng) as f32;
+    }
+    let world = World::new(z);
+    let piece = |cx: f64| Seg {
+        cx,
+        cy: 64.0,
+        theta: 0.0,
+        length: 56.0,
+        snr: 3.0,
+        flux: 0.0,
+        elongation: 5.0,
+        contrast: true,
+    };
+    let lengths = |regime| -> Vec<f64> {
+        merge(
+            &world.maps(),
+            vec![piece(34.0), piece(94.0)],
+            regime,
+            &no_star,
+        )
+        .iter()
+        .map(|s| s.length)
+        .collect()
+    };
+    let sub = lengths(Regime::of(Seeds::FullLine));
+    assert!(sub.len() == 1 && sub[0] > 100.0, "{sub:?}");
+    // As a resolved streak (what every merge was before), the same pieces end 5-88 px long
+    // on five noise seeds: 51 px on this one.
+    let resolved = lengths(Regime::Resolved);
+    assert!(resolved.iter().all(|&l| l < 100.0), "{resolved:?}");
 }
 
 /// Step 7: a streak passes and is scored; a piece too short fails with why.
