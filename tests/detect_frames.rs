@@ -9,7 +9,9 @@
 use std::path::Path;
 
 mod common;
+mod independent;
 use common::{arg, json, ok, repo, scratch, soig};
+use independent::{Rng, Segment, Sensor, light};
 
 use soig::sky::projection::Tan;
 
@@ -293,6 +295,85 @@ fn the_raw_dark_frame_gives_no_confident_box_and_explains_what_it_dropped() {
     let out2 = tmp.path().join("det2");
     ok(soig(&["detect", arg(&frame), "--out", arg(&out2)]));
     assert!(json(&out2.join("detections.json"))["frames"][0]["dropped"].is_null());
+}
+
+/// A registered frame: the sky of an 800 px square turned 25 degrees onto a 1024 px canvas, NaN
+/// (no data) in the canvas's corners beyond it, and one debris streak inside, on a frame from
+/// the independent generator (sky 300 e-, read noise 8 e-, PSF sigma 1.4 px, no stars). The
+/// streak is found and nothing else: the margin is filled with values drawn from the frame's
+/// own (`frames::ready_for_enhancement`), so no edge marks where the data end. (Filled with the
+/// finite median, as until 2026-11-30, the same frame gave 6 false boxes along the margin.)
+#[test]
+fn a_frame_with_no_data_margins_gives_the_streak_and_no_box_along_its_edges() {
+    const N: usize = 1024;
+    let sensor = Sensor {
+        psf_sigma: 1.4,
+        sky: 300.0,
+        read_noise: 8.0,
+    };
+    let debris = Segment {
+        a: (379.0, 614.0),
+        b: (655.0, 461.0),
+        per_px: sensor.per_px_for_peak_snr(3.0),
+    };
+    let mut rng = Rng::new(42);
+    let (c, s) = (25f64.to_radians().cos(), 25f64.to_radians().sin());
+    let data: Vec<f32> = light(N, N, sensor.psf_sigma, &[debris])
+        .iter()
+        .enumerate()
+        .map(|(i, &l)| {
+            let e = rng.poisson(sensor.sky + l) + sensor.read_noise * rng.normal();
+            // The square's own axes through the canvas centre.
+            let (x, y) = ((i % N) as f64 - 511.5, (i / N) as f64 - 511.5);
+            let (u, v) = (c * x + s * y, -s * x + c * y);
+            if u.abs() <= 400.0 && v.abs() <= 400.0 {
+                e as f32
+            } else {
+                f32::NAN
+            }
+        })
+        .collect();
+    let (tmp, out) = scratch("det");
+    let path = tmp.path().join("registered.fits");
+    let desc = fitsio::images::ImageDescription {
+        data_type: fitsio::images::ImageType::Float,
+        dimensions: &[N, N],
+    };
+    let mut f = fitsio::FitsFile::create(&path)
+        .with_custom_primary(&desc)
+        .open()
+        .unwrap();
+    f.primary_hdu().unwrap().write_image(&mut f, &data).unwrap();
+    drop(f);
+    ok(soig(&[
+        "detect",
+        arg(&path),
+        "--psf-fwhm-px",
+        "3.3",
+        "--out",
+        arg(&out),
+    ]));
+    let found = json(&out.join("detections.json"));
+    let f = &found["frames"][0];
+    assert_eq!(f["non_finite_pixels"].as_u64().unwrap() as usize, {
+        let nan = data.iter().filter(|v| v.is_nan()).count();
+        assert!(nan > 300_000, "{nan}");
+        nan
+    });
+    let confident: Vec<&serde_json::Value> = f["detections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|d| d["confidence"].as_f64().unwrap() >= 0.5)
+        .collect();
+    assert_eq!(confident.len(), 1, "{confident:?}");
+    // Both ends on the streak, within 6 px of its own (pixel edges: centres at + 0.5).
+    let ends: Vec<[f64; 2]> = (0..2).map(|k| pair(&confident[0]["ends"][k])).collect();
+    let near = |p: (f64, f64)| {
+        ends.iter()
+            .any(|e| (e[0] - 0.5 - p.0).hypot(e[1] - 0.5 - p.1) < 6.0)
+    };
+    assert!(near(debris.a) && near(debris.b), "{ends:?}");
 }
 
 fn assert_fails(args: &[&str], out: &Path, expect: &[&str]) {

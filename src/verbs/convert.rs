@@ -1,8 +1,8 @@
 //! `soig enhance`: the paper's FITS -> PNG conversion (section 3.3: square root for fixed
 //! pointing, the log stretch, CLAHE, gamma, 8-bit PNG) as a command of its own, for any FITS:
 //! soig's own images or a real frame. A frame's sky region is read as `soig detect` reads it
-//! (`frames`: `TRIMSEC`/`DATASEC`, any numeric type; non-finite pixels set to the median, a
-//! negative frame lifted before the square root), so this is the PNG `soig detect` gives its
+//! (`frames`: `TRIMSEC`/`DATASEC`, any numeric type; non-finite pixels given values of the
+//! frame's finite ones drawn at random, a negative frame lifted before the square root), so this is the PNG `soig detect` gives its
 //! detectors; on a soig FITS of the original frame it is the run's own PNG, byte for byte
 //! (tests/cli.rs). The padded and rotated frames are not made here: their padding is sky noise
 //! drawn from the image's own random stream, which belongs to the run.
@@ -30,7 +30,7 @@ pub struct Converted {
     pub png: String,
     pub width: usize,
     pub height: usize,
-    /// Non-finite pixels set to the median.
+    /// Non-finite pixels (given values of the frame's finite ones drawn at random).
     pub non_finite_pixels: usize,
     /// Added to every pixel so the square root clips none (a sky-subtracted frame).
     pub pedestal: f64,

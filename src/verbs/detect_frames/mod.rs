@@ -168,7 +168,8 @@ pub struct FrameResult {
     /// The streak detector's PSF FWHM in pixels and where it came from.
     pub psf_fwhm_px: f64,
     pub psf_source: &'static str,
-    /// Pixels of a FITS frame that were not finite numbers (set to the median before enhancing).
+    /// Pixels of a FITS frame that were not finite numbers (no data: each given a value of the
+    /// frame's finite pixels drawn at random before enhancing).
     pub non_finite_pixels: usize,
     /// Added to a FITS frame before the square root when it holds negative values (a
     /// calibrated frame whose sky was subtracted), so the square root does not clip half of it.
