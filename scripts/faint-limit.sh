@@ -1,15 +1,28 @@
 #!/usr/bin/env bash
-# The streak detector's faint limit (issue #44): run results/campaigns/faint-limit-survey.toml
-# (the survey original-frame synthetic test set with dim debris and no SNR gate; about 3 min on
-# 2 cores) and write results/faint-limit/ from it: the recall against the streak's integrated
-# matched-filter SNR, its 50% point and the precision (scripts/faint_limit.py).
+# The streak detector's faint limit (issue #44): run the faint-limit campaigns of
+# results/campaigns/ (a results test set with dim debris and no SNR gate; 1-3 min each on 2
+# cores) and write, from each, the recall against the streak's integrated matched-filter SNR,
+# its 50% point and the precision (scripts/faint_limit.py):
+#   faint-limit-survey                -> results/faint-limit/ (survey, synthetic noise)
+#   faint-limit-fixed                 -> results/faint-limit-fixed/ (point stars)
+#   faint-limit-survey-semisynthetic  -> results/faint-limit-survey-semisynthetic/ (real noise)
 #
-#   bash scripts/faint-limit.sh            # OUT (default runs/faint-limit-survey) is the run
+#   bash scripts/faint-limit.sh [NAME...]   # default all three; runs under RUNS (default runs/)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SOIG=${SOIG:-target/release/soig}
-OUT=${OUT:-runs/faint-limit-survey}
-"$SOIG" run results/campaigns/faint-limit-survey.toml --out "$OUT" --quiet
-python3 scripts/faint_limit.py "$OUT" results/faint-limit
-cp "$OUT"/report/report.md results/faint-limit/report.md
-"$SOIG" verify "$OUT" | sed -n 's/.*digest //p' > results/faint-limit/digest.txt
+RUNS=${RUNS:-runs}
+names=("$@")
+[ ${#names[@]} -gt 0 ] || names=(faint-limit-survey faint-limit-fixed faint-limit-survey-semisynthetic)
+for name in "${names[@]}"; do
+    case $name in
+        faint-limit-survey) dest=results/faint-limit ;;
+        faint-limit-fixed | faint-limit-survey-semisynthetic) dest=results/$name ;;
+        *) echo "faint-limit.sh: no faint-limit campaign $name" >&2; exit 2 ;;
+    esac
+    out="$RUNS/$name"
+    "$SOIG" run "results/campaigns/$name.toml" --out "$out" --quiet
+    python3 scripts/faint_limit.py "$out" "$dest"
+    cp "$out"/report/report.md "$dest"/report.md
+    "$SOIG" verify "$out" | sed -n 's/.*digest //p' > "$dest"/digest.txt
+done

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Reruns every committed reference run in results/ and copies back what is committed of each
 # (digest, metrics, reports, PR curve; the images stay in the scratch folder), then the study,
-# the committed experiments, the faint limit (results/faint-limit),
+# the committed experiments, the faint limits (results/faint-limit*),
 # the CI baseline (results/ci-quickstart) and the tables of results/README.md.
 # Run after any change that moves a digest, on a quiet machine; results/README.md says when
 # it was last done. Usage: bash scripts/regenerate-results.sh [SCRATCH_DIR]
@@ -12,8 +12,8 @@ soig=target/release/soig
 cargo build --release --locked
 for campaign in results/campaigns/*.toml; do
     name=$(basename "$campaign" .toml)
-    # The faint limit's run writes results/faint-limit/ (below), not a results row.
-    [ "$name" = faint-limit-survey ] && continue
+    # The faint limit's runs write results/faint-limit*/ (below), not results rows.
+    case $name in faint-limit-*) continue ;; esac
     "$soig" run "$campaign" --out "$scratch/$name"
     mkdir -p "results/$name"
     python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["digest"])' \
@@ -43,7 +43,7 @@ for experiment in experiments/*.toml; do
             "results/experiments/$name/points/$(basename "$point")/"
     done
 done
-SOIG="$soig" OUT="$scratch/faint-limit-survey" bash scripts/faint-limit.sh
+SOIG="$soig" RUNS="$scratch" bash scripts/faint-limit.sh
 SOIG="$soig" OUT="$scratch/ci-quickstart" bash scripts/ci.sh --pin
 "$soig" tables results/results-* --models models/queue.toml --readme results/README.md > /dev/null
 echo "results regenerated (scratch: $scratch)"

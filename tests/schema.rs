@@ -182,6 +182,14 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "f2356a0442a167e6ccf694340b110529d151add3a72fb989379bd21fad44a697",
     ),
     (
+        "results/campaigns/faint-limit-fixed.toml",
+        "d00d0984495f304902a06b0cdcd7cff87b8c04b70a2fc1d1185804f6117d47e0",
+    ),
+    (
+        "results/campaigns/faint-limit-survey-semisynthetic.toml",
+        "73f034abbd38676da59975ccfc88397cae6e68ca3e4229e45c408bf874c6107f",
+    ),
+    (
         "results/campaigns/faint-limit-survey.toml",
         "4d7fd11f65a452cc07f36e9dfa64927b44beda5d86e04f5ef8de472fe3df538d",
     ),
