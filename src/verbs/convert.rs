@@ -2,10 +2,11 @@
 //! pointing, the log stretch, CLAHE, gamma, 8-bit PNG) as a command of its own, for any FITS:
 //! soig's own images or a real frame. A frame's sky region is read as `soig detect` reads it
 //! (`frames`: `TRIMSEC`/`DATASEC`, any numeric type; non-finite pixels given values of the
-//! frame's finite ones drawn at random, a negative frame lifted before the square root), so this is the PNG `soig detect` gives its
-//! detectors; on a soig FITS of the original frame it is the run's own PNG, byte for byte
-//! (tests/cli.rs). The padded and rotated frames are not made here: their padding is sky noise
-//! drawn from the image's own random stream, which belongs to the run.
+//! frame's finite ones drawn at random, a negative frame lifted before the square root), so
+//! this is the PNG `soig detect` gives its detectors; on a soig FITS of the original frame it
+//! is the run's own PNG, byte for byte (tests/cli.rs). The padded and rotated frames are not
+//! made here: their padding is sky noise drawn from the image's own random stream, which
+//! belongs to the run.
 //!
 //! The output folder holds `<stem>.png` per input, `timing.json` (the conversion time of each
 //! frame: enhancement and PNG encoding, as the report's Table 6 "conversion"; volatile) and a

@@ -310,17 +310,19 @@ fn section(key: &str, text: &str, width: usize, height: usize) -> Result<Region,
 /// values the margin has the sky's level, spread and tail (hot pixels, stars: a fill cut at a
 /// few sigma left a step at the join, issue #30), so nothing marks where the data end.
 pub fn ready_for_enhancement(values: &[f32], sqrt: bool) -> (Vec<f32>, usize, f64) {
-    let finite: Vec<f32> = values.iter().copied().filter(|v| v.is_finite()).collect();
-    let non_finite = values.len() - finite.len();
-    let mut rng = pixel_stream(0, 0, PixelPurpose::Enhance);
-    let mut out: Vec<f32> = values
-        .iter()
-        .map(|&v| match (v.is_finite(), finite.len()) {
-            (true, _) => v,
-            (false, 0) => 0.0,
-            (false, n) => finite[rng.random_range(0..n)],
-        })
-        .collect();
+    let non_finite = values.iter().filter(|v| !v.is_finite()).count();
+    let mut out = values.to_vec();
+    // The draws need the finite values apart: a copy only for a frame that has holes.
+    if non_finite > 0 {
+        let finite: Vec<f32> = values.iter().copied().filter(|v| v.is_finite()).collect();
+        let mut rng = pixel_stream(0, 0, PixelPurpose::Enhance);
+        for v in out.iter_mut().filter(|v| !v.is_finite()) {
+            *v = match finite.len() {
+                0 => 0.0,
+                n => finite[rng.random_range(0..n)],
+            };
+        }
+    }
     let min = out.iter().copied().fold(f32::INFINITY, f32::min);
     let pedestal = if sqrt && min < 0.0 {
         -(min as f64)

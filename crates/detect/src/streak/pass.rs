@@ -81,20 +81,15 @@ pub(super) fn pass(
     // one (the same streak, its ends less sharp) would otherwise re-refine it into a segment
     // that can fail where the local one passed. Where both find a streak, explaining away
     // keeps the better scoring one.
-    let mut merged: Vec<(Seg, Seeds)> = merge(&maps, local_frags, Regime::Resolved, &is_star)
-        .into_iter()
-        .map(|s| (s, Seeds::Local))
-        .collect();
-    merged.extend(
-        merge(&maps, long_frags, Regime::Resolved, &is_star)
-            .into_iter()
-            .map(|s| (s, Seeds::LongLine)),
-    );
-    merged.extend(
-        merge(&maps, full_frags, Regime::of(Seeds::FullLine), &is_star)
-            .into_iter()
-            .map(|s| (s, Seeds::FullLine)),
-    );
+    let mut merged: Vec<(Seg, Seeds)> = Vec::new();
+    for (frags, seeds) in [
+        (local_frags, Seeds::Local),
+        (long_frags, Seeds::LongLine),
+        (full_frags, Seeds::FullLine),
+    ] {
+        let segs = merge(&maps, frags, Regime::of(seeds), &is_star);
+        merged.extend(segs.into_iter().map(|s| (s, seeds)));
+    }
     let (cands, d) = accept(&maps, merged, &is_star);
     dropped.extend(d);
     let (kept, d) = explain_away(&maps, cands);
