@@ -100,8 +100,15 @@ def main():
     ap.add_argument("--soig", default=str(ROOT / "target/release/soig"))
     ap.add_argument("--keep", help="work folder to keep (default: a temporary one)")
     a = ap.parse_args()
-    work = Path(a.keep) if a.keep else Path(tempfile.mkdtemp(prefix="soig-catalog-"))
-    work.mkdir(parents=True, exist_ok=True)
+    if a.keep:
+        Path(a.keep).mkdir(parents=True, exist_ok=True)
+        return measure(a, Path(a.keep))
+    # The work folder holds about 3 GB (the render and eight detections): removed at the end.
+    with tempfile.TemporaryDirectory(prefix="soig-catalog-") as work:
+        return measure(a, Path(work))
+
+
+def measure(a, work):
     run = render(a.soig, work, a.images, a.seed)
     stars = read_stars(run)
     print(f"{a.images} images of paper-survey-original, seed {a.seed}; {len(stars)} stars in the exact catalogue\n")

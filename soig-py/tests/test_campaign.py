@@ -274,14 +274,21 @@ def test_ctrl_c_stops_a_run_within_a_second_and_the_output_resumes(tmp_path):
     import time
 
     out = tmp_path / "run"
+    # Small frames and no extra artifacts: 400 images write about 100 MB, not the 3.4 GB of
+    # the quickstart's 1024 px frames with their noise-free copies, which a CI machine's
+    # disk refused (the run checks its free space first).
     quickstart = str(REPO / "campaigns" / "quickstart.toml")
+    sets = {"images": 400, "stages": ["render"], "sensor.width_px": 256,
+            "sensor.height_px": 256, "artifacts.noise_free_fits": False,
+            "artifacts.star_list": False}
     script = (
         "import signal, sys, soig\n"
         # A shell without job control starts background commands with SIGINT ignored, and
         # Python then installs no KeyboardInterrupt handler: a CI runner launched that way
         # made this test fail (rc 0, the run finished). What is tested is soig.run's Ctrl-C.
         "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
-        f"c = soig.Campaign({quickstart!r}).set('images', 400).set('stages', ['render'])\n"
+        f"c = soig.Campaign({quickstart!r})\n"
+        f"for k, v in {sets!r}.items(): c.set(k, v)\n"
         "print('start', flush=True)\n"
         "try:\n"
         f"    soig.run(c, {str(out)!r})\n"
@@ -290,7 +297,13 @@ def test_ctrl_c_stops_a_run_within_a_second_and_the_output_resumes(tmp_path):
     )
     p = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
     assert p.stdout.readline().strip() == "start"
-    time.sleep(3.0)
+    # Ctrl-C once some images are done (20 of 400 FITS in the run's hidden staging folder), not
+    # after a fixed sleep, which a fast machine could outlast: 400 small images take about 5 s
+    # on 2 cores.
+    deadline = time.monotonic() + 60
+    while (len(list(tmp_path.glob(".run.partial-*/fits/*.fits"))) < 20
+           and time.monotonic() < deadline):
+        time.sleep(0.02)
     sent = time.monotonic()
     p.send_signal(signal.SIGINT)
     p.wait(timeout=60)
@@ -298,7 +311,9 @@ def test_ctrl_c_stops_a_run_within_a_second_and_the_output_resumes(tmp_path):
     assert p.returncode == 3, p.returncode
     assert stopped < 2.0, f"KeyboardInterrupt {stopped:.2f} s after Ctrl-C"
     # The work done is kept: the same run resumes it and ends whole.
-    c = soig.Campaign(quickstart).set("images", 400).set("stages", ["render"])
+    c = soig.Campaign(quickstart)
+    for k, v in sets.items():
+        c.set(k, v)
     r = soig.run(c, out)
     assert r["resumed"] > 0, r
     assert soig.verify(out)["ok"]
