@@ -26,7 +26,7 @@ pub mod vec3;
 pub mod wcs;
 
 pub use vec3::{
-    Mat3, Vec3, angle_deg, cross, dot, mat_mul, mat_vec, norm, radec_deg, radec_unit, rotate,
+    Mat3, Turn, Vec3, angle_deg, cross, dot, mat_mul, mat_vec, norm, radec_deg, radec_unit, rotate,
     scale, segment_hits_sphere, sub, transpose, unit,
 };
 

@@ -3,6 +3,7 @@
 
 use serde::Serialize;
 
+use super::vec3::Turn;
 use super::{Vec3, angle_deg, cross, dot, norm, radec_deg, radec_unit, rotate, scale, unit};
 
 /// Where the sensor points. Fixed pointing carries only its direction; survey pointing carries
@@ -74,11 +75,13 @@ impl SurveyTrack {
     /// The sky direction that the camera at `t_s` sees where the mid-exposure camera sees
     /// (ra, dec): the camera turned by R(t), so a star s appears at R(t)^-1 s of the mid frame.
     pub fn to_mid_frame(&self, t_s: f64, ra_deg: f64, dec_deg: f64) -> (f64, f64) {
-        radec_deg(rotate(
-            radec_unit(ra_deg, dec_deg),
-            self.axis,
-            -self.angle_rad(t_s),
-        ))
+        radec_deg(self.turn_back(t_s).apply(radec_unit(ra_deg, dec_deg)))
+    }
+
+    /// The turn that carries a star's direction at `t_s` into the mid-exposure frame
+    /// (`to_mid_frame` is it, applied), for turning many stars at one time.
+    pub fn turn_back(&self, t_s: f64) -> Turn {
+        Turn::new(self.axis, -self.angle_rad(t_s))
     }
 }
 
@@ -183,6 +186,13 @@ impl TargetTrack {
             Some((axis, angle)) => radec_deg(rotate(radec_unit(ra_deg, dec_deg), axis, -angle)),
             None => (ra_deg, dec_deg),
         }
+    }
+
+    /// [`Self::turn_at`] as the turn that undoes it (None: no turn), for turning many stars
+    /// at one time: `radec_deg(turn.apply(radec_unit(ra, dec)))` is `undo_turn`'s result.
+    pub fn turn_back(&self, t_s: f64) -> Option<Turn> {
+        self.turn_at(t_s)
+            .map(|(axis, angle)| Turn::new(axis, -angle))
     }
 
     /// The sky direction that the camera at `t_s` sees where the mid-exposure camera sees

@@ -74,6 +74,17 @@ impl Tan {
         })
     }
 
+    /// The angle from the tangent point, degrees, within which every position that projects
+    /// into the pixel rectangle [x0, x1] x [y0, y1] lies: its farthest corner's (the projection
+    /// is radial, pixel radius = tan(angle) / scale).
+    pub fn reach_deg(&self, [x0, x1]: [f64; 2], [y0, y1]: [f64; 2]) -> f64 {
+        let dx = (x0 - self.cx).abs().max((x1 - self.cx).abs());
+        let dy = (y0 - self.cy).abs().max((y1 - self.cy).abs());
+        (dx.hypot(dy) * self.scale_deg.to_radians())
+            .atan()
+            .to_degrees()
+    }
+
     /// Sky position of pixel coordinates.
     pub fn sky(&self, x: f64, y: f64) -> (f64, f64) {
         let xi = ((x - self.cx) * self.scale_deg).to_radians();

@@ -43,11 +43,44 @@ pub fn angle_deg(a: Vec3, b: Vec3) -> f64 {
 
 /// Rodrigues' rotation of `v` about the unit `axis` by `angle` radians.
 pub fn rotate(v: Vec3, axis: Vec3, angle: f64) -> Vec3 {
-    let (s, c) = angle.sin_cos();
-    let k = axis;
-    let kxv = cross(k, v);
-    let kv = dot(k, v) * (1.0 - c);
-    [0, 1, 2].map(|i| v[i] * c + kxv[i] * s + k[i] * kv)
+    Turn::new(axis, angle).apply(v)
+}
+
+/// A rotation about a unit axis with its sine and cosine taken once: the renderer turns every
+/// star by each trail node's rotation, and the sines were most of that work. [`rotate`] is
+/// this, so a turn gives its result to the bit.
+#[derive(Clone, Copy, Debug)]
+pub struct Turn {
+    axis: Vec3,
+    angle: f64,
+    sin: f64,
+    cos: f64,
+}
+
+impl Turn {
+    /// The rotation about the unit `axis` by `angle` radians.
+    pub fn new(axis: Vec3, angle: f64) -> Turn {
+        let (sin, cos) = angle.sin_cos();
+        Turn {
+            axis,
+            angle,
+            sin,
+            cos,
+        }
+    }
+
+    /// Its angle, radians: no direction moves farther than its absolute value.
+    pub fn angle(&self) -> f64 {
+        self.angle
+    }
+
+    /// Rodrigues' rotation of `v`.
+    pub fn apply(&self, v: Vec3) -> Vec3 {
+        let (k, s, c) = (self.axis, self.sin, self.cos);
+        let kxv = cross(k, v);
+        let kv = dot(k, v) * (1.0 - c);
+        [0, 1, 2].map(|i| v[i] * c + kxv[i] * s + k[i] * kv)
+    }
 }
 
 pub fn mat_vec(a: &Mat3, v: Vec3) -> Vec3 {

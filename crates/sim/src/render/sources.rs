@@ -11,9 +11,10 @@ use crate::scene::{Pointing, Scene, SurveyTrack, TargetTrack};
 use crate::sensor::Sensor;
 use soig_sky::photometry::photon_rate;
 use soig_sky::stars::Star;
+use soig_sky::{Turn, angle_deg, radec_deg, radec_unit};
 
 /// Spacing of the time nodes along a survey star trail, pixels.
-const SURVEY_NODE_SPACING_PX: f64 = 4.0;
+pub(super) const SURVEY_NODE_SPACING_PX: f64 = 4.0;
 
 /// A star as traced in an image.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -145,25 +146,41 @@ pub(super) fn for_each_source(
             let nodes = ((drift_px / SURVEY_NODE_SPACING_PX).ceil() as usize + 1).max(2);
             let step = t_exp / (nodes - 1) as f64;
             let mut trail = vec![(f64::NAN, f64::NAN); nodes];
-            // A tracking camera's turn at each node, once for all stars.
-            let turns: Option<Vec<_>> = match &scene.exposure.pointing {
-                Pointing::Track(t) => {
-                    Some((0..nodes).map(|i| t.turn_at(i as f64 * step)).collect())
-                }
-                _ => None,
-            };
+            // The camera's turn at each node, once for all stars (its sines and cosines were
+            // most of this loop's work when taken per star); None: not turned.
+            let turns: Vec<Option<Turn>> = (0..nodes)
+                .map(|i| match &scene.exposure.pointing {
+                    Pointing::Survey(t) => Some(t.turn_back(i as f64 * step)),
+                    Pointing::Track(t) => t.turn_back(i as f64 * step),
+                    Pointing::Fixed { .. } => unreachable!("a fixed pointing has no trails"),
+                })
+                .collect();
+            // A star farther from the tangent point than the near rectangle's reach plus the
+            // largest turn is near at no node (a turn moves a direction by at most its angle):
+            // it is passed over before its nodes are traced (more than half the catalogue's
+            // stars of a survey image). Two pixels of slack cover the rounding.
+            let centre = radec_unit(tan.ra0_deg, tan.dec0_deg);
+            let turned = turns
+                .iter()
+                .flatten()
+                .map(|t| t.angle().abs())
+                .fold(0.0, f64::max);
+            let (x0, y0) = (-0.5 - margin - 2.0, -0.5 - margin - 2.0);
+            let (x1, y1) = (width - 0.5 + margin + 2.0, height - 0.5 + margin + 2.0);
+            let far_deg = tan.reach_deg([x0, x1], [y0, y1]) + turned.to_degrees();
             for star in &scene.exposure.stars {
                 let (mut first, mut last) = (None, None);
-                for (i, node) in trail.iter_mut().enumerate() {
-                    *node = match &turns {
-                        Some(turns) => {
-                            let (ra, dec) =
-                                TargetTrack::undo_turn(turns[i], star.ra_deg, star.dec_deg);
-                            tan.pixel(ra, dec)
-                        }
-                        None => scene.pixel_at(&tan, i as f64 * step, star.ra_deg, star.dec_deg),
-                    }
-                    .unwrap_or((f64::NAN, f64::NAN));
+                let v = radec_unit(star.ra_deg, star.dec_deg);
+                if angle_deg(v, centre) > far_deg {
+                    continue;
+                }
+                for (i, (node, turn)) in trail.iter_mut().zip(&turns).enumerate() {
+                    // `Scene::pixel_at`, to the bit.
+                    let (ra, dec) = match turn {
+                        Some(turn) => radec_deg(turn.apply(v)),
+                        None => (star.ra_deg, star.dec_deg),
+                    };
+                    *node = tan.pixel(ra, dec).unwrap_or((f64::NAN, f64::NAN));
                     if near(node.0, node.1) {
                         first.get_or_insert(i);
                         last = Some(i);

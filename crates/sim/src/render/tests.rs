@@ -551,3 +551,72 @@ fn an_objects_own_box_holds_the_whole_image_draws_and_label() {
             .is_none()
     );
 }
+
+/// Survey pointing: the stars `for_each_source` passes over before tracing them (farther from
+/// the tangent point than the near rectangle's reach plus the largest turn) are exactly those
+/// that no node would have put near the image. A grid of 6561 stars 0.08 deg around a 128 px
+/// field that drifts 300 px, traced node by node as `Scene::pixel_at` places them.
+#[test]
+fn survey_stars_passed_over_are_near_at_no_node() {
+    use crate::scene::{Pointing, SurveyTrack};
+    use soig_sky::{radec_unit, unit};
+    let c = fixture(0.0);
+    let mut s = scene(&c, Vec::new(), 12.0, 1.0);
+    let exposure_s = s.exposure.exposure_s;
+    let rate_deg_s = 300.0 * c.sensor.pixel_scale_deg() / exposure_s;
+    s.exposure.pointing = Pointing::Survey(SurveyTrack {
+        mid_ra_deg: 10.0,
+        mid_dec_deg: 20.0,
+        // Perpendicular to the boresight, tilted so the trails run askew to the pixel axes.
+        axis: unit(radec_unit(100.0, 30.0)),
+        rate_deg_s,
+        t_mid_s: exposure_s / 2.0,
+        drift_deg: rate_deg_s * exposure_s,
+        trail_angle_deg: 0.0,
+    });
+    let step = 0.08 / 40.0;
+    s.exposure.stars = (-40..=40)
+        .flat_map(|i| (-40..=40).map(move |j| (i, j)))
+        .map(|(i, j)| Star {
+            ra_deg: 10.0 + i as f64 * step / 20f64.to_radians().cos(),
+            dec_deg: 20.0 + j as f64 * step,
+            mag: 12.0,
+        })
+        .collect();
+    let jitter = Jitter::still(exposure_s);
+    let traced = for_each_source(&c.sensor, &s, &jitter, |_| {});
+    // The renderer's `near`, node by node over every star (its margin: 8 core sigmas, the
+    // jitter's excursion and a pixel).
+    let tan = tan_of(&c);
+    let margin = 8.0 * s.psf(&c.sensor).core_sigma_px() + jitter.max_excursion() + 1.0;
+    let w = c.sensor.width_px as f64;
+    let near = |(x, y): (f64, f64)| {
+        x > -0.5 - margin && y > -0.5 - margin && x < w - 0.5 + margin && y < w - 0.5 + margin
+    };
+    let drift_px = rate_deg_s * exposure_s / tan.scale_deg;
+    let nodes = ((drift_px / sources::SURVEY_NODE_SPACING_PX).ceil() as usize + 1).max(2);
+    let dt = exposure_s / (nodes - 1) as f64;
+    let expected: Vec<(u64, u64)> = s
+        .exposure
+        .stars
+        .iter()
+        .filter(|star| {
+            (0..nodes).any(|k| {
+                s.pixel_at(&tan, k as f64 * dt, star.ra_deg, star.dec_deg)
+                    .is_some_and(near)
+            })
+        })
+        .map(|star| (star.ra_deg.to_bits(), star.dec_deg.to_bits()))
+        .collect();
+    let got: Vec<(u64, u64)> = traced
+        .iter()
+        .map(|t| (t.ra_deg.to_bits(), t.dec_deg.to_bits()))
+        .collect();
+    // Some stars are near, most are not: both sides of the test are exercised.
+    assert!(
+        expected.len() > 200 && expected.len() < 3000,
+        "{}",
+        expected.len()
+    );
+    assert_eq!(got, expected);
+}
