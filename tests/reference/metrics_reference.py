@@ -12,19 +12,20 @@
   with --legacy DIR) and exec'd; `np.trapz` (removed in numpy 2.4) is bound to `np.trapezoid`, the plot
   functions are no-ops; the loop of 8.3.0's `DetectionValidator.update_metrics` / `get_stats` is restated below.
 
-Usage: python metrics_reference.py [--legacy /path/to/unzipped/ultralytics-8.3.0] [--rust OUT.rs]
+Usage: python metrics_reference.py [--legacy /path/to/unzipped/ultralytics-8.3.0] [--toml OUT.toml]
 As run for the pinned figures (numpy 2.4.6, torch 2.15.0, ultralytics 8.4.190, pycocotools 2.0.11):
     python -m venv /tmp/mvenv && /tmp/mvenv/bin/pip install pycocotools ultralytics
     /tmp/mvenv/bin/pip download --no-deps ultralytics==8.3.0 -d /tmp/uold
     (cd /tmp/uold && mkdir v830 && cd v830 && unzip -q ../ultralytics-8.3.0-py3-none-any.whl)
-    /tmp/mvenv/bin/python reference/metrics_reference.py --legacy /tmp/uold/v830 --rust fixtures/metrics/expected.rs
-(from tests/), the `EXPECTED` table that crates/detect/src/metrics/cases.rs includes.
+    /tmp/mvenv/bin/python reference/metrics_reference.py --legacy /tmp/uold/v830 --toml fixtures/metrics/expected.toml
+(from tests/), the pinned figures that crates/detect/src/metrics/cases.rs reads.
 
 The test cases are defined twice, here and in the Rust tests of crates/detect/src/metrics/cases.rs; the random
 ones come from the same splitmix64 generator, so both sides build bit-identical inputs (each case's input
 checksum is printed and pinned too).
 """
 import argparse
+import json
 import ast
 import importlib.metadata
 import contextlib
@@ -372,10 +373,6 @@ def coco_reference(images):
 CURVE_SAMPLES = [0, 1, 100, 250, 400, 500, 600, 750, 900, 998, 999]
 
 
-def fmt(x):
-    return repr(float(x)) if x == x else "f64::NAN"
-
-
 def runs(values):
     """Run-length encoding: [(value, count)]."""
     out = []
@@ -387,33 +384,62 @@ def runs(values):
     return out
 
 
-def rust_ultra(name, r):
-    out = [f"                precision: {fmt(r['precision'])}, recall: {fmt(r['recall'])}, map50: {fmt(r['map50'])},",
-           f"                map50_95: {fmt(r['map50_95'])}, f1_conf: {fmt(r['f1_conf'])},",
-           f"                ap_per_iou: [{', '.join(fmt(x) for x in r['ap_per_iou'])}],"]
+def pinned_ultra(r):
+    """The figures of one Ultralytics version that the Rust test pins: the scalars, and of each
+    curve its length, mean and the values at CURVE_SAMPLES."""
+    out = {k: float(r[k]) for k in ("precision", "recall", "map50", "map50_95", "f1_conf")}
+    out["ap_per_iou"] = [float(x) for x in r["ap_per_iou"]]
     for c in ("precision_curve", "recall_curve", "f1_curve", "pr_curve_map50"):
         a = r[c]
-        samples = ", ".join(f"({i}, {fmt(a[i])})" for i in CURVE_SAMPLES) if len(a) else ""
-        mean = fmt(a.mean()) if len(a) else "0.0"
-        out.append(f"                {c}: Curve {{ len: {len(a)}, mean: {mean}, samples: &[{samples}] }},")
-    return "\n".join(out)
+        out[c] = {"len": len(a), "mean": float(a.mean()) if len(a) else 0.0,
+                  "samples": [[i, float(a[i])] for i in CURVE_SAMPLES] if len(a) else []}
+    return out
+
+
+def toml_value(v):
+    """A TOML value; a float as repr() writes it, the shortest text that reads back as the same
+    double (Rust's parser reads it exactly; serde_json's, by default, only to within one unit in
+    the last place: hence TOML), a NaN as nan."""
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{k} = {toml_value(x)}" for k, x in v.items()) + " }"
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
+    if isinstance(v, str):
+        return json.dumps(v)  # a TOML basic string: the same escapes
+    if isinstance(v, float):
+        return repr(float(v))  # nan, inf and -inf are TOML's spellings too
+    return str(int(v))
+
+
+def fixture_toml(provenance, expected):
+    """tests/fixtures/metrics/expected.toml: a [[case]] per case, its Ultralytics figures in
+    [case.current] and [case.legacy], a figure one a line."""
+    lines = [f"# {provenance}"]
+    for case in expected:
+        lines += ["", "[[case]]"]
+        lines += [f"{k} = {toml_value(v)}" for k, v in case.items() if k not in ("current", "legacy")]
+        for version in ("current", "legacy"):
+            if version in case:
+                lines += ["", f"[case.{version}]"]
+                lines += [f"{k} = {toml_value(v)}" for k, v in case[version].items()]
+    return "\n".join(lines) + "\n"
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--legacy", help="folder of the unzipped ultralytics 8.3.0 wheel")
-    ap.add_argument("--rust", help="write the pinned-figure table (Rust source) here")
+    ap.add_argument("--toml", help="write the pinned figures (TOML) here")
     args = ap.parse_args()
     import ultralytics
     import pycocotools
     print(f"numpy {np.__version__}, torch {torch.__version__}, ultralytics {ultralytics.__version__}, "
           f"pycocotools {importlib.metadata.version('pycocotools')}")
     legacy = load_legacy(args.legacy) if args.legacy else None
-    rust = [f"// Generated by tests/reference/metrics_reference.py --rust, do not edit (pycocotools "
-            f"{importlib.metadata.version('pycocotools')}, ultralytics",
-            f"// {ultralytics.__version__} and the 8.3.0 sources, numpy {np.__version__}, torch {torch.__version__}): "
-            "the cases of crates/detect/src/metrics/cases.rs.",
-            "    const EXPECTED: &[Expected] = &["]
+    provenance = (f"Generated by tests/reference/metrics_reference.py --toml, do not edit (pycocotools "
+                  f"{importlib.metadata.version('pycocotools')}, ultralytics {ultralytics.__version__} and the "
+                  f"8.3.0 sources, numpy {np.__version__}, torch {torch.__version__}): the cases of "
+                  "crates/detect/src/metrics/cases.rs.")
+    expected = []
     for name, images in CASES.items():
         cur = ultralytics_current(images)
         coco = coco_reference(images)
@@ -427,27 +453,17 @@ def main():
             leg = ultralytics_legacy(images, legacy)
             print(f"  Ultralytics 8.3.0: P {leg['precision']:.6f} R {leg['recall']:.6f} "
                   f"mAP50 {leg['map50']:.6f} mAP50-95 {leg['map50_95']:.6f} F1 conf {leg['f1_conf']:.6f}")
-        rust.append("        Expected {")
-        rust.append(f"            name: {name!r},".replace("'", '"'))
-        rust.append(f"            n_truth: {cur['n_truth']}, n_detections: {cur['n_detections']}, "
-                    f"checksum: {fmt(checksum(images))},")
-        rust.append(f"            coco: CocoExpected {{ ap: {fmt(coco['ap'])}, ap50: {fmt(coco['ap50'])}, "
-                    f"ap75: {fmt(coco['ap75'])}, ar100: {fmt(coco['ar100'])},")
-        rust.append(f"                precision_at_50: &[{', '.join(f'({fmt(v)}, {n})' for v, n in runs(coco['precision_at_50']))}] }},")
-        rust.append("            current: UltraExpected {")
-        rust.append(rust_ultra(name, cur))
-        rust.append("            },")
+        case = {"name": name, "n_truth": cur["n_truth"], "n_detections": cur["n_detections"],
+                "checksum": float(checksum(images)),
+                "coco": {**{k: float(coco[k]) for k in ("ap", "ap50", "ap75", "ar100")},
+                         "precision_at_50": [[float(v), n] for v, n in runs(coco["precision_at_50"])]},
+                "current": pinned_ultra(cur)}
         if leg is not None:
-            rust.append("            legacy: UltraExpected {")
-            rust.append(rust_ultra(name, leg))
-            rust.append("            },")
-        rust.append("        },")
-    rust.append("    ];")
-    if args.rust:
-        # top-level items of a file that `include!` pastes into the test module
-        text = "\n".join(rust).split("\n")
-        Path(args.rust).write_text("\n".join(line.removeprefix("    ") for line in text) + "\n")
-        print(f"wrote {args.rust}")
+            case["legacy"] = pinned_ultra(leg)
+        expected.append(case)
+    if args.toml:
+        Path(args.toml).write_text(fixture_toml(provenance, expected))
+        print(f"wrote {args.toml}")
 
 
 if __name__ == "__main__":

@@ -2,6 +2,8 @@
 //! inputs) and the figures pycocotools and Ultralytics gave for them: one test per case checks every
 //! metric against them.
 
+use serde::Deserialize;
+
 use super::{
     ImageEval, UltralyticsMetrics, UltralyticsVersion, box_det, coco, ultralytics, ultralytics_with,
 };
@@ -253,12 +255,14 @@ fn checksum(images: &[ImageEval]) -> f64 {
     s
 }
 
+#[derive(Deserialize)]
 struct Curve {
     len: usize,
     mean: f64,
-    samples: &'static [(usize, f64)],
+    samples: Vec<(usize, f64)>,
 }
 
+#[derive(Deserialize)]
 struct UltraExpected {
     precision: f64,
     recall: f64,
@@ -272,17 +276,19 @@ struct UltraExpected {
     pr_curve_map50: Curve,
 }
 
+#[derive(Deserialize)]
 struct CocoExpected {
     ap: f64,
     ap50: f64,
     ap75: f64,
     ar100: f64,
     /// run-length encoded: (value, count)
-    precision_at_50: &'static [(f64, usize)],
+    precision_at_50: Vec<(f64, usize)>,
 }
 
+#[derive(Deserialize)]
 struct Expected {
-    name: &'static str,
+    name: String,
     n_truth: usize,
     n_detections: usize,
     checksum: f64,
@@ -291,8 +297,20 @@ struct Expected {
     legacy: UltraExpected,
 }
 
-// `EXPECTED`: the figures tests/reference/metrics_reference.py printed, one `Expected` per case.
-include!("../../../../tests/fixtures/metrics/expected.rs");
+/// tests/fixtures/metrics/expected.toml: the figures tests/reference/metrics_reference.py wrote
+/// (its first line says with what), one `[[case]]` per case. TOML, whose floats Rust reads
+/// exactly, as the script wrote them.
+#[derive(Deserialize)]
+struct Fixture {
+    case: Vec<Expected>,
+}
+
+fn expected() -> Vec<Expected> {
+    let text = include_str!("../../../../tests/fixtures/metrics/expected.toml");
+    toml::from_str::<Fixture>(text)
+        .expect("tests/fixtures/metrics/expected.toml")
+        .case
+}
 
 const TOL: f64 = 1e-6;
 
@@ -323,7 +341,7 @@ fn check_curve(errs: &mut Vec<String>, what: &str, got: &[f64], want: &Curve) {
             want.mean,
         ));
     }
-    for &(i, v) in want.samples {
+    for &(i, v) in &want.samples {
         errs.extend(close(&format!("{what}[{i}]"), got[i], v));
     }
 }
@@ -379,10 +397,10 @@ fn check_ultra(errs: &mut Vec<String>, tag: &str, got: &UltralyticsMetrics, want
 }
 
 fn check_case(name: &str) {
-    let want = EXPECTED
-        .iter()
+    let want = expected()
+        .into_iter()
         .find(|e| e.name == name)
-        .expect("case in EXPECTED");
+        .expect("case in expected.toml");
     let images = case(name);
     let mut errs = Vec::new();
     let cs = checksum(&images);
@@ -434,7 +452,8 @@ fn check_case(name: &str) {
 }
 
 // One test per reference case; figures from tests/reference/metrics_reference.py (pycocotools 2.0.11,
-// ultralytics 8.4.190 and the 8.3.0 sources, numpy 2.4.6, torch 2.15.0), in EXPECTED.
+// ultralytics 8.4.190 and the 8.3.0 sources, numpy 2.4.6, torch 2.15.0), in
+// tests/fixtures/metrics/expected.toml.
 #[test]
 fn reference_no_predictions() {
     check_case("no_predictions");
@@ -482,10 +501,11 @@ fn reference_stress_multi() {
 
 #[test]
 fn every_reference_case_is_tested() {
-    for e in EXPECTED {
-        let _ = case(e.name);
+    let expected = expected();
+    for e in &expected {
+        let _ = case(&e.name);
     }
-    assert_eq!(EXPECTED.len(), 11);
+    assert_eq!(expected.len(), 11);
 }
 
 #[test]
