@@ -20,9 +20,9 @@ As run for the pinned figures (numpy 2.4.6, torch 2.15.0, ultralytics 8.4.190, p
     /tmp/mvenv/bin/python reference/metrics_reference.py --legacy /tmp/uold/v830 --toml fixtures/metrics/expected.toml
 (from tests/), the pinned figures that crates/detect/src/metrics/cases.rs reads.
 
-The test cases are defined twice, here and in the Rust tests of crates/detect/src/metrics/cases.rs; the random
-ones come from the same splitmix64 generator, so both sides build bit-identical inputs (each case's input
-checksum is printed and pinned too).
+The hand-made test cases are data, tests/fixtures/metrics/cases.toml, which the Rust tests of
+crates/detect/src/metrics/cases.rs read too; the random ones come from the same splitmix64 generator here
+and there, so both sides build bit-identical inputs (each case's input checksum is printed and pinned too).
 """
 import argparse
 import json
@@ -31,6 +31,7 @@ import importlib.metadata
 import contextlib
 import io
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -97,76 +98,17 @@ def stress(seed, n_images, n_classes):
     return images
 
 
-def box(x, y, w, h):
-    return [x, y, x + w, y + h]
+CASES_TOML = Path(__file__).resolve().parents[1] / "fixtures/metrics/cases.toml"
 
 
-CASES = {
-    # two images with objects, no detections anywhere
-    "no_predictions": [
-        ([box(10, 10, 20, 20), box(100, 100, 30, 10)], [0, 0], []),
-        ([box(50, 60, 12, 12)], [0], []),
-    ],
-    # detections but no objects anywhere
-    "no_labels": [
-        ([], [], [box(10, 10, 20, 20) + [0.9, 0], box(200, 10, 20, 20) + [0.4, 0]]),
-        ([], [], [box(5, 5, 8, 8) + [0.7, 0]]),
-    ],
-    # three detections on one object (IoUs about 0.93, 0.90, 0.83), one good detection on a second object
-    "duplicates": [
-        ([[10, 10, 50, 40], [200, 200, 230, 220]], [0, 0],
-         [[11, 10, 50, 41, 0.9, 0], [10, 11, 49, 40, 0.8, 0], [12, 12, 52, 42, 0.7, 0],
-          [201, 200, 230, 221, 0.6, 0]]),
-    ],
-    # every object found exactly, nothing else
-    "perfect": [
-        ([box(10, 10, 20, 20), box(300, 40, 8, 30)], [0, 0],
-         [box(10, 10, 20, 20) + [0.9, 0], box(300, 40, 8, 30) + [0.8, 0]]),
-        ([box(500, 500, 16, 16)], [0], [box(500, 500, 16, 16) + [0.75, 0]]),
-    ],
-    # tied scores: ties only within groups whose members are all TP (IoU 1) or all FP at every IoU threshold,
-    # so that the result does not depend on the order of tied detections (see the module docs)
-    "ties": [
-        ([box(10, 10, 20, 20), box(100, 10, 20, 20), box(200, 10, 20, 20)], [0, 0, 0],
-         [box(10, 10, 20, 20) + [0.8, 0], box(100, 10, 20, 20) + [0.6, 0],
-          box(600, 600, 20, 20) + [0.7, 0], box(200, 10, 20, 20) + [0.6, 0]]),
-        ([box(10, 10, 20, 20), box(300, 300, 10, 10)], [0, 0],
-         [box(10, 10, 20, 20) + [0.8, 0], box(700, 600, 20, 20) + [0.7, 0],
-          box(300, 300, 10, 10) + [0.6, 0]]),
-        ([box(40, 40, 20, 20)], [0], [box(800, 800, 20, 20) + [0.7, 0]]),
-    ],
-    # precision 1 up to recall 0.5 (the example of design/physics.md)
-    "half_recall": [
-        ([box(10, 10, 20, 20), box(100, 100, 20, 20)], [0, 0], [box(10, 10, 20, 20) + [0.9, 0]]),
-    ],
-    # several images of different kinds, two classes
-    "mixed": [
-        ([box(10, 10, 20, 20)], [0], []),
-        ([], [], [box(30, 30, 10, 10) + [0.35, 0], box(60, 30, 10, 10) + [0.55, 1]]),
-        ([box(10, 10, 20, 20), box(50, 50, 30, 30), box(120, 40, 10, 25)], [0, 1, 0],
-         [[11, 11, 31, 29, 0.95, 0], [52, 49, 80, 82, 0.85, 1], [50, 50, 80, 80, 0.5, 0],
-          [121, 44, 131, 63, 0.45, 0], [400, 400, 410, 410, 0.65, 1]]),
-        ([box(70, 70, 14, 14), box(90, 70, 14, 14)], [1, 1],
-         [[72, 70, 86, 84, 0.75, 1], [91, 71, 105, 85, 0.75, 0], [88, 70, 103, 85, 0.25, 1]]),
-    ],
-    # one image, six objects, detections with IoU about 0.52 .. 0.97, scores not in IoU order
-    "multi_box": [
-        ([box(0, 0, 20, 20), box(100, 0, 20, 20), box(200, 0, 20, 20), box(300, 0, 20, 20),
-          box(400, 0, 20, 20), box(500, 0, 20, 20)], [0] * 6,
-         [box(0, 0, 20, 10.4) + [0.3, 0], box(100, 0, 20, 11.6) + [0.9, 0], box(200, 0, 20, 13.2) + [0.5, 0],
-          box(300, 0, 20, 14.8) + [0.7, 0], box(400, 0, 20, 16.6) + [0.2, 0], box(500, 0, 20, 19.4) + [0.6, 0],
-          box(250, 250, 20, 20) + [0.8, 0]]),
-    ],
-    # IoU exactly at thresholds: 0.5 in normalised units (Ultralytics' eps = 1e-7 pushes it below 0.5 in float32),
-    # 0.5, 0.75 and 0.55 in pixels
-    "iou_boundaries": [
-        ([[0, 0, 0.1, 0.1]], [0], [[0, 0, 0.1, 0.05, 0.9, 0]]),
-        ([[0, 0, 10, 10], [20, 0, 40, 20], [60, 0, 80, 20]], [0, 0, 0],
-         [[0, 0, 10, 5, 0.8, 0], [20, 0, 40, 15, 0.7, 0], [60, 0, 80, 11, 0.6, 0]]),
-    ],
-    "stress_single": stress(42, 50, 1),
-    "stress_multi": stress(7, 40, 3),
-}
+def load_cases(path):
+    """The hand-made cases (tests/fixtures/metrics/cases.toml, which the Rust tests read too):
+    per image, (truth boxes, truth classes, detections)."""
+    return {name: [([t[:4] for t in im["truth"]], [t[4] for t in im["truth"]], im["detections"]) for im in images]
+            for name, images in tomllib.loads(path.read_text()).items()}
+
+
+CASES = {**load_cases(CASES_TOML), "stress_single": stress(42, 50, 1), "stress_multi": stress(7, 40, 3)}
 
 
 def checksum(images):

@@ -2,6 +2,8 @@
 //! inputs) and the figures pycocotools and Ultralytics gave for them: one test per case checks every
 //! metric against them.
 
+use std::collections::BTreeMap;
+
 use serde::Deserialize;
 
 use super::{
@@ -92,149 +94,44 @@ fn stress(seed: u64, n_images: usize, n_classes: u64) -> Vec<ImageEval> {
     images
 }
 
-/// The cases of tests/reference/metrics_reference.py (`CASES`), same names, same inputs.
+/// One image of tests/fixtures/metrics/cases.toml.
+#[derive(Deserialize)]
+struct CaseImage {
+    /// The objects: [x1, y1, x2, y2, class].
+    truth: Vec<(f64, f64, f64, f64, u32)>,
+    /// [x1, y1, x2, y2, score, class].
+    detections: Vec<(f64, f64, f64, f64, f64, u32)>,
+}
+
+/// The cases of tests/reference/metrics_reference.py (`CASES`), same names, same inputs: the
+/// hand-made ones of tests/fixtures/metrics/cases.toml, which the script reads too, and the
+/// random ones.
 pub(super) fn case(name: &str) -> Vec<ImageEval> {
     match name {
-        "no_predictions" => vec![
-            img(
-                &[(bx(10., 10., 20., 20.), 0), (bx(100., 100., 30., 10.), 0)],
-                &[],
-            ),
-            img(&[(bx(50., 60., 12., 12.), 0)], &[]),
-        ],
-        "no_labels" => vec![
-            img(
-                &[],
-                &[
-                    (bx(10., 10., 20., 20.), 0.9, 0),
-                    (bx(200., 10., 20., 20.), 0.4, 0),
-                ],
-            ),
-            img(&[], &[(bx(5., 5., 8., 8.), 0.7, 0)]),
-        ],
-        "duplicates" => vec![img(
-            &[([10., 10., 50., 40.], 0), ([200., 200., 230., 220.], 0)],
-            &[
-                ([11., 10., 50., 41.], 0.9, 0),
-                ([10., 11., 49., 40.], 0.8, 0),
-                ([12., 12., 52., 42.], 0.7, 0),
-                ([201., 200., 230., 221.], 0.6, 0),
-            ],
-        )],
-        "perfect" => vec![
-            img(
-                &[(bx(10., 10., 20., 20.), 0), (bx(300., 40., 8., 30.), 0)],
-                &[
-                    (bx(10., 10., 20., 20.), 0.9, 0),
-                    (bx(300., 40., 8., 30.), 0.8, 0),
-                ],
-            ),
-            img(
-                &[(bx(500., 500., 16., 16.), 0)],
-                &[(bx(500., 500., 16., 16.), 0.75, 0)],
-            ),
-        ],
-        "ties" => vec![
-            img(
-                &[
-                    (bx(10., 10., 20., 20.), 0),
-                    (bx(100., 10., 20., 20.), 0),
-                    (bx(200., 10., 20., 20.), 0),
-                ],
-                &[
-                    (bx(10., 10., 20., 20.), 0.8, 0),
-                    (bx(100., 10., 20., 20.), 0.6, 0),
-                    (bx(600., 600., 20., 20.), 0.7, 0),
-                    (bx(200., 10., 20., 20.), 0.6, 0),
-                ],
-            ),
-            img(
-                &[(bx(10., 10., 20., 20.), 0), (bx(300., 300., 10., 10.), 0)],
-                &[
-                    (bx(10., 10., 20., 20.), 0.8, 0),
-                    (bx(700., 600., 20., 20.), 0.7, 0),
-                    (bx(300., 300., 10., 10.), 0.6, 0),
-                ],
-            ),
-            img(
-                &[(bx(40., 40., 20., 20.), 0)],
-                &[(bx(800., 800., 20., 20.), 0.7, 0)],
-            ),
-        ],
-        "half_recall" => vec![img(
-            &[(bx(10., 10., 20., 20.), 0), (bx(100., 100., 20., 20.), 0)],
-            &[(bx(10., 10., 20., 20.), 0.9, 0)],
-        )],
-        "mixed" => vec![
-            img(&[(bx(10., 10., 20., 20.), 0)], &[]),
-            img(
-                &[],
-                &[
-                    (bx(30., 30., 10., 10.), 0.35, 0),
-                    (bx(60., 30., 10., 10.), 0.55, 1),
-                ],
-            ),
-            img(
-                &[
-                    (bx(10., 10., 20., 20.), 0),
-                    (bx(50., 50., 30., 30.), 1),
-                    (bx(120., 40., 10., 25.), 0),
-                ],
-                &[
-                    ([11., 11., 31., 29.], 0.95, 0),
-                    ([52., 49., 80., 82.], 0.85, 1),
-                    ([50., 50., 80., 80.], 0.5, 0),
-                    ([121., 44., 131., 63.], 0.45, 0),
-                    ([400., 400., 410., 410.], 0.65, 1),
-                ],
-            ),
-            img(
-                &[(bx(70., 70., 14., 14.), 1), (bx(90., 70., 14., 14.), 1)],
-                &[
-                    ([72., 70., 86., 84.], 0.75, 1),
-                    ([91., 71., 105., 85.], 0.75, 0),
-                    ([88., 70., 103., 85.], 0.25, 1),
-                ],
-            ),
-        ],
-        "multi_box" => vec![img(
-            &[
-                (bx(0., 0., 20., 20.), 0),
-                (bx(100., 0., 20., 20.), 0),
-                (bx(200., 0., 20., 20.), 0),
-                (bx(300., 0., 20., 20.), 0),
-                (bx(400., 0., 20., 20.), 0),
-                (bx(500., 0., 20., 20.), 0),
-            ],
-            &[
-                (bx(0., 0., 20., 10.4), 0.3, 0),
-                (bx(100., 0., 20., 11.6), 0.9, 0),
-                (bx(200., 0., 20., 13.2), 0.5, 0),
-                (bx(300., 0., 20., 14.8), 0.7, 0),
-                (bx(400., 0., 20., 16.6), 0.2, 0),
-                (bx(500., 0., 20., 19.4), 0.6, 0),
-                (bx(250., 250., 20., 20.), 0.8, 0),
-            ],
-        )],
-        "iou_boundaries" => vec![
-            img(&[([0., 0., 0.1, 0.1], 0)], &[([0., 0., 0.1, 0.05], 0.9, 0)]),
-            img(
-                &[
-                    ([0., 0., 10., 10.], 0),
-                    ([20., 0., 40., 20.], 0),
-                    ([60., 0., 80., 20.], 0),
-                ],
-                &[
-                    ([0., 0., 10., 5.], 0.8, 0),
-                    ([20., 0., 40., 15.], 0.7, 0),
-                    ([60., 0., 80., 11.], 0.6, 0),
-                ],
-            ),
-        ],
-        "stress_single" => stress(42, 50, 1),
-        "stress_multi" => stress(7, 40, 3),
-        _ => panic!("unknown case {name}"),
+        "stress_single" => return stress(42, 50, 1),
+        "stress_multi" => return stress(7, 40, 3),
+        _ => {}
     }
+    let text = include_str!("../../../../tests/fixtures/metrics/cases.toml");
+    let mut cases: BTreeMap<String, Vec<CaseImage>> =
+        toml::from_str(text).expect("tests/fixtures/metrics/cases.toml");
+    let images = cases
+        .remove(name)
+        .unwrap_or_else(|| panic!("unknown case {name}"));
+    images
+        .iter()
+        .map(|im| ImageEval {
+            truth: im
+                .truth
+                .iter()
+                .map(|&(x1, y1, x2, y2, _)| [x1, y1, x2, y2])
+                .collect(),
+            truth_class: im.truth.iter().map(|t| t.4).collect(),
+            detections: (im.detections.iter())
+                .map(|&(x1, y1, x2, y2, score, class)| box_det([x1, y1, x2, y2], score, class))
+                .collect(),
+        })
+        .collect()
 }
 
 /// `checksum()` of the reference script.
