@@ -1,4 +1,4 @@
-//! crates/detect/src/yolo/ against Ultralytics. The figures in tests/fixtures/yolo/expected.rs and the
+//! crates/detect/src/yolo/ against Ultralytics. The figures in tests/fixtures/yolo/expected.toml and the
 //! fixtures themselves (tiny.onnx, the PNGs, the invalid models) are made by
 //! tests/reference/yolo_reference.py: Ultralytics' own `YOLO('tiny.onnx').predict(...)`, its LetterBox and
 //! cv2.resize.
@@ -18,8 +18,46 @@ use std::path::{Path, PathBuf};
 use soig::detect::Detection;
 use soig::detect::yolo::{YoloDetector, YoloError, YoloParams, letterbox_gray, resize_linear_u8};
 
-mod expected {
-    include!("fixtures/yolo/expected.rs");
+/// tests/fixtures/yolo/expected.toml (its first line says what wrote it). TOML, whose floats
+/// Rust reads exactly, as the script wrote them.
+#[derive(serde::Deserialize)]
+struct Expected {
+    conf: f64,
+    iou: f64,
+    max_det: usize,
+    /// Ultralytics' `predict` on each test PNG (`[[prediction]]`).
+    #[serde(rename = "prediction")]
+    predictions: Vec<Predicted>,
+    /// LetterBox((640, 640), auto=False) of `pattern(w, h)`: (w, h, FNV-1a of the result).
+    letterbox: Vec<(usize, usize, Hash)>,
+    /// cv2.resize(pattern(w, h), (dw, dh), interpolation=cv2.INTER_LINEAR): (w, h, dw, dh, FNV-1a).
+    resize: Vec<(usize, usize, usize, usize, Hash)>,
+}
+
+#[derive(serde::Deserialize)]
+struct Predicted {
+    file: String,
+    /// FNV-1a of the file's LetterBox.
+    letterbox_fnv1a: Hash,
+    /// [x1, y1, x2, y2, score, class], sorted by score.
+    boxes: Vec<[f64; 6]>,
+}
+
+/// An FNV-1a hash, written as 16 hex digits.
+#[derive(serde::Deserialize, Clone, Copy)]
+#[serde(try_from = "String")]
+struct Hash(u64);
+
+impl TryFrom<String> for Hash {
+    type Error = std::num::ParseIntError;
+    fn try_from(hex: String) -> Result<Self, Self::Error> {
+        u64::from_str_radix(&hex, 16).map(Hash)
+    }
+}
+
+fn expected() -> Expected {
+    toml::from_str(include_str!("fixtures/yolo/expected.toml"))
+        .expect("tests/fixtures/yolo/expected.toml")
 }
 
 /// Agreement required with Ultralytics' stored figures. ONNX Runtime picks its float32 GEMM and
@@ -44,10 +82,11 @@ fn load_gray(name: &str) -> (Vec<u8>, usize, usize) {
 }
 
 fn params(conf: f64) -> YoloParams {
+    let Expected { iou, max_det, .. } = expected();
     YoloParams {
         conf,
-        iou: expected::IOU,
-        max_det: expected::MAX_DET,
+        iou,
+        max_det,
         imgsz: None,
         intra_threads: 1,
     }
@@ -98,13 +137,17 @@ fn detections_match_ultralytics_predict() {
     if !ort_available() {
         return;
     }
-    let mut det = YoloDetector::load(&fixture("tiny.onnx"), params(expected::CONF)).unwrap();
+    let expected = expected();
+    let mut det = YoloDetector::load(&fixture("tiny.onnx"), params(expected.conf)).unwrap();
     assert_eq!(det.input_size(), (640, 640));
     assert_eq!(det.num_classes(), 1);
-    for &(name, _, want) in expected::EXPECTED {
+    for Predicted {
+        file: name, boxes, ..
+    } in &expected.predictions
+    {
         let (gray, w, h) = load_gray(name);
         let got = det.detect(&gray, w, h).unwrap();
-        let (dbox, dscore) = compare(name, &got, want);
+        let (dbox, dscore) = compare(name, &got, boxes);
         eprintln!(
             "{name}: {} boxes, max |diff| box {dbox:.2e} px, score {dscore:.2e}",
             got.len()
@@ -128,9 +171,12 @@ fn paper_thresholds_keep_the_confident_subset() {
     }
     let mut det = YoloDetector::load(&fixture("tiny.onnx"), params(0.5)).unwrap();
     let mut total = 0;
-    for &(name, _, want) in expected::EXPECTED {
+    for Predicted {
+        file: name, boxes, ..
+    } in &expected().predictions
+    {
         let (gray, w, h) = load_gray(name);
-        let want: Vec<[f64; 6]> = want.iter().filter(|b| b[4] > 0.5).copied().collect();
+        let want: Vec<[f64; 6]> = boxes.iter().filter(|b| b[4] > 0.5).copied().collect();
         let got = det.detect(&gray, w, h).unwrap();
         compare(name, &got, &want);
         total += got.len();
@@ -143,27 +189,32 @@ fn paper_thresholds_keep_the_confident_subset() {
 
 #[test]
 fn letterbox_of_fixtures_matches_ultralytics() {
-    for &(name, hash, _) in expected::EXPECTED {
+    for Predicted {
+        file: name,
+        letterbox_fnv1a,
+        ..
+    } in &expected().predictions
+    {
         let (gray, w, h) = load_gray(name);
         let lb = letterbox_gray(&gray, w, h, 640, 640, None);
         assert_eq!((lb.width, lb.height), (640, 640));
-        assert_eq!(fnv1a64(&lb.data), hash, "{name}");
+        assert_eq!(fnv1a64(&lb.data), letterbox_fnv1a.0, "{name}");
     }
 }
 
 #[test]
 fn letterbox_matches_ultralytics_bit_exactly() {
-    for &(w, h, hash) in expected::LETTERBOX {
+    for (w, h, hash) in expected().letterbox {
         let lb = letterbox_gray(&pattern(w, h), w, h, 640, 640, None);
-        assert_eq!(fnv1a64(&lb.data), hash, "LetterBox of {w}x{h}");
+        assert_eq!(fnv1a64(&lb.data), hash.0, "LetterBox of {w}x{h}");
     }
 }
 
 #[test]
 fn resize_matches_opencv_inter_linear_bit_exactly() {
-    for &(w, h, dw, dh, hash) in expected::RESIZE {
+    for (w, h, dw, dh, hash) in expected().resize {
         let out = resize_linear_u8(&pattern(w, h), w, h, dw, dh);
-        assert_eq!(fnv1a64(&out), hash, "cv2.resize {w}x{h} -> {dw}x{dh}");
+        assert_eq!(fnv1a64(&out), hash.0, "cv2.resize {w}x{h} -> {dw}x{dh}");
     }
 }
 

@@ -12,24 +12,26 @@
   with --legacy DIR) and exec'd; `np.trapz` (removed in numpy 2.4) is bound to `np.trapezoid`, the plot
   functions are no-ops; the loop of 8.3.0's `DetectionValidator.update_metrics` / `get_stats` is restated below.
 
-Usage: python metrics_reference.py [--legacy /path/to/unzipped/ultralytics-8.3.0] [--rust OUT.rs]
+Usage: python metrics_reference.py [--legacy /path/to/unzipped/ultralytics-8.3.0] [--toml OUT.toml]
 As run for the pinned figures (numpy 2.4.6, torch 2.15.0, ultralytics 8.4.190, pycocotools 2.0.11):
     python -m venv /tmp/mvenv && /tmp/mvenv/bin/pip install pycocotools ultralytics
     /tmp/mvenv/bin/pip download --no-deps ultralytics==8.3.0 -d /tmp/uold
     (cd /tmp/uold && mkdir v830 && cd v830 && unzip -q ../ultralytics-8.3.0-py3-none-any.whl)
-    /tmp/mvenv/bin/python reference/metrics_reference.py --legacy /tmp/uold/v830 --rust fixtures/metrics/expected.rs
-(from tests/), the `EXPECTED` table that crates/detect/src/metrics/cases.rs includes.
+    /tmp/mvenv/bin/python reference/metrics_reference.py --legacy /tmp/uold/v830 --toml fixtures/metrics/expected.toml
+(from tests/), the pinned figures that crates/detect/src/metrics/cases.rs reads.
 
-The test cases are defined twice, here and in the Rust tests of crates/detect/src/metrics/cases.rs; the random
-ones come from the same splitmix64 generator, so both sides build bit-identical inputs (each case's input
-checksum is printed and pinned too).
+The hand-made test cases are data, tests/fixtures/metrics/cases.toml, which the Rust tests of
+crates/detect/src/metrics/cases.rs read too; the random ones come from the same splitmix64 generator here
+and there, so both sides build bit-identical inputs (each case's input checksum is printed and pinned too).
 """
 import argparse
+import json
 import ast
 import importlib.metadata
 import contextlib
 import io
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -96,76 +98,17 @@ def stress(seed, n_images, n_classes):
     return images
 
 
-def box(x, y, w, h):
-    return [x, y, x + w, y + h]
+CASES_TOML = Path(__file__).resolve().parents[1] / "fixtures/metrics/cases.toml"
 
 
-CASES = {
-    # two images with objects, no detections anywhere
-    "no_predictions": [
-        ([box(10, 10, 20, 20), box(100, 100, 30, 10)], [0, 0], []),
-        ([box(50, 60, 12, 12)], [0], []),
-    ],
-    # detections but no objects anywhere
-    "no_labels": [
-        ([], [], [box(10, 10, 20, 20) + [0.9, 0], box(200, 10, 20, 20) + [0.4, 0]]),
-        ([], [], [box(5, 5, 8, 8) + [0.7, 0]]),
-    ],
-    # three detections on one object (IoUs about 0.93, 0.90, 0.83), one good detection on a second object
-    "duplicates": [
-        ([[10, 10, 50, 40], [200, 200, 230, 220]], [0, 0],
-         [[11, 10, 50, 41, 0.9, 0], [10, 11, 49, 40, 0.8, 0], [12, 12, 52, 42, 0.7, 0],
-          [201, 200, 230, 221, 0.6, 0]]),
-    ],
-    # every object found exactly, nothing else
-    "perfect": [
-        ([box(10, 10, 20, 20), box(300, 40, 8, 30)], [0, 0],
-         [box(10, 10, 20, 20) + [0.9, 0], box(300, 40, 8, 30) + [0.8, 0]]),
-        ([box(500, 500, 16, 16)], [0], [box(500, 500, 16, 16) + [0.75, 0]]),
-    ],
-    # tied scores: ties only within groups whose members are all TP (IoU 1) or all FP at every IoU threshold,
-    # so that the result does not depend on the order of tied detections (see the module docs)
-    "ties": [
-        ([box(10, 10, 20, 20), box(100, 10, 20, 20), box(200, 10, 20, 20)], [0, 0, 0],
-         [box(10, 10, 20, 20) + [0.8, 0], box(100, 10, 20, 20) + [0.6, 0],
-          box(600, 600, 20, 20) + [0.7, 0], box(200, 10, 20, 20) + [0.6, 0]]),
-        ([box(10, 10, 20, 20), box(300, 300, 10, 10)], [0, 0],
-         [box(10, 10, 20, 20) + [0.8, 0], box(700, 600, 20, 20) + [0.7, 0],
-          box(300, 300, 10, 10) + [0.6, 0]]),
-        ([box(40, 40, 20, 20)], [0], [box(800, 800, 20, 20) + [0.7, 0]]),
-    ],
-    # precision 1 up to recall 0.5 (the example of design/physics.md)
-    "half_recall": [
-        ([box(10, 10, 20, 20), box(100, 100, 20, 20)], [0, 0], [box(10, 10, 20, 20) + [0.9, 0]]),
-    ],
-    # several images of different kinds, two classes
-    "mixed": [
-        ([box(10, 10, 20, 20)], [0], []),
-        ([], [], [box(30, 30, 10, 10) + [0.35, 0], box(60, 30, 10, 10) + [0.55, 1]]),
-        ([box(10, 10, 20, 20), box(50, 50, 30, 30), box(120, 40, 10, 25)], [0, 1, 0],
-         [[11, 11, 31, 29, 0.95, 0], [52, 49, 80, 82, 0.85, 1], [50, 50, 80, 80, 0.5, 0],
-          [121, 44, 131, 63, 0.45, 0], [400, 400, 410, 410, 0.65, 1]]),
-        ([box(70, 70, 14, 14), box(90, 70, 14, 14)], [1, 1],
-         [[72, 70, 86, 84, 0.75, 1], [91, 71, 105, 85, 0.75, 0], [88, 70, 103, 85, 0.25, 1]]),
-    ],
-    # one image, six objects, detections with IoU about 0.52 .. 0.97, scores not in IoU order
-    "multi_box": [
-        ([box(0, 0, 20, 20), box(100, 0, 20, 20), box(200, 0, 20, 20), box(300, 0, 20, 20),
-          box(400, 0, 20, 20), box(500, 0, 20, 20)], [0] * 6,
-         [box(0, 0, 20, 10.4) + [0.3, 0], box(100, 0, 20, 11.6) + [0.9, 0], box(200, 0, 20, 13.2) + [0.5, 0],
-          box(300, 0, 20, 14.8) + [0.7, 0], box(400, 0, 20, 16.6) + [0.2, 0], box(500, 0, 20, 19.4) + [0.6, 0],
-          box(250, 250, 20, 20) + [0.8, 0]]),
-    ],
-    # IoU exactly at thresholds: 0.5 in normalised units (Ultralytics' eps = 1e-7 pushes it below 0.5 in float32),
-    # 0.5, 0.75 and 0.55 in pixels
-    "iou_boundaries": [
-        ([[0, 0, 0.1, 0.1]], [0], [[0, 0, 0.1, 0.05, 0.9, 0]]),
-        ([[0, 0, 10, 10], [20, 0, 40, 20], [60, 0, 80, 20]], [0, 0, 0],
-         [[0, 0, 10, 5, 0.8, 0], [20, 0, 40, 15, 0.7, 0], [60, 0, 80, 11, 0.6, 0]]),
-    ],
-    "stress_single": stress(42, 50, 1),
-    "stress_multi": stress(7, 40, 3),
-}
+def load_cases(path):
+    """The hand-made cases (tests/fixtures/metrics/cases.toml, which the Rust tests read too):
+    per image, (truth boxes, truth classes, detections)."""
+    return {name: [([t[:4] for t in im["truth"]], [t[4] for t in im["truth"]], im["detections"]) for im in images]
+            for name, images in tomllib.loads(path.read_text()).items()}
+
+
+CASES = {**load_cases(CASES_TOML), "stress_single": stress(42, 50, 1), "stress_multi": stress(7, 40, 3)}
 
 
 def checksum(images):
@@ -372,10 +315,6 @@ def coco_reference(images):
 CURVE_SAMPLES = [0, 1, 100, 250, 400, 500, 600, 750, 900, 998, 999]
 
 
-def fmt(x):
-    return repr(float(x)) if x == x else "f64::NAN"
-
-
 def runs(values):
     """Run-length encoding: [(value, count)]."""
     out = []
@@ -387,33 +326,62 @@ def runs(values):
     return out
 
 
-def rust_ultra(name, r):
-    out = [f"                precision: {fmt(r['precision'])}, recall: {fmt(r['recall'])}, map50: {fmt(r['map50'])},",
-           f"                map50_95: {fmt(r['map50_95'])}, f1_conf: {fmt(r['f1_conf'])},",
-           f"                ap_per_iou: [{', '.join(fmt(x) for x in r['ap_per_iou'])}],"]
+def pinned_ultra(r):
+    """The figures of one Ultralytics version that the Rust test pins: the scalars, and of each
+    curve its length, mean and the values at CURVE_SAMPLES."""
+    out = {k: float(r[k]) for k in ("precision", "recall", "map50", "map50_95", "f1_conf")}
+    out["ap_per_iou"] = [float(x) for x in r["ap_per_iou"]]
     for c in ("precision_curve", "recall_curve", "f1_curve", "pr_curve_map50"):
         a = r[c]
-        samples = ", ".join(f"({i}, {fmt(a[i])})" for i in CURVE_SAMPLES) if len(a) else ""
-        mean = fmt(a.mean()) if len(a) else "0.0"
-        out.append(f"                {c}: Curve {{ len: {len(a)}, mean: {mean}, samples: &[{samples}] }},")
-    return "\n".join(out)
+        out[c] = {"len": len(a), "mean": float(a.mean()) if len(a) else 0.0,
+                  "samples": [[i, float(a[i])] for i in CURVE_SAMPLES] if len(a) else []}
+    return out
+
+
+def toml_value(v):
+    """A TOML value; a float as repr() writes it, the shortest text that reads back as the same
+    double (Rust's parser reads it exactly; serde_json's, by default, only to within one unit in
+    the last place: hence TOML), a NaN as nan."""
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{k} = {toml_value(x)}" for k, x in v.items()) + " }"
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
+    if isinstance(v, str):
+        return json.dumps(v)  # a TOML basic string: the same escapes
+    if isinstance(v, float):
+        return repr(float(v))  # nan, inf and -inf are TOML's spellings too
+    return str(int(v))
+
+
+def fixture_toml(provenance, expected):
+    """tests/fixtures/metrics/expected.toml: a [[case]] per case, its Ultralytics figures in
+    [case.current] and [case.legacy], a figure one a line."""
+    lines = [f"# {provenance}"]
+    for case in expected:
+        lines += ["", "[[case]]"]
+        lines += [f"{k} = {toml_value(v)}" for k, v in case.items() if k not in ("current", "legacy")]
+        for version in ("current", "legacy"):
+            if version in case:
+                lines += ["", f"[case.{version}]"]
+                lines += [f"{k} = {toml_value(v)}" for k, v in case[version].items()]
+    return "\n".join(lines) + "\n"
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--legacy", help="folder of the unzipped ultralytics 8.3.0 wheel")
-    ap.add_argument("--rust", help="write the pinned-figure table (Rust source) here")
+    ap.add_argument("--toml", help="write the pinned figures (TOML) here")
     args = ap.parse_args()
     import ultralytics
     import pycocotools
     print(f"numpy {np.__version__}, torch {torch.__version__}, ultralytics {ultralytics.__version__}, "
           f"pycocotools {importlib.metadata.version('pycocotools')}")
     legacy = load_legacy(args.legacy) if args.legacy else None
-    rust = [f"// Generated by tests/reference/metrics_reference.py --rust, do not edit (pycocotools "
-            f"{importlib.metadata.version('pycocotools')}, ultralytics",
-            f"// {ultralytics.__version__} and the 8.3.0 sources, numpy {np.__version__}, torch {torch.__version__}): "
-            "the cases of crates/detect/src/metrics/cases.rs.",
-            "    const EXPECTED: &[Expected] = &["]
+    provenance = (f"Generated by tests/reference/metrics_reference.py --toml, do not edit (pycocotools "
+                  f"{importlib.metadata.version('pycocotools')}, ultralytics {ultralytics.__version__} and the "
+                  f"8.3.0 sources, numpy {np.__version__}, torch {torch.__version__}): the cases of "
+                  "crates/detect/src/metrics/cases.rs.")
+    expected = []
     for name, images in CASES.items():
         cur = ultralytics_current(images)
         coco = coco_reference(images)
@@ -427,27 +395,17 @@ def main():
             leg = ultralytics_legacy(images, legacy)
             print(f"  Ultralytics 8.3.0: P {leg['precision']:.6f} R {leg['recall']:.6f} "
                   f"mAP50 {leg['map50']:.6f} mAP50-95 {leg['map50_95']:.6f} F1 conf {leg['f1_conf']:.6f}")
-        rust.append("        Expected {")
-        rust.append(f"            name: {name!r},".replace("'", '"'))
-        rust.append(f"            n_truth: {cur['n_truth']}, n_detections: {cur['n_detections']}, "
-                    f"checksum: {fmt(checksum(images))},")
-        rust.append(f"            coco: CocoExpected {{ ap: {fmt(coco['ap'])}, ap50: {fmt(coco['ap50'])}, "
-                    f"ap75: {fmt(coco['ap75'])}, ar100: {fmt(coco['ar100'])},")
-        rust.append(f"                precision_at_50: &[{', '.join(f'({fmt(v)}, {n})' for v, n in runs(coco['precision_at_50']))}] }},")
-        rust.append("            current: UltraExpected {")
-        rust.append(rust_ultra(name, cur))
-        rust.append("            },")
+        case = {"name": name, "n_truth": cur["n_truth"], "n_detections": cur["n_detections"],
+                "checksum": float(checksum(images)),
+                "coco": {**{k: float(coco[k]) for k in ("ap", "ap50", "ap75", "ar100")},
+                         "precision_at_50": [[float(v), n] for v, n in runs(coco["precision_at_50"])]},
+                "current": pinned_ultra(cur)}
         if leg is not None:
-            rust.append("            legacy: UltraExpected {")
-            rust.append(rust_ultra(name, leg))
-            rust.append("            },")
-        rust.append("        },")
-    rust.append("    ];")
-    if args.rust:
-        # top-level items of a file that `include!` pastes into the test module
-        text = "\n".join(rust).split("\n")
-        Path(args.rust).write_text("\n".join(line.removeprefix("    ") for line in text) + "\n")
-        print(f"wrote {args.rust}")
+            case["legacy"] = pinned_ultra(leg)
+        expected.append(case)
+    if args.toml:
+        Path(args.toml).write_text(fixture_toml(provenance, expected))
+        print(f"wrote {args.toml}")
 
 
 if __name__ == "__main__":

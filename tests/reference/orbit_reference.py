@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Reference figures for the tests of crates/sky/src/orbit/ and crates/sky/src/frames.rs (the tables of
-tests/fixtures/sky/orbit_teme.rs and teme_gcrs.rs, and the figures inline in those tests).
+tests/fixtures/sky/orbit_teme.rs and teme_gcrs.csv, and the figures inline in those tests).
 
 Run: python3 reference/orbit_reference.py [path/to/catalog.tle]
 Needs the PyPI packages sgp4 (2.x), astropy and numpy (pyerfa comes with astropy). No network:
@@ -13,13 +13,16 @@ Prints Rust literals that the tests pin:
   * the same for the Table-1 orbit of NORAD 40649 built with sgp4init;
   * TEME -> GCRS rotations from astropy (TEME frame -> GCRS, obstime UTC), and from the same
     IAU-76/80 route as the Rust code, built from pyerfa routines (pmat76, nut80, obl80, bp00), which
-    checks the Rust transcription of the nutation series to far below a milliarcsecond.
+    checks the Rust transcription of the nutation series to far below a milliarcsecond: written
+    to tests/fixtures/sky/teme_gcrs.csv rather than printed.
 """
 import sys
 from datetime import datetime, timedelta
 from fractions import Fraction
+from pathlib import Path
 
 import numpy as np
+import astropy
 import erfa
 from astropy.utils import iers
 
@@ -145,12 +148,24 @@ def arcsec(a, b):
     return float(np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b)), np.dot(a, b))) * 3600)
 
 
+GCRS_CSV = Path(__file__).resolve().parents[1] / "fixtures/sky/teme_gcrs.csv"
+
+
+def gcrs_csv(provenance, rows):
+    """tests/fixtures/sky/teme_gcrs.csv: a '#' line of provenance, a header, then a row per
+    (UTC, TEME km, astropy GCRS km, IAU-76/80 route via pyerfa km), the km as fmt() writes them."""
+    header = ["utc"] + [f"{what}_{axis}_km" for what in ("teme", "astropy_gcrs", "erfa_gcrs") for axis in "xyz"]
+    lines = [f"# {provenance}", ",".join(header)]
+    lines += [",".join([ts] + [f"{x:.9f}" for x in (*v, *a, *e)]) for ts, v, a, e in rows]
+    return "\n".join(lines) + "\n"
+
+
 def gcrs_block():
     vecs = [[7000.0, 0.0, 0.0], [0.0, 7000.0, 0.0], [0.0, 0.0, 7000.0], [-4000.0, 3000.0, 20000.0],
             [42164.0, -1000.0, 500.0]]
     times = DATES + ["2023-01-01T06:00:00"]
-    print("// ---- TEME -> GCRS: (UTC, TEME km, astropy GCRS km, IAU-76/80 route via pyerfa km) ----")
     worst_raw, worst_bias = 0.0, 0.0
+    rows = []
     for ts in times:
         t = Time(ts, scale="utc")
         for v in vecs:
@@ -159,7 +174,11 @@ def gcrs_block():
             worst_bias = max(worst_bias, arcsec(a, e))
             rb = erfa.bp00(t.tt.jd1, t.tt.jd2)[0]
             worst_raw = max(worst_raw, arcsec(a, rb @ e))
-            print(f'({when(ts)}, {fmt(v)}, {fmt(a)}, {fmt(e)}),')
+            rows.append((ts, v, a, e))
+    provenance = (f"Written by tests/reference/orbit_reference.py (astropy {astropy.__version__} with its bundled "
+                  f"IERS tables, pyerfa {erfa.__version__}); read by the unit tests of crates/sky/src/frames.rs.")
+    GCRS_CSV.write_text(gcrs_csv(provenance, rows))
+    print(f"// ---- TEME -> GCRS: wrote {GCRS_CSV} ----")
     print(f"// astropy vs IAU-76/80 + frame bias: max {worst_bias:.4f} arcsec; "
           f"without the frame bias (J2000 mean equator): max {worst_raw:.4f} arcsec")
 

@@ -175,29 +175,25 @@ mod tests {
 
     #[test]
     fn bad_values_name_line_and_field() {
+        // The last line of each holds the bad value: the error names its line and its key.
         let cases = [
-            ("read_noise_e = -1.0", 10, "noise.read_noise_e"),
-            ("dark_e_per_s = inf", 10, "noise.dark_e_per_s"),
-            (
-                "sky_e_per_s = 1.0\nsky_mag_per_arcsec2 = 21.0",
-                11,
-                "noise.sky_mag_per_arcsec2",
-            ),
-            ("hot_pixel_fraction = 1.5", 10, "noise.hot_pixel_fraction"),
-            ("bias_adu = 70000.0", 10, "noise.bias_adu"),
-            ("adc_max_adu = 0.0", 10, "noise.adc_max_adu"),
-            ("full_well_e = 0.0", 10, "noise.full_well_e"),
-            (
-                "cosmic_rate_per_cm2_s = -2.0",
-                10,
-                "noise.cosmic_rate_per_cm2_s",
-            ),
-            ("pixel_size_um = 0.0", 10, "noise.pixel_size_um"),
+            "read_noise_e = -1.0",
+            "dark_e_per_s = inf",
+            "sky_e_per_s = 1.0\nsky_mag_per_arcsec2 = 21.0",
+            "hot_pixel_fraction = 1.5",
+            "bias_adu = 70000.0",
+            "adc_max_adu = 0.0",
+            "full_well_e = 0.0",
+            "cosmic_rate_per_cm2_s = -2.0",
+            "pixel_size_um = 0.0",
         ];
-        for (line, at, field) in cases {
-            let e = campaign(&format!("[noise]\nmodel = \"physical\"\n{line}\n")).unwrap_err();
+        for lines in cases {
+            // The case follows `[noise]` (line 8 of the campaign) and `model` (line 9).
+            let at = 9 + lines.lines().count();
+            let (key, _) = lines.lines().last().unwrap().split_once(" = ").unwrap();
+            let e = campaign(&format!("[noise]\nmodel = \"physical\"\n{lines}\n")).unwrap_err();
             assert!(
-                e.starts_with(&format!("/nowhere/c.toml:{at}: field `{field}`: ")),
+                e.starts_with(&format!("/nowhere/c.toml:{at}: field `noise.{key}`: ")),
                 "{e}"
             );
         }

@@ -2,6 +2,10 @@
 //! inputs) and the figures pycocotools and Ultralytics gave for them: one test per case checks every
 //! metric against them.
 
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+
 use super::{
     ImageEval, UltralyticsMetrics, UltralyticsVersion, box_det, coco, ultralytics, ultralytics_with,
 };
@@ -90,149 +94,44 @@ fn stress(seed: u64, n_images: usize, n_classes: u64) -> Vec<ImageEval> {
     images
 }
 
-/// The cases of tests/reference/metrics_reference.py (`CASES`), same names, same inputs.
+/// One image of tests/fixtures/metrics/cases.toml.
+#[derive(Deserialize)]
+struct CaseImage {
+    /// The objects: [x1, y1, x2, y2, class].
+    truth: Vec<(f64, f64, f64, f64, u32)>,
+    /// [x1, y1, x2, y2, score, class].
+    detections: Vec<(f64, f64, f64, f64, f64, u32)>,
+}
+
+/// The cases of tests/reference/metrics_reference.py (`CASES`), same names, same inputs: the
+/// hand-made ones of tests/fixtures/metrics/cases.toml, which the script reads too, and the
+/// random ones.
 pub(super) fn case(name: &str) -> Vec<ImageEval> {
     match name {
-        "no_predictions" => vec![
-            img(
-                &[(bx(10., 10., 20., 20.), 0), (bx(100., 100., 30., 10.), 0)],
-                &[],
-            ),
-            img(&[(bx(50., 60., 12., 12.), 0)], &[]),
-        ],
-        "no_labels" => vec![
-            img(
-                &[],
-                &[
-                    (bx(10., 10., 20., 20.), 0.9, 0),
-                    (bx(200., 10., 20., 20.), 0.4, 0),
-                ],
-            ),
-            img(&[], &[(bx(5., 5., 8., 8.), 0.7, 0)]),
-        ],
-        "duplicates" => vec![img(
-            &[([10., 10., 50., 40.], 0), ([200., 200., 230., 220.], 0)],
-            &[
-                ([11., 10., 50., 41.], 0.9, 0),
-                ([10., 11., 49., 40.], 0.8, 0),
-                ([12., 12., 52., 42.], 0.7, 0),
-                ([201., 200., 230., 221.], 0.6, 0),
-            ],
-        )],
-        "perfect" => vec![
-            img(
-                &[(bx(10., 10., 20., 20.), 0), (bx(300., 40., 8., 30.), 0)],
-                &[
-                    (bx(10., 10., 20., 20.), 0.9, 0),
-                    (bx(300., 40., 8., 30.), 0.8, 0),
-                ],
-            ),
-            img(
-                &[(bx(500., 500., 16., 16.), 0)],
-                &[(bx(500., 500., 16., 16.), 0.75, 0)],
-            ),
-        ],
-        "ties" => vec![
-            img(
-                &[
-                    (bx(10., 10., 20., 20.), 0),
-                    (bx(100., 10., 20., 20.), 0),
-                    (bx(200., 10., 20., 20.), 0),
-                ],
-                &[
-                    (bx(10., 10., 20., 20.), 0.8, 0),
-                    (bx(100., 10., 20., 20.), 0.6, 0),
-                    (bx(600., 600., 20., 20.), 0.7, 0),
-                    (bx(200., 10., 20., 20.), 0.6, 0),
-                ],
-            ),
-            img(
-                &[(bx(10., 10., 20., 20.), 0), (bx(300., 300., 10., 10.), 0)],
-                &[
-                    (bx(10., 10., 20., 20.), 0.8, 0),
-                    (bx(700., 600., 20., 20.), 0.7, 0),
-                    (bx(300., 300., 10., 10.), 0.6, 0),
-                ],
-            ),
-            img(
-                &[(bx(40., 40., 20., 20.), 0)],
-                &[(bx(800., 800., 20., 20.), 0.7, 0)],
-            ),
-        ],
-        "half_recall" => vec![img(
-            &[(bx(10., 10., 20., 20.), 0), (bx(100., 100., 20., 20.), 0)],
-            &[(bx(10., 10., 20., 20.), 0.9, 0)],
-        )],
-        "mixed" => vec![
-            img(&[(bx(10., 10., 20., 20.), 0)], &[]),
-            img(
-                &[],
-                &[
-                    (bx(30., 30., 10., 10.), 0.35, 0),
-                    (bx(60., 30., 10., 10.), 0.55, 1),
-                ],
-            ),
-            img(
-                &[
-                    (bx(10., 10., 20., 20.), 0),
-                    (bx(50., 50., 30., 30.), 1),
-                    (bx(120., 40., 10., 25.), 0),
-                ],
-                &[
-                    ([11., 11., 31., 29.], 0.95, 0),
-                    ([52., 49., 80., 82.], 0.85, 1),
-                    ([50., 50., 80., 80.], 0.5, 0),
-                    ([121., 44., 131., 63.], 0.45, 0),
-                    ([400., 400., 410., 410.], 0.65, 1),
-                ],
-            ),
-            img(
-                &[(bx(70., 70., 14., 14.), 1), (bx(90., 70., 14., 14.), 1)],
-                &[
-                    ([72., 70., 86., 84.], 0.75, 1),
-                    ([91., 71., 105., 85.], 0.75, 0),
-                    ([88., 70., 103., 85.], 0.25, 1),
-                ],
-            ),
-        ],
-        "multi_box" => vec![img(
-            &[
-                (bx(0., 0., 20., 20.), 0),
-                (bx(100., 0., 20., 20.), 0),
-                (bx(200., 0., 20., 20.), 0),
-                (bx(300., 0., 20., 20.), 0),
-                (bx(400., 0., 20., 20.), 0),
-                (bx(500., 0., 20., 20.), 0),
-            ],
-            &[
-                (bx(0., 0., 20., 10.4), 0.3, 0),
-                (bx(100., 0., 20., 11.6), 0.9, 0),
-                (bx(200., 0., 20., 13.2), 0.5, 0),
-                (bx(300., 0., 20., 14.8), 0.7, 0),
-                (bx(400., 0., 20., 16.6), 0.2, 0),
-                (bx(500., 0., 20., 19.4), 0.6, 0),
-                (bx(250., 250., 20., 20.), 0.8, 0),
-            ],
-        )],
-        "iou_boundaries" => vec![
-            img(&[([0., 0., 0.1, 0.1], 0)], &[([0., 0., 0.1, 0.05], 0.9, 0)]),
-            img(
-                &[
-                    ([0., 0., 10., 10.], 0),
-                    ([20., 0., 40., 20.], 0),
-                    ([60., 0., 80., 20.], 0),
-                ],
-                &[
-                    ([0., 0., 10., 5.], 0.8, 0),
-                    ([20., 0., 40., 15.], 0.7, 0),
-                    ([60., 0., 80., 11.], 0.6, 0),
-                ],
-            ),
-        ],
-        "stress_single" => stress(42, 50, 1),
-        "stress_multi" => stress(7, 40, 3),
-        _ => panic!("unknown case {name}"),
+        "stress_single" => return stress(42, 50, 1),
+        "stress_multi" => return stress(7, 40, 3),
+        _ => {}
     }
+    let text = include_str!("../../../../tests/fixtures/metrics/cases.toml");
+    let mut cases: BTreeMap<String, Vec<CaseImage>> =
+        toml::from_str(text).expect("tests/fixtures/metrics/cases.toml");
+    let images = cases
+        .remove(name)
+        .unwrap_or_else(|| panic!("unknown case {name}"));
+    images
+        .iter()
+        .map(|im| ImageEval {
+            truth: im
+                .truth
+                .iter()
+                .map(|&(x1, y1, x2, y2, _)| [x1, y1, x2, y2])
+                .collect(),
+            truth_class: im.truth.iter().map(|t| t.4).collect(),
+            detections: (im.detections.iter())
+                .map(|&(x1, y1, x2, y2, score, class)| box_det([x1, y1, x2, y2], score, class))
+                .collect(),
+        })
+        .collect()
 }
 
 /// `checksum()` of the reference script.
@@ -253,12 +152,14 @@ fn checksum(images: &[ImageEval]) -> f64 {
     s
 }
 
+#[derive(Deserialize)]
 struct Curve {
     len: usize,
     mean: f64,
-    samples: &'static [(usize, f64)],
+    samples: Vec<(usize, f64)>,
 }
 
+#[derive(Deserialize)]
 struct UltraExpected {
     precision: f64,
     recall: f64,
@@ -272,17 +173,19 @@ struct UltraExpected {
     pr_curve_map50: Curve,
 }
 
+#[derive(Deserialize)]
 struct CocoExpected {
     ap: f64,
     ap50: f64,
     ap75: f64,
     ar100: f64,
     /// run-length encoded: (value, count)
-    precision_at_50: &'static [(f64, usize)],
+    precision_at_50: Vec<(f64, usize)>,
 }
 
+#[derive(Deserialize)]
 struct Expected {
-    name: &'static str,
+    name: String,
     n_truth: usize,
     n_detections: usize,
     checksum: f64,
@@ -291,8 +194,20 @@ struct Expected {
     legacy: UltraExpected,
 }
 
-// `EXPECTED`: the figures tests/reference/metrics_reference.py printed, one `Expected` per case.
-include!("../../../../tests/fixtures/metrics/expected.rs");
+/// tests/fixtures/metrics/expected.toml: the figures tests/reference/metrics_reference.py wrote
+/// (its first line says with what), one `[[case]]` per case. TOML, whose floats Rust reads
+/// exactly, as the script wrote them.
+#[derive(Deserialize)]
+struct Fixture {
+    case: Vec<Expected>,
+}
+
+fn expected() -> Vec<Expected> {
+    let text = include_str!("../../../../tests/fixtures/metrics/expected.toml");
+    toml::from_str::<Fixture>(text)
+        .expect("tests/fixtures/metrics/expected.toml")
+        .case
+}
 
 const TOL: f64 = 1e-6;
 
@@ -323,7 +238,7 @@ fn check_curve(errs: &mut Vec<String>, what: &str, got: &[f64], want: &Curve) {
             want.mean,
         ));
     }
-    for &(i, v) in want.samples {
+    for &(i, v) in &want.samples {
         errs.extend(close(&format!("{what}[{i}]"), got[i], v));
     }
 }
@@ -379,10 +294,10 @@ fn check_ultra(errs: &mut Vec<String>, tag: &str, got: &UltralyticsMetrics, want
 }
 
 fn check_case(name: &str) {
-    let want = EXPECTED
-        .iter()
+    let want = expected()
+        .into_iter()
         .find(|e| e.name == name)
-        .expect("case in EXPECTED");
+        .expect("case in expected.toml");
     let images = case(name);
     let mut errs = Vec::new();
     let cs = checksum(&images);
@@ -434,7 +349,8 @@ fn check_case(name: &str) {
 }
 
 // One test per reference case; figures from tests/reference/metrics_reference.py (pycocotools 2.0.11,
-// ultralytics 8.4.190 and the 8.3.0 sources, numpy 2.4.6, torch 2.15.0), in EXPECTED.
+// ultralytics 8.4.190 and the 8.3.0 sources, numpy 2.4.6, torch 2.15.0), in
+// tests/fixtures/metrics/expected.toml.
 #[test]
 fn reference_no_predictions() {
     check_case("no_predictions");
@@ -482,10 +398,11 @@ fn reference_stress_multi() {
 
 #[test]
 fn every_reference_case_is_tested() {
-    for e in EXPECTED {
-        let _ = case(e.name);
+    let expected = expected();
+    for e in &expected {
+        let _ = case(&e.name);
     }
-    assert_eq!(EXPECTED.len(), 11);
+    assert_eq!(expected.len(), 11);
 }
 
 #[test]
