@@ -90,7 +90,8 @@ pub(super) fn pass(
         let segs = merge(&maps, frags, Regime::of(seeds), &is_star);
         merged.extend(segs.into_iter().map(|s| (s, seeds)));
     }
-    let (cands, d) = accept(&maps, merged, &is_star);
+    let points = matches!(star_test, StarTest::Round);
+    let (cands, d) = accept(&maps, merged, &is_star, points);
     dropped.extend(d);
     let (kept, d) = explain_away(&maps, cands);
     dropped.extend(d);

@@ -272,12 +272,17 @@ fn accept_scores_a_streak_and_drops_a_short_one() {
     let s = refined(&world.maps()).unwrap();
     let short = Seg { length: 10.0, ..s };
     let merged = vec![(short, Seeds::Local), (s, Seeds::Local)];
-    let (cands, dropped) = accept(&world.maps(), merged, &no_star);
+    let (cands, dropped) = accept(&world.maps(), merged, &no_star, false);
     assert_eq!(cands.len(), 1);
     assert!(cands[0].2 > 0.0 && cands[0].2 <= 1.0, "{}", cands[0].2);
     assert!(matches!(dropped[0].reason, Reason::TooShort { .. }));
     // The star test drops it.
-    let (cands, dropped) = accept(&world.maps(), vec![(s, Seeds::Local)], &|_: &Seg| true);
+    let (cands, dropped) = accept(
+        &world.maps(),
+        vec![(s, Seeds::Local)],
+        &|_: &Seg| true,
+        false,
+    );
     assert!(cands.is_empty() && dropped[0].reason == Reason::StarTrail);
 }
 
@@ -291,9 +296,9 @@ fn gap_against_the_quieter_side_band() {
     z.iter_mut().zip(&beside).for_each(|(a, b)| *a += b);
     let mut world = World::new(z);
     let s = refined(&World::new(streak_map(3.0, 64.0, 30, 90)).maps()).unwrap();
-    assert!(gap(&world.maps(), &s).is_some());
+    assert!(gap(&world.maps(), &s, false).is_some());
     world.p.quiet_side = true;
-    assert_eq!(gap(&world.maps(), &s), None);
+    assert_eq!(gap(&world.maps(), &s, false), None);
     // A hole of 17 px in the streak (one of its four chunks of 15 px, at its SNR) is a gap on
     // either side.
     let mut z = streak_map(3.0, 64.0, 30, 90);
@@ -309,7 +314,43 @@ fn gap_against_the_quieter_side_band() {
         },
         ..World::new(z)
     };
-    assert!(gap(&world.maps(), &s).is_some());
+    assert!(gap(&world.maps(), &s, false).is_some());
+}
+
+/// Step 7, the gap test where stars are points: three round blobs 14 px apart in a row (a
+/// short "streak" of SNR 10) have dips between them that the chunks split, and only the test
+/// at every window position finds; a streak of the same length and level has none.
+#[test]
+fn gap_between_star_blobs_in_a_row() {
+    let blob = |z: &mut [f32], cx: f64, amp: f64| {
+        for y in 0..H {
+            for x in 0..W {
+                let d2 = (x as f64 - cx).powi(2) + (y as f64 - 64.0).powi(2);
+                z[y * W + x] += (amp * (-d2 / (2.0 * 9.0)).exp()) as f32;
+            }
+        }
+    };
+    let mut z = vec![0f32; W * H];
+    for cx in [50.0, 64.0, 78.0] {
+        blob(&mut z, cx, 7.0);
+    }
+    let world = World::new(z);
+    let s = refined(&World::new(streak_map(3.0, 64.0, 30, 90)).maps()).unwrap();
+    let s = Seg {
+        cx: 64.0,
+        cy: 64.0,
+        theta: 0.0,
+        length: 41.0,
+        snr: 10.0,
+        ..s
+    };
+    assert_eq!(gap(&world.maps(), &s, false), None);
+    let g = gap(&world.maps(), &s, true).expect("a gap between the blobs");
+    assert!(g.level < 0.5, "{g:?}");
+    let even = World::new(streak_map(5.0, 64.0, 44, 84));
+    assert_eq!(gap(&even.maps(), &s, true), None);
+    // A long segment is tested in its chunks only.
+    assert_eq!(gap(&world.maps(), &Seg { length: 65.0, ..s }, true), None);
 }
 
 /// Step 7: of one streak found twice, the better scoring is kept and the other explained away.
