@@ -3,8 +3,7 @@
 
 use serde::Serialize;
 
-use super::vec3::Turn;
-use super::{Vec3, angle_deg, cross, dot, norm, radec_deg, radec_unit, rotate, scale, unit};
+use super::{Turn, Vec3, angle_deg, cross, dot, norm, radec_deg, radec_unit, rotate, scale, unit};
 
 /// Where the sensor points. Fixed pointing carries only its direction; survey pointing carries
 /// the attitude track, so fixed scenes never build one.
@@ -179,17 +178,8 @@ impl TargetTrack {
         (sin != 0.0).then(|| (scale(n, 1.0 / sin), sin.atan2(dot(self.debris_mid, u))))
     }
 
-    /// Where (ra, dec) appears in the mid-exposure frame for a camera turned by `turn`
-    /// (`turn_at`): R^-1 s. The renderer takes each node's turn once for all stars.
-    pub fn undo_turn(turn: Option<(Vec3, f64)>, ra_deg: f64, dec_deg: f64) -> (f64, f64) {
-        match turn {
-            Some((axis, angle)) => radec_deg(rotate(radec_unit(ra_deg, dec_deg), axis, -angle)),
-            None => (ra_deg, dec_deg),
-        }
-    }
-
-    /// [`Self::turn_at`] as the turn that undoes it (None: no turn), for turning many stars
-    /// at one time: `radec_deg(turn.apply(radec_unit(ra, dec)))` is `undo_turn`'s result.
+    /// [`Self::turn_at`] as the turn that undoes it, R(t)^-1 (None: no turn); the renderer
+    /// takes each node's once for all stars.
     pub fn turn_back(&self, t_s: f64) -> Option<Turn> {
         self.turn_at(t_s)
             .map(|(axis, angle)| Turn::new(axis, -angle))
@@ -198,7 +188,10 @@ impl TargetTrack {
     /// The sky direction that the camera at `t_s` sees where the mid-exposure camera sees
     /// (ra, dec): the camera turned by R(t), so a star s appears at R(t)^-1 s of the mid frame.
     pub fn to_mid_frame(&self, t_s: f64, ra_deg: f64, dec_deg: f64) -> (f64, f64) {
-        Self::undo_turn(self.turn_at(t_s), ra_deg, dec_deg)
+        match self.turn_back(t_s) {
+            Some(turn) => radec_deg(turn.apply(radec_unit(ra_deg, dec_deg))),
+            None => (ra_deg, dec_deg),
+        }
     }
 
     /// Boresight (RA, Dec) at `t_s` seconds after the start of the exposure.
