@@ -16,12 +16,6 @@ pub(super) fn line_filter(
     noise: &LineNoise,
 ) -> (Vec<f32>, Vec<u8>) {
     let n = p.n_angles;
-    // Steep (y-major) lines advance one row per step in the image itself; flat (x-major) lines
-    // advance one row per step in the transposed image.
-    let mut zt = vec![0f32; w * h];
-    transpose(zc, &mut zt, w, h);
-    let mut best = vec![f32::NEG_INFINITY; w * h];
-    let mut best_t = vec![f32::NEG_INFINITY; w * h];
     let (mut flat, mut steep) = (Vec::new(), Vec::new());
     for j in (0..n).filter(|&j| p.uses(j)) {
         let (x_major, t) = slope(j, n);
@@ -38,17 +32,25 @@ pub(super) fn line_filter(
             steep.push(dir);
         }
     }
-    sweep(&p.half_lengths, &flat, &zt, w, h, &mut best_t);
+    // Steep (y-major) lines advance one row per step in the image itself; flat (x-major) lines
+    // advance one row per step in the transposed image. The star-aware pass runs only the
+    // orientations near the trails, often of one family: the other's transposes are skipped
+    // (-inf merged in changes nothing).
+    let mut best = vec![f32::NEG_INFINITY; w * h];
     sweep(&p.half_lengths, &steep, zc, h, w, &mut best);
-    // Merge the transposed results, then unpack the orientation index.
-    transpose(&best_t, &mut zt, h, w);
-    drop(best_t);
-    let mut arg = vec![0u8; w * h];
-    for ((b, a), &bt) in best.iter_mut().zip(arg.iter_mut()).zip(&zt) {
-        let v = b.max(bt);
-        *a = (v.to_bits() & 0xFF) as u8;
-        *b = v;
+    if !flat.is_empty() {
+        let mut zt = vec![0f32; w * h];
+        transpose(zc, &mut zt, w, h);
+        let mut best_t = vec![f32::NEG_INFINITY; w * h];
+        sweep(&p.half_lengths, &flat, &zt, w, h, &mut best_t);
+        // Merge the transposed results.
+        transpose(&best_t, &mut zt, h, w);
+        for (b, &bt) in best.iter_mut().zip(&zt) {
+            *b = b.max(bt);
+        }
     }
+    // Unpack the orientation index.
+    let arg = best.iter().map(|v| (v.to_bits() & 0xFF) as u8).collect();
     (best, arg)
 }
 

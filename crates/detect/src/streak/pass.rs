@@ -61,6 +61,7 @@ pub(super) fn pass(
         noise: &noise,
         under_trails: flat.under_trails.as_deref(),
         removed: flat.removed.as_deref(),
+        sample_corr: Default::default(),
     };
     let star_test = match (&sky, trail) {
         (Some((sky, z_sky)), _) => StarTest::Predicted(sky, z_sky),

@@ -82,6 +82,7 @@ impl World {
             noise: &self.noise,
             under_trails: None,
             removed: self.removed.as_deref(),
+            sample_corr: Default::default(),
         }
     }
 }
