@@ -87,17 +87,28 @@ struct Window {
     next: usize,
 }
 
-/// The orientations `dirs` of the line filter over a map of `rows` rows of `m` values, for
-/// lines that advance one row per step (|t| <= 1); the best response per value into `best`,
-/// which holds no NaN (it comes filled with -inf).
-/// Values beyond the map are zero (responses within half a window of an edge are
-/// conservative). All orientations go down the map together, row by row: each output row
-/// takes its maxima over them all while it is in the L1 cache, and the rows they add are the
-/// same ones (one orientation at a time streamed the whole map, 4-8 MB, through the cache
-/// twice per orientation). Every window's sums and every maximum are taken in the order the
-/// orientation-at-a-time loop took them, so the output is the same to the bit.
-#[inline(never)]
-fn sweep(halves: &[usize], dirs: &[Dir], src: &[f32], rows: usize, m: usize, best: &mut [f32]) {
+avx2_dispatch! {
+    /// The orientations `dirs` of the line filter over a map of `rows` rows of `m` values, for
+    /// lines that advance one row per step (|t| <= 1); the best response per value into `best`,
+    /// which holds no NaN (it comes filled with -inf).
+    /// Values beyond the map are zero (responses within half a window of an edge are
+    /// conservative). All orientations go down the map together, row by row: each output row
+    /// takes its maxima over them all while it is in the L1 cache, and the rows they add are the
+    /// same ones (one orientation at a time streamed the whole map, 4-8 MB, through the cache
+    /// twice per orientation). Every window's sums and every maximum are taken in the order the
+    /// orientation-at-a-time loop took them, so the output is the same to the bit.
+    fn sweep(halves: &[usize], dirs: &[Dir], src: &[f32], rows: usize, m: usize, best: &mut [f32]) = sweep_rows
+}
+
+#[inline(always)]
+fn sweep_rows(
+    halves: &[usize],
+    dirs: &[Dir],
+    src: &[f32],
+    rows: usize,
+    m: usize,
+    best: &mut [f32],
+) {
     // Per orientation: offset of row i's values in its windows (index = pos - s[i] + smax).
     let shifts: Vec<Vec<usize>> = dirs
         .iter()

@@ -101,6 +101,8 @@
 //! whether a segment is a star's trail, and `stats` the robust statistics (bilinear sampling
 //! is [`soig_image::imaging::bilinear`]).
 
+#[macro_use]
+mod simd;
 mod accept;
 mod background;
 mod components;

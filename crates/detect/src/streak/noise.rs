@@ -19,6 +19,7 @@ use super::stats::median_of;
 const SAMPLES: usize = 4096;
 
 /// Measured over modelled noise sd per filter, at least 1.
+#[cfg_attr(test, derive(Debug, PartialEq))]
 pub(super) struct LineNoise {
     n_angles: usize,
     /// Line lengths (pixels, odd, ascending), one column of `ratio` each.
@@ -38,6 +39,8 @@ pub(super) struct LineNoise {
 /// as `sum` adds (the same bits as one length at a time, which gathered the shorter line's
 /// values again: 29 % of the gathers at 21 and 51 px). Four centres at a time: four independent
 /// chains of adds (one chain waits on each add).
+/// Inlined into `measured`'s two builds (see `simd`).
+#[inline(always)]
 fn two_lengths(
     zc: &[f32],
     w: usize,
@@ -94,134 +97,7 @@ impl LineNoise {
         p: &Sanitized,
         samples: usize,
     ) -> Self {
-        let lengths: Vec<usize> = p.half_lengths.iter().map(|&h| 2 * h + 1).collect();
-        let hmax = *p.half_lengths.last().expect("at least one length") as isize;
-        // Sample centres on a regular grid, away from the edges where sums are cut short.
-        let (x0, x1) = (
-            hmax.min(w as isize / 2),
-            (w as isize - hmax).max(w as isize / 2 + 1),
-        );
-        let (y0, y1) = (
-            hmax.min(h as isize / 2),
-            (h as isize - hmax).max(h as isize / 2 + 1),
-        );
-        let area = ((x1 - x0) * (y1 - y0)).max(1) as f64;
-        let step = ((area / samples.max(1) as f64).sqrt().floor() as isize).max(1);
-        let centres: Vec<(isize, isize)> = (y0..y1)
-            .step_by(step as usize)
-            .flat_map(|y| (x0..x1).step_by(step as usize).map(move |x| (x, y)))
-            .collect();
-        // Every centre's lines stay inside the map (an image over twice the longest filter).
-        let inside =
-            x0 >= hmax && x1 - 1 + hmax < w as isize && y0 >= hmax && y1 - 1 + hmax < h as isize;
-        let at = |x: isize, y: isize| -> f64 {
-            if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
-                0.0
-            } else {
-                zc[y as usize * w + x as usize] as f64
-            }
-        };
-        let mut ratio = Vec::with_capacity(p.n_angles * lengths.len());
-        let mut models = Vec::with_capacity(p.n_angles * lengths.len());
-        let mut sums = vec![0f64; centres.len()];
-        // With two lengths, their sums at the first centres, four at a time (`two_lengths`).
-        let mut pairs = match p.half_lengths.len() {
-            2 => vec![vec![0f64; centres.len() / 4 * 4]; 2],
-            _ => Vec::new(),
-        };
-        for j in 0..p.n_angles {
-            if !p.uses(j) {
-                // A filter the pass does not run.
-                ratio.extend(p.half_lengths.iter().map(|_| 1.0));
-                models.extend(p.half_lengths.iter().map(|_| 0.0));
-                continue;
-            }
-            let (x_major, t) = slope(j, p.n_angles);
-            // The same digital line as `lines`: one step along the major axis, the minor
-            // offset rounded.
-            // Tabulated once per orientation (it was rounded again for every sample: 7% of
-            // the detector); offset(i) is at index i + hmax.
-            let offsets: Vec<(isize, isize)> = (-hmax..=hmax)
-                .map(|i| {
-                    let m = (i as f64 * t).round() as isize;
-                    if x_major { (i, m) } else { (m, i) }
-                })
-                .collect();
-            let offset = |i: isize| offsets[(i + hmax) as usize];
-            // The same offsets in the row-major map, for centres whose every line lies inside.
-            let linear: Vec<isize> = offsets
-                .iter()
-                .map(|&(dx, dy)| dy * w as isize + dx)
-                .collect();
-            let model = model_sd(j, p);
-            models.extend(&model);
-            // Two lengths (the default): both sums in one pass along the longer line.
-            let quads = sums.len() / 4 * 4;
-            if inside && let [h0, _] = p.half_lengths[..] {
-                let middle = (hmax as usize - h0, hmax as usize + h0);
-                let (q0, q1) = pairs.split_at_mut(1);
-                two_lengths(
-                    zc,
-                    w,
-                    &centres[..quads],
-                    &linear,
-                    middle,
-                    (&mut q0[0], &mut q1[0]),
-                );
-            }
-            for (l, &hk) in p.half_lengths.iter().enumerate() {
-                let hk = hk as isize;
-                let line = &linear[(hmax - hk) as usize..=(hmax + hk) as usize];
-                if inside {
-                    let base = |&(x, y): &(isize, isize)| y * w as isize + x;
-                    if pairs.len() == 2 {
-                        sums[..quads].copy_from_slice(&pairs[l][..quads]);
-                    } else {
-                        // Four centres at a time: four independent chains of adds (one chain
-                        // waits on each add), each in the line's order from -0, as `sum` adds.
-                        for (s4, c4) in sums[..quads]
-                            .chunks_exact_mut(4)
-                            .zip(centres[..quads].chunks_exact(4))
-                        {
-                            let c = [base(&c4[0]), base(&c4[1]), base(&c4[2]), base(&c4[3])];
-                            let mut acc = [-0.0f64; 4];
-                            for &o in line {
-                                for k in 0..4 {
-                                    acc[k] += zc[(c[k] + o) as usize] as f64;
-                                }
-                            }
-                            s4.copy_from_slice(&acc);
-                        }
-                    }
-                    for (sum, c) in sums[quads..].iter_mut().zip(&centres[quads..]) {
-                        *sum = line
-                            .iter()
-                            .map(|&o| zc[(base(c) + o) as usize] as f64)
-                            .sum();
-                    }
-                } else {
-                    for (sum, &(x, y)) in sums.iter_mut().zip(&centres) {
-                        *sum = (-hk..=hk)
-                            .map(|i| {
-                                let (dx, dy) = offset(i);
-                                at(x + dx, y + dy)
-                            })
-                            .sum();
-                    }
-                }
-                let mut v = sums.clone();
-                let med = median_of(&mut v);
-                let mut dev: Vec<f64> = sums.iter().map(|s| (s - med).abs()).collect();
-                let sd = 1.4826 * median_of(&mut dev);
-                ratio.push((sd / model[l]).max(1.0));
-            }
-        }
-        LineNoise {
-            n_angles: p.n_angles,
-            lengths,
-            ratio,
-            model: models,
-        }
+        measured(zc, w, h, p, samples)
     }
 
     /// The white-noise model alone: every ratio 1.
@@ -272,5 +148,148 @@ impl LineNoise {
             }
         }
         r(last)
+    }
+}
+
+avx2_dispatch! {
+    /// The body of [`LineNoise::measure_at`] (its sums are most of its time).
+    pub(super) fn measured(zc: &[f32], w: usize, h: usize, p: &Sanitized, samples: usize) -> LineNoise = measured_at
+}
+
+#[inline(always)]
+pub(super) fn measured_at(
+    zc: &[f32],
+    w: usize,
+    h: usize,
+    p: &Sanitized,
+    samples: usize,
+) -> LineNoise {
+    let lengths: Vec<usize> = p.half_lengths.iter().map(|&h| 2 * h + 1).collect();
+    let hmax = *p.half_lengths.last().expect("at least one length") as isize;
+    // Sample centres on a regular grid, away from the edges where sums are cut short.
+    let (x0, x1) = (
+        hmax.min(w as isize / 2),
+        (w as isize - hmax).max(w as isize / 2 + 1),
+    );
+    let (y0, y1) = (
+        hmax.min(h as isize / 2),
+        (h as isize - hmax).max(h as isize / 2 + 1),
+    );
+    let area = ((x1 - x0) * (y1 - y0)).max(1) as f64;
+    let step = ((area / samples.max(1) as f64).sqrt().floor() as isize).max(1);
+    let centres: Vec<(isize, isize)> = (y0..y1)
+        .step_by(step as usize)
+        .flat_map(|y| (x0..x1).step_by(step as usize).map(move |x| (x, y)))
+        .collect();
+    // Every centre's lines stay inside the map (an image over twice the longest filter).
+    let inside =
+        x0 >= hmax && x1 - 1 + hmax < w as isize && y0 >= hmax && y1 - 1 + hmax < h as isize;
+    let at = |x: isize, y: isize| -> f64 {
+        if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
+            0.0
+        } else {
+            zc[y as usize * w + x as usize] as f64
+        }
+    };
+    let mut ratio = Vec::with_capacity(p.n_angles * lengths.len());
+    let mut models = Vec::with_capacity(p.n_angles * lengths.len());
+    let mut sums = vec![0f64; centres.len()];
+    // With two lengths, their sums at the first centres, four at a time (`two_lengths`).
+    let mut pairs = match p.half_lengths.len() {
+        2 => vec![vec![0f64; centres.len() / 4 * 4]; 2],
+        _ => Vec::new(),
+    };
+    for j in 0..p.n_angles {
+        if !p.uses(j) {
+            // A filter the pass does not run.
+            ratio.extend(p.half_lengths.iter().map(|_| 1.0));
+            models.extend(p.half_lengths.iter().map(|_| 0.0));
+            continue;
+        }
+        let (x_major, t) = slope(j, p.n_angles);
+        // The same digital line as `lines`: one step along the major axis, the minor
+        // offset rounded.
+        // Tabulated once per orientation (it was rounded again for every sample: 7% of
+        // the detector); offset(i) is at index i + hmax.
+        let offsets: Vec<(isize, isize)> = (-hmax..=hmax)
+            .map(|i| {
+                let m = (i as f64 * t).round() as isize;
+                if x_major { (i, m) } else { (m, i) }
+            })
+            .collect();
+        let offset = |i: isize| offsets[(i + hmax) as usize];
+        // The same offsets in the row-major map, for centres whose every line lies inside.
+        let linear: Vec<isize> = offsets
+            .iter()
+            .map(|&(dx, dy)| dy * w as isize + dx)
+            .collect();
+        let model = model_sd(j, p);
+        models.extend(&model);
+        // Two lengths (the default): both sums in one pass along the longer line.
+        let quads = sums.len() / 4 * 4;
+        if inside && let [h0, _] = p.half_lengths[..] {
+            let middle = (hmax as usize - h0, hmax as usize + h0);
+            let (q0, q1) = pairs.split_at_mut(1);
+            two_lengths(
+                zc,
+                w,
+                &centres[..quads],
+                &linear,
+                middle,
+                (&mut q0[0], &mut q1[0]),
+            );
+        }
+        for (l, &hk) in p.half_lengths.iter().enumerate() {
+            let hk = hk as isize;
+            let line = &linear[(hmax - hk) as usize..=(hmax + hk) as usize];
+            if inside {
+                let base = |&(x, y): &(isize, isize)| y * w as isize + x;
+                if pairs.len() == 2 {
+                    sums[..quads].copy_from_slice(&pairs[l][..quads]);
+                } else {
+                    // Four centres at a time: four independent chains of adds (one chain
+                    // waits on each add), each in the line's order from -0, as `sum` adds.
+                    for (s4, c4) in sums[..quads]
+                        .chunks_exact_mut(4)
+                        .zip(centres[..quads].chunks_exact(4))
+                    {
+                        let c = [base(&c4[0]), base(&c4[1]), base(&c4[2]), base(&c4[3])];
+                        let mut acc = [-0.0f64; 4];
+                        for &o in line {
+                            for k in 0..4 {
+                                acc[k] += zc[(c[k] + o) as usize] as f64;
+                            }
+                        }
+                        s4.copy_from_slice(&acc);
+                    }
+                }
+                for (sum, c) in sums[quads..].iter_mut().zip(&centres[quads..]) {
+                    *sum = line
+                        .iter()
+                        .map(|&o| zc[(base(c) + o) as usize] as f64)
+                        .sum();
+                }
+            } else {
+                for (sum, &(x, y)) in sums.iter_mut().zip(&centres) {
+                    *sum = (-hk..=hk)
+                        .map(|i| {
+                            let (dx, dy) = offset(i);
+                            at(x + dx, y + dy)
+                        })
+                        .sum();
+                }
+            }
+            let mut v = sums.clone();
+            let med = median_of(&mut v);
+            let mut dev: Vec<f64> = sums.iter().map(|s| (s - med).abs()).collect();
+            let sd = 1.4826 * median_of(&mut dev);
+            ratio.push((sd / model[l]).max(1.0));
+        }
+    }
+    LineNoise {
+        n_angles: p.n_angles,
+        lengths,
+        ratio,
+        model: models,
     }
 }

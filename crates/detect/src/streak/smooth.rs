@@ -25,9 +25,13 @@ fn reflect(i: isize, n: usize) -> usize {
     }
 }
 
-/// Separable convolution with mirrored borders.
-#[inline(never)]
-pub(super) fn smooth(src: &[f32], w: usize, h: usize, k: &[f32]) -> Vec<f32> {
+avx2_dispatch! {
+    /// Separable convolution with mirrored borders.
+    pub(super) fn smooth(src: &[f32], w: usize, h: usize, k: &[f32]) -> Vec<f32> = smooth_at
+}
+
+#[inline(always)]
+pub(super) fn smooth_at(src: &[f32], w: usize, h: usize, k: &[f32]) -> Vec<f32> {
     let r = (k.len() / 2) as isize;
     let ru = r as usize;
     let mut tmp = vec![0f32; w * h];

@@ -34,13 +34,25 @@ pub(super) fn remove_trails(z: &mut [f32], w: usize, h: usize, angle: f64, p: &S
     z.iter_mut().for_each(|v| *v -= med);
 }
 
-/// `src -= max(mean before, mean after)` along exact lines advancing one row per step (line
-/// through (row i, position p + i t)); rows are split between the two nearest lines by linear
-/// weights, so that bright trails at any angle leave no aliasing residual. Windows: the
-/// `2 hk + 1` rows on each side, in-map pixels only (a side with fewer than 3 is missing).
-/// The larger side mean is subtracted when it exceeds 3 sigma of its noise (a trail, including
-/// its ends), otherwise the average of the two (unbiased on noise; removes faint trails).
-fn subtract_side_means(src: &mut [f32], rows: usize, m: usize, t: f64, hk: usize, psf_sigma: f64) {
+avx2_dispatch! {
+    /// `src -= max(mean before, mean after)` along exact lines advancing one row per step (line
+    /// through (row i, position p + i t)); rows are split between the two nearest lines by linear
+    /// weights, so that bright trails at any angle leave no aliasing residual. Windows: the
+    /// `2 hk + 1` rows on each side, in-map pixels only (a side with fewer than 3 is missing).
+    /// The larger side mean is subtracted when it exceeds 3 sigma of its noise (a trail, including
+    /// its ends), otherwise the average of the two (unbiased on noise; removes faint trails).
+    pub(super) fn subtract_side_means(src: &mut [f32], rows: usize, m: usize, t: f64, hk: usize, psf_sigma: f64) = subtract_side_means_at
+}
+
+#[inline(always)]
+pub(super) fn subtract_side_means_at(
+    src: &mut [f32],
+    rows: usize,
+    m: usize,
+    t: f64,
+    hk: usize,
+    psf_sigma: f64,
+) {
     let k = 2 * hk + 1;
     // Line coordinate of pixel (i, pos): pos + base[i].0 + base[i].1 (integer + fraction).
     let top = (0..rows).map(|i| i as f64 * t).fold(0.0, f64::max).ceil();
