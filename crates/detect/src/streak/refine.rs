@@ -61,13 +61,26 @@ impl Regime {
     }
 }
 
-/// For the axes of orientation `theta` through (cx, cy) + k du n, k = -nu..=nu (n the
-/// normal): the axis point and z clipped to +-`clip` summed along the axis over integer t
-/// in [-half, half] inside the image, every `stride`-th t from the least of any axis. The axes
-/// lie within a few pixels of each other, so they are summed together, t by t (each in
-/// increasing t, as alone): their samples share cache lines, where one axis at a time
-/// streamed the whole band in again for each.
-fn axis_scores(
+avx2_dispatch! {
+    /// For the axes of orientation `theta` through (cx, cy) + k du n, k = -nu..=nu (n the
+    /// normal): the axis point and z clipped to +-`clip` summed along the axis over integer t
+    /// in [-half, half] inside the image, every `stride`-th t from the least of any axis. The axes
+    /// lie within a few pixels of each other, so they are summed together, t by t (each in
+    /// increasing t, as alone): their samples share cache lines, where one axis at a time
+    /// streamed the whole band in again for each.
+    pub(super) fn axis_scores(
+        maps: &Maps,
+        centre: Point,
+        theta: f64,
+        half: f64,
+        clip: f64,
+        lateral: (f64, i32),
+        stride: usize,
+    ) -> Vec<(f64, Point)> = axis_scores_at
+}
+
+#[inline(always)]
+pub(super) fn axis_scores_at(
     maps: &Maps,
     (cx, cy): Point,
     theta: f64,

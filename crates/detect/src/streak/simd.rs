@@ -29,8 +29,10 @@ macro_rules! avx2_dispatch {
 
 #[cfg(test)]
 mod tests {
-    use super::super::noise::{measured, measured_at};
+    use super::super::maps::Maps;
+    use super::super::noise::{LineNoise, measured, measured_at};
     use super::super::params::{Sanitized, StreakParams};
+    use super::super::refine::{axis_scores, axis_scores_at};
     use super::super::smooth::{gaussian_kernel, smooth, smooth_at};
     use super::super::trails::{subtract_side_means, subtract_side_means_at};
     use rand::SeedableRng;
@@ -59,6 +61,30 @@ mod tests {
             assert_eq!(bits(&a), bits(&b));
             let p = Sanitized::new(&StreakParams::default());
             assert_eq!(measured(&z, w, h, &p, 512), measured_at(&z, w, h, &p, 512));
+            let noise = LineNoise::white(&p);
+            let maps = Maps {
+                w,
+                h,
+                pixels: &vec![0; w * h],
+                bg: &vec![0.0; w * h],
+                z: &z,
+                p: &p,
+                noise: &noise,
+                under_trails: None,
+                removed: None,
+                sample_corr: Default::default(),
+            };
+            for theta in [0.1, 0.25, 1.3] {
+                let at = (w as f64 / 2.0, 25.0 + w as f64 / 8.0);
+                let a = axis_scores(&maps, at, theta, 60.0, 4.0, (0.5, 4), 2);
+                let b = axis_scores_at(&maps, at, theta, 60.0, 4.0, (0.5, 4), 2);
+                let bits = |v: &[(f64, (f64, f64))]| {
+                    v.iter()
+                        .map(|(s, (x, y))| [s.to_bits(), x.to_bits(), y.to_bits()])
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(bits(&a), bits(&b));
+            }
         }
     }
 }
