@@ -537,3 +537,35 @@ fn a_dark_stretch_at_the_border_ends_only_a_bright_streak() {
     let c = candidate(&bright.maps(), &across(60.0), 0.9).detection;
     assert!((c.x2 - (end as f64 + 1.0)).abs() <= 2.0, "{c:?}");
 }
+
+/// Step 7 at the border: a tumbling streak dims along its length, and where its far part falls
+/// below half the level matched inside the change point it still leaves the frame
+/// (`GOES_ON_SHARE`); light that is no narrow line beyond its own end (a pedestal as bright
+/// across the whole frame) does not carry it on. The refined segment holds the bright part.
+#[test]
+fn a_dimmer_far_part_carries_the_streak_to_the_border() {
+    let end = 60;
+    let bright_part = Seg {
+        cx: 35.0,
+        length: 50.0,
+        ..across(20.0)
+    };
+    // Bright to x = 60, then at 0.4 of that to the border.
+    let mut z = streak_map(3.0, 64.0, 0, end);
+    for (v, s) in z.iter_mut().zip(streak_map(1.2, 64.0, end + 1, W - 1)) {
+        *v += s;
+    }
+    let dim = World::new(z);
+    let c = candidate(&dim.maps(), &bright_part, 0.9).detection;
+    assert!(c.x2 >= W as f64 - 3.0, "{c:?}");
+    // The streak ends at x = 60; beyond it the whole frame is raised by as much.
+    let mut z = streak_map(3.0, 64.0, 0, end);
+    for (i, v) in z.iter_mut().enumerate() {
+        if i % W > end {
+            *v += 1.2;
+        }
+    }
+    let pedestal = World::new(z);
+    let c = candidate(&pedestal.maps(), &bright_part, 0.9).detection;
+    assert!((c.x2 - (end as f64 + 1.0)).abs() <= 2.0, "{c:?}");
+}
