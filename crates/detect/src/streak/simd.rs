@@ -1,8 +1,10 @@
 //! Hot loops compiled twice: for the baseline x86-64 (SSE2) and for AVX2, chosen at run time.
 //! Lane-by-lane additions, subtractions, products, comparisons and maxima are IEEE-exact at
 //! any vector width, and the compiler never reorders a float sum without being told to, so
-//! both give the same bits (tests compare them with the one-at-a-time references); AVX2 does
-//! twice as many lanes an instruction on nearly every x86-64 made since 2013.
+//! both give the same bits (the test below compares each AVX2 build with its baseline build,
+//! and `lines`' test the sweep with its one-at-a-time reference); AVX2 does twice as many
+//! lanes an instruction on nearly every x86-64 made since 2013. Where it is missing (or on
+//! another architecture) the baseline build runs.
 
 /// `fn name(args) -> R = inner`: a function that calls `inner(args)` compiled with AVX2
 /// where the CPU has it (checked once per call: a cached flag), and as built elsewhere.
