@@ -340,35 +340,24 @@ fn end(maps: &Maps, s: &Seg, fit: &Fit, sign: f64, (lo, hi): (f64, f64), beyond:
     let inner_b = (near - margin).min(border);
     let inner_a = (inner_b - SEARCH_IN_PX).max(margin - far);
     let vh = HALF_WIDTH * sz;
-    let (mut level, mut count) = (0.0, 0.0);
+    // And the centre line's own brightness over the same stretch (the median: a star on it is
+    // no streak), for the exit test: the 8-bit stretch and a faint streak's noise can put the
+    // level beside the line far below half of it.
+    let (mut level, mut along) = (0.0, Vec::new());
     let mut d = inner_a;
     while d <= inner_b {
         let t = sign * d;
         if t >= lo && t <= hi {
             level += 0.5 * (at(t, vh) + at(t, -vh));
-            count += 1.0;
+            along.push(at(t, 0.0));
         }
         d += 1.0;
     }
-    if count == 0.0 || level <= 0.0 {
+    if along.is_empty() || level <= 0.0 {
         return near;
     }
-    let level = level / count;
-    // The centre line's own brightness over the same stretch (the median: a star on it is no
-    // streak), for the exit test: the 8-bit stretch and a faint streak's noise can put the level
-    // beside the line far below half of it.
-    let centre_in = {
-        let mut along = Vec::new();
-        let mut d = inner_a;
-        while d <= inner_b {
-            let t = sign * d;
-            if t >= lo && t <= hi {
-                along.push(at(t, 0.0));
-            }
-            d += 1.0;
-        }
-        super::stats::median_of(&mut along)
-    };
+    let level = level / along.len() as f64;
+    let centre_in = super::stats::median_of(&mut along);
     // Change point: the distance maximising the cumulative excess of the profile over
     // the level, outwards from inside the streak (robust to noise and to dips).
     let start = (near - SEARCH_IN_PX).max(0.5 * (near - far)).min(border);
