@@ -10,7 +10,7 @@
 
 use std::f64::consts::PI;
 
-use super::digital_line::{model_sd, slope};
+use super::digital_line::{CorrTable, model_sd, slope};
 use super::params::Sanitized;
 use super::stats::median_of;
 
@@ -102,6 +102,7 @@ impl LineNoise {
 
     /// The white-noise model alone: every ratio 1.
     pub(super) fn white(p: &Sanitized) -> Self {
+        let mut table = CorrTable::new(p.psf_sigma);
         LineNoise {
             n_angles: p.n_angles,
             lengths: p.half_lengths.iter().map(|&h| 2 * h + 1).collect(),
@@ -109,7 +110,7 @@ impl LineNoise {
             model: (0..p.n_angles)
                 .flat_map(|j| {
                     if p.uses(j) {
-                        model_sd(j, p)
+                        model_sd(j, p, &mut table)
                     } else {
                         vec![0.0; p.half_lengths.len()]
                     }
@@ -194,6 +195,7 @@ pub(super) fn measured_at(
     let mut ratio = Vec::with_capacity(p.n_angles * lengths.len());
     let mut models = Vec::with_capacity(p.n_angles * lengths.len());
     let mut sums = vec![0f64; centres.len()];
+    let mut table = CorrTable::new(p.psf_sigma);
     // With two lengths, their sums at the first centres, four at a time (`two_lengths`).
     let mut pairs = match p.half_lengths.len() {
         2 => vec![vec![0f64; centres.len() / 4 * 4]; 2],
@@ -223,7 +225,7 @@ pub(super) fn measured_at(
             .iter()
             .map(|&(dx, dy)| dy * w as isize + dx)
             .collect();
-        let model = model_sd(j, p);
+        let model = model_sd(j, p, &mut table);
         models.extend(&model);
         // Two lengths (the default): both sums in one pass along the longer line.
         let quads = sums.len() / 4 * 4;
