@@ -60,19 +60,35 @@ impl Hist {
     }
 }
 
-/// Median of a small set (reorders it), the mean of the two middle values for an even count.
-/// By selection, not a full sort: the same values, in linear time (the line filter's noise
-/// measurement takes hundreds of medians of 4096 sums per image).
+/// Median of a small set, the mean of the two middle values for an even count. By selection,
+/// not a full sort: the same values, in linear time (the line filter's noise measurement
+/// takes hundreds of medians of 4096 sums per image). The selection orders integer keys that
+/// order as `f64::total_cmp` orders the values (`total_cmp` makes that key of both values at
+/// every comparison; here each is made once), so the values picked are `total_cmp`'s, bit for
+/// bit. (`v` is left as it was; callers take it `&mut` from when it was reordered.)
 pub(super) fn median_of(v: &mut [f64]) -> f64 {
     let n = v.len();
-    let (lower, mid, _) = v.select_nth_unstable_by(n / 2, |a, b| a.total_cmp(b));
-    let mid = *mid;
+    let mut keys: Vec<i64> = v.iter().map(|&x| total_key(x)).collect();
+    let (lower, mid, _) = keys.select_nth_unstable(n / 2);
+    let mid = from_total_key(*mid);
     if n % 2 == 1 {
         mid
     } else {
-        let below = lower.iter().copied().max_by(|a, b| a.total_cmp(b));
+        let below = lower.iter().copied().max().map(from_total_key);
         0.5 * (below.expect("an even, non-empty set has a value below the middle") + mid)
     }
+}
+
+/// `f64::total_cmp`'s key: the bits as a signed integer, a negative's flipped but for the
+/// sign, so that integer order is `total_cmp`'s order.
+fn total_key(x: f64) -> i64 {
+    let b = x.to_bits() as i64;
+    b ^ ((((b >> 63) as u64) >> 1) as i64)
+}
+
+/// The value of a [`total_key`] (the flip is its own inverse).
+fn from_total_key(k: i64) -> f64 {
+    f64::from_bits((k ^ ((((k >> 63) as u64) >> 1) as i64)) as u64)
 }
 
 /// A regular subsample of a map: every pixel, or every third pixel of every third row above
@@ -94,4 +110,56 @@ fn subsample(v: &[f32], w: usize, h: usize) -> Vec<f32> {
 #[inline(never)]
 pub(super) fn map_stats(v: &[f32], w: usize, h: usize) -> (f64, f64) {
     robust_stats(&subsample(v, w, h))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::median_of;
+
+    /// `median_of` by integer keys picks the bits `select_nth_unstable_by(f64::total_cmp)`
+    /// picks: odd and even counts, negatives, both zeros, repeats, infinities and NaN.
+    #[test]
+    fn median_by_keys_is_total_cmp_s_median() {
+        let reference = |v: &[f64]| -> f64 {
+            let mut v = v.to_vec();
+            let n = v.len();
+            let (lower, mid, _) = v.select_nth_unstable_by(n / 2, f64::total_cmp);
+            let mid = *mid;
+            if n % 2 == 1 {
+                mid
+            } else {
+                0.5 * (lower.iter().copied().max_by(f64::total_cmp).unwrap() + mid)
+            }
+        };
+        let mut state = 7u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            state >> 11
+        };
+        let special = [
+            0.0,
+            -0.0,
+            1.5,
+            -1.5,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            -f64::NAN,
+        ];
+        for n in 1..60 {
+            for _ in 0..20 {
+                let v: Vec<f64> = (0..n)
+                    .map(|_| match next() % 5 {
+                        0 => special[(next() % 8) as usize],
+                        1 => (next() % 7) as f64 - 3.0,
+                        _ => (next() as f64 / (1u64 << 53) as f64 - 0.5) * 1e3,
+                    })
+                    .collect();
+                let got = median_of(&mut v.clone());
+                assert_eq!(got.to_bits(), reference(&v).to_bits(), "{v:?}");
+            }
+        }
+    }
 }
