@@ -281,8 +281,7 @@ pub(super) fn measured_at(
                         .sum();
                 }
             }
-            let mut v = sums.clone();
-            let med = median_of(&mut v);
+            let med = median_of(&mut sums);
             let mut dev: Vec<f64> = sums.iter().map(|s| (s - med).abs()).collect();
             let sd = 1.4826 * median_of(&mut dev);
             ratio.push((sd / model[l]).max(1.0));
