@@ -131,7 +131,7 @@ pub(super) fn gap(maps: &Maps, s: &Seg, points: bool) -> Option<Gap> {
     if n < 4 {
         return None;
     }
-    let level = median_of(&mut vals.clone());
+    let level = median_of(&vals);
     if level <= 0.0 {
         return None;
     }

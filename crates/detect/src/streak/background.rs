@@ -47,7 +47,7 @@ fn median_filter_mesh(m: &[f64], nx: usize, ny: usize) -> Vec<f64> {
                     buf.push(m[jj * nx + ii]);
                 }
             }
-            out[j * nx + i] = median_of(&mut buf);
+            out[j * nx + i] = median_of(&buf);
         }
     }
     out

@@ -38,7 +38,7 @@ fn survives(maps: &Maps, s: &Seg, others: &[(Point, Point)]) -> bool {
     let (ux, uy) = s.dir();
     let (nx, ny) = (-uy, ux);
     let taps = maps.contrast_taps();
-    let mut vals: Vec<f64> = s
+    let vals: Vec<f64> = s
         .axis_points()
         .filter(|&q| {
             !others
@@ -51,5 +51,5 @@ fn survives(maps: &Maps, s: &Seg, others: &[(Point, Point)]) -> bool {
     if (n as f64) < maps.p.min_length || n == 0 {
         return false;
     }
-    median_of(&mut vals) * n as f64 / maps.contrast_sum_sd(&taps, s.theta, n) >= maps.p.min_snr
+    median_of(&vals) * n as f64 / maps.contrast_sum_sd(&taps, s.theta, n) >= maps.p.min_snr
 }

@@ -265,8 +265,8 @@ fn pieces(maps: &Maps, s: &Seg, ta: f64, tb: f64) -> Vec<(f64, f64, f64)> {
             .sum();
         pieces.push((start + 0.5 * piece, off, bright));
     }
-    let mut bright: Vec<f64> = pieces.iter().map(|p| p.2).collect();
-    let med = super::stats::median_of(&mut bright).max(1e-6);
+    let bright: Vec<f64> = pieces.iter().map(|p| p.2).collect();
+    let med = super::stats::median_of(&bright).max(1e-6);
     for p in &mut pieces {
         if p.2 < 0.3 * med {
             p.1 = f64::NAN;
@@ -295,11 +295,11 @@ fn pieces(maps: &Maps, s: &Seg, ta: f64, tb: f64) -> Vec<(f64, f64, f64)> {
 /// The pieces' brightness as a running median over as many pieces as bring its relative
 /// scatter (about the median `med`) down to `BRIGHTNESS_SCATTER`: one piece on a bright streak.
 fn smooth_brightness(pieces: &mut [(f64, f64, f64)], med: f64) {
-    let mut dev: Vec<f64> = pieces.iter().map(|p| (p.2 - med).abs()).collect();
+    let dev: Vec<f64> = pieces.iter().map(|p| (p.2 - med).abs()).collect();
     if dev.is_empty() {
         return;
     }
-    let scatter = 1.4826 * super::stats::median_of(&mut dev) / med;
+    let scatter = 1.4826 * super::stats::median_of(&dev) / med;
     let n = ((scatter / BRIGHTNESS_SCATTER).powi(2).ceil() as usize).clamp(1, pieces.len());
     if n == 1 {
         return;
@@ -307,8 +307,8 @@ fn smooth_brightness(pieces: &mut [(f64, f64, f64)], med: f64) {
     let half = n / 2;
     let bright: Vec<f64> = pieces.iter().map(|p| p.2).collect();
     for (i, p) in pieces.iter_mut().enumerate() {
-        let mut window = bright[i.saturating_sub(half)..(i + half + 1).min(bright.len())].to_vec();
-        p.2 = super::stats::median_of(&mut window);
+        let window = &bright[i.saturating_sub(half)..(i + half + 1).min(bright.len())];
+        p.2 = super::stats::median_of(window);
     }
 }
 
@@ -357,7 +357,7 @@ fn end(maps: &Maps, s: &Seg, fit: &Fit, sign: f64, (lo, hi): (f64, f64), beyond:
         return near;
     }
     let level = level / along.len() as f64;
-    let centre_in = super::stats::median_of(&mut along);
+    let centre_in = super::stats::median_of(&along);
     // Change point: the distance maximising the cumulative excess of the profile over
     // the level, outwards from inside the streak (robust to noise and to dips).
     let start = (near - SEARCH_IN_PX).max(0.5 * (near - far)).min(border);
@@ -411,11 +411,11 @@ fn goes_on(
         }
         if count > 0.0 { sum / count } else { 0.0 }
     };
-    let mut beside: Vec<f64> = BESIDE_SIGMAS
+    let beside: Vec<f64> = BESIDE_SIGMAS
         .flat_map(|k| [k as f64 * sz, -k as f64 * sz])
         .map(mean_along)
         .collect();
-    let mean = mean_along(0.0) - super::stats::median_of(&mut beside).max(0.0);
+    let mean = mean_along(0.0) - super::stats::median_of(&beside).max(0.0);
     let stretch = to + 0.5 * STEP_PX - from;
     let var = 2.0 * std::f64::consts::PI.sqrt() * sz / stretch;
     let lit = GOES_ON_SHARE * bright;

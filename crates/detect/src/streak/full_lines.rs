@@ -281,13 +281,13 @@ fn add_lanes_at(grid: &Grid, s: &Shear, sum: &mut [f32], steps: &mut [i32]) {
 /// 1; the smoothing's correlation and what lies along this direction (a residual of star
 /// trails) more. Never below the white-noise value; infinite (nothing significant) where too
 /// few lines are long enough to measure it.
-fn spread(mut t: Vec<f64>) -> f64 {
+fn spread(t: Vec<f64>) -> f64 {
     if t.len() < 16 {
         return f64::INFINITY;
     }
-    let m = median_of(&mut t);
-    let mut dev: Vec<f64> = t.iter().map(|v| (v - m).abs()).collect();
-    (1.4826 * median_of(&mut dev)).max(1.0)
+    let m = median_of(&t);
+    let dev: Vec<f64> = t.iter().map(|v| (v - m).abs()).collect();
+    (1.4826 * median_of(&dev)).max(1.0)
 }
 
 /// The bins beside a line of `width` bins from `r` (of `bins`), `SIDE` away.

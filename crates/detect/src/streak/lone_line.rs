@@ -89,7 +89,7 @@ pub(super) fn trail_length(along: &[&Candidate]) -> Option<f64> {
         return None;
     }
     Some(median_of(
-        &mut along.iter().map(|c| c.length_px).collect::<Vec<f64>>(),
+        &along.iter().map(|c| c.length_px).collect::<Vec<f64>>(),
     ))
 }
 
@@ -121,7 +121,7 @@ impl Seams {
                 && e[1] <= h as f64 - EDGE_PX
         });
         let prof = profile(c, z, w, h);
-        let level = median_of(&mut prof.clone());
+        let level = median_of(&prof);
         let (low, high) = pieces(&prof, trail_px, level);
         let ratio = c.length_px / trail_px;
         let crossed = match crossing(&prof, trail_px) {
@@ -130,7 +130,7 @@ impl Seams {
                 let pad = (j - i) / 4;
                 let (i, j) = (i.saturating_sub(pad), (j + pad).min(prof.len()));
                 let rest: Vec<f64> = prof[..i].iter().chain(&prof[j..]).copied().collect();
-                pieces(&rest, trail_px, median_of(&mut rest.clone()))
+                pieces(&rest, trail_px, median_of(&rest))
             }
             _ => (low, high),
         };
@@ -231,9 +231,7 @@ fn pieces(prof: &[f64], trail_px: f64, level: f64) -> (f64, f64) {
     }
     let k = ((prof.len() as f64 / (0.5 * trail_px)).round() as usize).clamp(2, prof.len());
     (0..k)
-        .map(|i| {
-            median_of(&mut prof[i * prof.len() / k..(i + 1) * prof.len() / k].to_vec()) / level
-        })
+        .map(|i| median_of(&prof[i * prof.len() / k..(i + 1) * prof.len() / k]) / level)
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), m| {
             (lo.min(m), hi.max(m))
         })

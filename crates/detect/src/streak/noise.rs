@@ -281,9 +281,9 @@ pub(super) fn measured_at(
                         .sum();
                 }
             }
-            let med = median_of(&mut sums);
-            let mut dev: Vec<f64> = sums.iter().map(|s| (s - med).abs()).collect();
-            let sd = 1.4826 * median_of(&mut dev);
+            let med = median_of(&sums);
+            let dev: Vec<f64> = sums.iter().map(|s| (s - med).abs()).collect();
+            let sd = 1.4826 * median_of(&dev);
             ratio.push((sd / model[l]).max(1.0));
         }
     }

@@ -190,8 +190,8 @@ pub(super) fn own_trails(z: &[f32], w: usize, h: usize) -> OwnTrails {
         whole = members.iter().map(|f| f.length).collect();
     }
     whole.sort_by(f64::total_cmp);
-    let med = |v: &mut Vec<f64>| median_of(v);
-    let spread_deg = med(&mut members
+    let med = |v: Vec<f64>| median_of(&v);
+    let spread_deg = med(members
         .iter()
         .map(|f| angle_diff_deg(f.angle_deg, angle_deg))
         .collect());
@@ -204,8 +204,8 @@ pub(super) fn own_trails(z: &[f32], w: usize, h: usize) -> OwnTrails {
     OwnTrails::Common(TrailModel {
         angle_deg,
         length_px: whole[(3 * whole.len()) / 4],
-        width_px: Some(med(&mut members.iter().map(|f| f.width).collect())),
-        level_sigma: Some(med(&mut members.iter().map(|f| f.level).collect())),
+        width_px: Some(med(members.iter().map(|f| f.width).collect())),
+        level_sigma: Some(med(members.iter().map(|f| f.level).collect())),
         count: best,
         lines: lines.len(),
         share: best as f64 / lines.len() as f64,
@@ -251,7 +251,7 @@ pub(super) fn from_lines(found: &[Candidate], psf_sigma: f64) -> Option<TrailMod
     };
     m.settle(found);
     m.spread_deg = median_of(
-        &mut members
+        &members
             .iter()
             .map(|c| angle_diff_deg(c.orientation_deg, m.angle_deg))
             .collect::<Vec<f64>>(),

@@ -51,11 +51,11 @@ pub(super) fn reach(maps: &Maps, s: &Seg) -> Seg {
     let (ux, uy) = s.dir();
     let (nx, ny) = (-uy, ux);
     // The streak's level: the median along it (its ends stopped where trails hide it).
-    let mut along: Vec<f64> = s
+    let along: Vec<f64> = s
         .axis_points()
         .map(|(x, y)| maps.cross_mean(x, y, nx, ny))
         .collect();
-    let level = median_of(&mut along);
+    let level = median_of(&along);
     if level <= 0.0 {
         return *s;
     }
@@ -124,8 +124,8 @@ fn follow(maps: &Maps, e: Point, u: (f64, f64), level: f64) -> Point {
             );
         // Hidden where the trails hide any line the streak may take (whole pixels apart).
         let hidden = offsets.step_by((1.0 / ACROSS_STEP_PX) as usize).any(|o| {
-            let mut removed: Vec<f64> = (0..n).map(|k| removed_at(maps, at(o, k))).collect();
-            median_of(&mut removed) >= HIDDEN_SHARE * level
+            let removed: Vec<f64> = (0..n).map(|k| removed_at(maps, at(o, k))).collect();
+            median_of(&removed) >= HIDDEN_SHARE * level
         });
         // A seen piece's gain is read on the line the streak is followed along, not on the
         // best of the offsets searched, which noise alone lifts: on the original

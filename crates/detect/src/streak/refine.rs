@@ -185,11 +185,11 @@ pub(super) fn refine(maps: &Maps, seed: &Seed) -> Option<Seg> {
     let inner = (half - seed.shrink).max(1.0);
     let ia = (-inner).ceil().max(ta as f64) as i64;
     let ib = inner.floor().min(tb as f64) as i64;
-    let mut vals: Vec<f64> = (ia..=ib).map(at).collect();
+    let vals: Vec<f64> = (ia..=ib).map(at).collect();
     if vals.is_empty() {
         return None;
     }
-    let level = median_of(&mut vals);
+    let level = median_of(&vals);
     if level <= 0.0 {
         return None;
     }
@@ -200,7 +200,7 @@ pub(super) fn refine(maps: &Maps, seed: &Seed) -> Option<Seg> {
     // Robust SNR: the median contrast over the segment times its sample count, so that a
     // bright star on the axis does not make a streak, nor a raised patch of background.
     // (A contrast profile holds these samples already.)
-    let mut seg_vals: Vec<f64> = (s..=e)
+    let seg_vals: Vec<f64> = (s..=e)
         .map(|t| {
             if seed.contrast {
                 at(t)
@@ -211,7 +211,7 @@ pub(super) fn refine(maps: &Maps, seed: &Seed) -> Option<Seg> {
         .collect();
     let n = seg_vals.len();
     let (level, sd) = match seed.regime {
-        Regime::Resolved => (median_of(&mut seg_vals), maps.contrast_sum_sd(&taps, th, n)),
+        Regime::Resolved => (median_of(&seg_vals), maps.contrast_sum_sd(&taps, th, n)),
         // Each sample of a full-line streak is far below the noise, where the median keeps
         // only 0.8 of the mean's SNR (sqrt(2 / pi)); the mean of the samples clipped to
         // `SAMPLE_CLIP` of their noise keeps nearly all of it, and a star on the axis adds
@@ -302,9 +302,9 @@ fn parallels_sd(
         return modelled;
     }
     // The spread's median deviation does not depend on the order `median_of` leaves.
-    let m = median_of(&mut t);
-    let mut dev: Vec<f64> = t.iter().map(|v| (v - m).abs()).collect();
-    let spread = 1.4826 * median_of(&mut dev);
+    let m = median_of(&t);
+    let dev: Vec<f64> = t.iter().map(|v| (v - m).abs()).collect();
+    let spread = 1.4826 * median_of(&dev);
     white(n) * spread.clamp(1.0, ratio)
 }
 

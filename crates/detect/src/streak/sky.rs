@@ -159,8 +159,8 @@ impl Sky {
                         return None;
                     }
                 }
-                let mut vals: Vec<f64> = samples.iter().map(|s| s.2).collect();
-                let level = median_of(&mut vals);
+                let vals: Vec<f64> = samples.iter().map(|s| s.2).collect();
+                let level = median_of(&vals);
                 Some((t, samples, level))
             })
             .collect();
@@ -185,14 +185,14 @@ impl Sky {
                     let big = (3.0 * reach).ceil().min(MAX_REACH_PX) as i64;
                     let prof: Vec<f64> = (-big..=big)
                         .map(|d| {
-                            let mut v: Vec<f64> = samples
+                            let v: Vec<f64> = samples
                                 .iter()
                                 .map(|q| {
                                     let (x, y) = (q.0 - d as f64 * uy, q.1 + d as f64 * ux);
                                     bilinear(z, w, h, x, y) as f64
                                 })
                                 .collect();
-                            median_of(&mut v)
+                            median_of(&v)
                         })
                         .collect();
                     let prof = symmetric(&prof);
@@ -384,7 +384,7 @@ impl Sky {
                     return 0.0;
                 }
                 let stride = (t.samples.len() / 256).max(1);
-                let mut v: Vec<f64> = t
+                let v: Vec<f64> = t
                     .samples
                     .iter()
                     .step_by(stride)
@@ -399,7 +399,7 @@ impl Sky {
                     // bounds (`catalogue_bounds`: capped where the map shows more).
                     t.level.max(0.0)
                 } else {
-                    let level = median_of(&mut v).max(0.0);
+                    let level = median_of(&v).max(0.0);
                     t.cap.map_or(level, |c| level.min(c.max(0.0)))
                 }
             })
@@ -428,7 +428,7 @@ impl Sky {
         if excess.is_empty() {
             return true;
         }
-        median_of(&mut excess) <= slack_sigma
+        median_of(&excess) <= slack_sigma
     }
 }
 

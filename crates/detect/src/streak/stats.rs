@@ -65,8 +65,8 @@ impl Hist {
 /// takes hundreds of medians of 4096 sums per image). The selection orders integer keys that
 /// order as `f64::total_cmp` orders the values (`total_cmp` makes that key of both values at
 /// every comparison; here each is made once), so the values picked are `total_cmp`'s, bit for
-/// bit. (`v` is left as it was; callers take it `&mut` from when it was reordered.)
-pub(super) fn median_of(v: &mut [f64]) -> f64 {
+/// bit; `v` is left as it is.
+pub(super) fn median_of(v: &[f64]) -> f64 {
     let n = v.len();
     let mut keys: Vec<i64> = v.iter().map(|&x| total_key(x)).collect();
     let (lower, mid, _) = keys.select_nth_unstable(n / 2);
@@ -157,7 +157,7 @@ mod tests {
                         _ => (next() as f64 / (1u64 << 53) as f64 - 0.5) * 1e3,
                     })
                     .collect();
-                let got = median_of(&mut v.clone());
+                let got = median_of(&v);
                 assert_eq!(got.to_bits(), reference(&v).to_bits(), "{v:?}");
             }
         }

@@ -127,8 +127,8 @@ fn unit_noise_map_removes_a_gradient_and_has_unit_noise() {
         let b = bg[64 * W + x] as f64;
         assert!((b - (50.0 + 0.5 * x as f64)).abs() < 2.0, "x {x}: {b}");
     }
-    let mut v: Vec<f64> = z.iter().map(|&v| v as f64).collect();
-    let med = super::stats::median_of(&mut v);
+    let v: Vec<f64> = z.iter().map(|&v| v as f64).collect();
+    let med = super::stats::median_of(&v);
     let sd = super::stats::map_stats(&z, W, H).1;
     assert!(med.abs() < 0.2 && (sd - 1.0).abs() < 0.05, "{med} {sd}");
 }

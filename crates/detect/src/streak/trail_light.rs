@@ -121,12 +121,12 @@ fn median_across(
     n: (f64, f64),
     d: f64,
 ) -> f64 {
-    let mut v: Vec<f64> = pts
+    let v: Vec<f64> = pts
         .iter()
         .step_by(stride)
         .map(|q| bilinear(z, w, h, q.0 + d * n.0, q.1 + d * n.1) as f64)
         .collect();
-    median_of(&mut v)
+    median_of(&v)
 }
 
 /// `t`'s nodes each moved across the trail by `offset(time)` pixels (along (-u_y, u_x), u its

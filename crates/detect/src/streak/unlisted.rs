@@ -173,7 +173,7 @@ impl TrailShape {
 /// its detected ends inside the frame, went on at its level for another 480 px to the frame's
 /// edge. A debris streak ends where its light does.
 fn goes_on(c: &Candidate, z: &[f32], w: usize, h: usize) -> bool {
-    let level = median_of(&mut profile(c, z, w, h));
+    let level = median_of(&profile(c, z, w, h));
     if level.is_nan() || level <= 0.0 {
         return false;
     }
@@ -187,8 +187,8 @@ fn goes_on(c: &Candidate, z: &[f32], w: usize, h: usize) -> bool {
         if !inside(far) {
             return false;
         }
-        let mut beyond = profile_at(end, far, 0.0, 0.0, z, w, h);
-        !beyond.is_empty() && median_of(&mut beyond) >= GOES_ON * level
+        let beyond = profile_at(end, far, 0.0, 0.0, z, w, h);
+        !beyond.is_empty() && median_of(&beyond) >= GOES_ON * level
     })
 }
 
