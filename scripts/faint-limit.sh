@@ -2,7 +2,8 @@
 # The streak detector's faint limit (issue #44): run the faint-limit campaigns of
 # results/campaigns/ (a results test set with dim debris and no SNR gate; 1-3 min each on 2
 # cores) and write, from each, the recall against the streak's integrated matched-filter SNR,
-# its 50% point and the precision (scripts/faint_limit.py):
+# its 50% point and the precision (scripts/faint_limit.py): the streak detector's in the folder,
+# YOLO's (the row's model, run beside it) in its yolo/:
 #   faint-limit-survey                -> results/faint-limit/ (survey, synthetic noise)
 #   faint-limit-fixed                 -> results/faint-limit-fixed/ (point stars)
 #   faint-limit-survey-semisynthetic  -> results/faint-limit-survey-semisynthetic/ (real noise)
@@ -23,6 +24,7 @@ for name in "${names[@]}"; do
     out="$RUNS/$name"
     "$SOIG" run "results/campaigns/$name.toml" --out "$out" --quiet
     python3 scripts/faint_limit.py "$out" "$dest"
+    python3 scripts/faint_limit.py "$out" "$dest/yolo" --detector yolo
     cp "$out"/report/report.md "$dest"/report.md
     "$SOIG" verify "$out" | sed -n 's/.*digest //p' > "$dest"/digest.txt
 done

@@ -183,15 +183,15 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/faint-limit-fixed.toml",
-        "d00d0984495f304902a06b0cdcd7cff87b8c04b70a2fc1d1185804f6117d47e0",
+        "12a76498fadb684109ab7c416a41df8811e0763f3d2f304fb0378d7f95270cb6",
     ),
     (
         "results/campaigns/faint-limit-survey-semisynthetic.toml",
-        "73f034abbd38676da59975ccfc88397cae6e68ca3e4229e45c408bf874c6107f",
+        "aa38b5972d75f80a5c9ce81554f3f239cf2612f6342abce480b2866c2393e464",
     ),
     (
         "results/campaigns/faint-limit-survey.toml",
-        "4d7fd11f65a452cc07f36e9dfa64927b44beda5d86e04f5ef8de472fe3df538d",
+        "b0718f5a58db3c86c8306cd058209d7398810426f09b5e9c5d5673e15152b48a",
     ),
     (
         "results/campaigns/results-fixed-original-semisynthetic.toml",
