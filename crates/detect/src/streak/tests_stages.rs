@@ -2,7 +2,7 @@
 //! promises, on input where the answer is known.
 
 use super::Candidate;
-use super::accept::{accept, gap};
+use super::accept::{accept, dip, gap};
 use super::explain::{Reason, Seeds};
 use super::explain_away::explain_away;
 use super::flatten::flatten;
@@ -352,6 +352,60 @@ fn gap_between_star_blobs_in_a_row() {
     assert_eq!(gap(&even.maps(), &s, true), None);
     // A long segment is tested in its chunks only.
     assert_eq!(gap(&world.maps(), &Seg { length: 65.0, ..s }, true), None);
+}
+
+/// Step 7, the dip test where stars are points: two round blobs 10 px apart (their dip at
+/// about 0.45 of their peaks, but above half the pair's median level, which the dip itself
+/// pulls down) are a gap; a streak whose brightness doubles along it, with no dip, is none.
+#[test]
+fn dip_between_two_close_star_blobs() {
+    let blob = |z: &mut [f32], cx: f64, amp: f64| {
+        for y in 0..H {
+            for x in 0..W {
+                let d2 = (x as f64 - cx).powi(2) + (y as f64 - 64.0).powi(2);
+                z[y * W + x] += (amp * (-d2 / (2.0 * 9.0)).exp()) as f32;
+            }
+        }
+    };
+    let mut z = vec![0f32; W * H];
+    blob(&mut z, 59.0, 7.0);
+    blob(&mut z, 69.0, 7.0);
+    let pair = World::new(z);
+    let s = refined(&World::new(streak_map(3.0, 64.0, 30, 90)).maps()).unwrap();
+    let s = Seg {
+        cx: 64.0,
+        cy: 64.0,
+        theta: 0.0,
+        length: 24.0,
+        snr: 10.0,
+        ..s
+    };
+    let g = gap(&pair.maps(), &s, true).expect("a dip between the blobs");
+    assert!(g.level > 0.3 && g.level < 0.55, "{g:?}");
+    // A streak from x 44 to 84 brightening twofold along it.
+    let mut z = vec![0f32; W * H];
+    for x in 44..84 {
+        let amp = 3.0 + 3.0 * (x - 44) as f64 / 39.0;
+        for y in 0..H {
+            let d2 = (y as f64 - 64.0).powi(2);
+            z[y * W + x] += (amp * (-d2 / (2.0 * SE * SE)).exp()) as f32;
+        }
+    }
+    assert_eq!(gap(&World::new(z).maps(), &s, true), None);
+    // The dip alone, on profiles: two bumps at 0.37 of their peaks between them are a gap where
+    // the dip is significant, not where the noise is as large; an even profile with a ripple
+    // has none.
+    let bumps: Vec<f64> = (0..30)
+        .map(|i| {
+            let b = |c: f64| 8.0 * (-(i as f64 - c).powi(2) / 18.0).exp();
+            b(9.0) + b(20.0)
+        })
+        .collect();
+    let g = dip(&bumps, 0.5).expect("a dip");
+    assert!(g.level < 0.55 && g.sigma > 2.5, "{g:?}");
+    assert_eq!(dip(&bumps, 5.0), None);
+    let even: Vec<f64> = (0..30).map(|i| 6.0 + 0.3 * (i as f64).sin()).collect();
+    assert_eq!(dip(&even, 0.5), None);
 }
 
 /// Step 7: of one streak found twice, the better scoring is kept and the other explained away.
