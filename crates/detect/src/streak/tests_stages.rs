@@ -318,33 +318,42 @@ fn gap_against_the_quieter_side_band() {
     assert!(gap(&world.maps(), &s, false).is_some());
 }
 
+/// A round star blob of peak `amp` at (`cx`, 64), sigma 3 px (a jitter-smeared star), added
+/// into the map `z`.
+fn blob(z: &mut [f32], cx: f64, amp: f64) {
+    for y in 0..H {
+        for x in 0..W {
+            let d2 = (x as f64 - cx).powi(2) + (y as f64 - 64.0).powi(2);
+            z[y * W + x] += (amp * (-d2 / (2.0 * 9.0)).exp()) as f32;
+        }
+    }
+}
+
+/// A segment of `length` along y = 64 centred at x = 64, of SNR 10 (a refined streak's other
+/// measurements).
+fn across_the_middle(length: f64) -> Seg {
+    let s = refined(&World::new(streak_map(3.0, 64.0, 30, 90)).maps()).unwrap();
+    Seg {
+        cx: 64.0,
+        cy: 64.0,
+        theta: 0.0,
+        length,
+        snr: 10.0,
+        ..s
+    }
+}
+
 /// Step 7, the gap test where stars are points: three round blobs 14 px apart in a row (a
 /// short "streak" of SNR 10) have dips between them that the chunks split, and only the test
 /// at every window position finds; a streak of the same length and level has none.
 #[test]
 fn gap_between_star_blobs_in_a_row() {
-    let blob = |z: &mut [f32], cx: f64, amp: f64| {
-        for y in 0..H {
-            for x in 0..W {
-                let d2 = (x as f64 - cx).powi(2) + (y as f64 - 64.0).powi(2);
-                z[y * W + x] += (amp * (-d2 / (2.0 * 9.0)).exp()) as f32;
-            }
-        }
-    };
     let mut z = vec![0f32; W * H];
     for cx in [50.0, 64.0, 78.0] {
         blob(&mut z, cx, 7.0);
     }
     let world = World::new(z);
-    let s = refined(&World::new(streak_map(3.0, 64.0, 30, 90)).maps()).unwrap();
-    let s = Seg {
-        cx: 64.0,
-        cy: 64.0,
-        theta: 0.0,
-        length: 41.0,
-        snr: 10.0,
-        ..s
-    };
+    let s = across_the_middle(41.0);
     assert_eq!(gap(&world.maps(), &s, false), None);
     let g = gap(&world.maps(), &s, true).expect("a gap between the blobs");
     assert!(g.level < 0.5, "{g:?}");
@@ -359,27 +368,11 @@ fn gap_between_star_blobs_in_a_row() {
 /// pulls down) are a gap; a streak whose brightness doubles along it, with no dip, is none.
 #[test]
 fn dip_between_two_close_star_blobs() {
-    let blob = |z: &mut [f32], cx: f64, amp: f64| {
-        for y in 0..H {
-            for x in 0..W {
-                let d2 = (x as f64 - cx).powi(2) + (y as f64 - 64.0).powi(2);
-                z[y * W + x] += (amp * (-d2 / (2.0 * 9.0)).exp()) as f32;
-            }
-        }
-    };
     let mut z = vec![0f32; W * H];
     blob(&mut z, 59.0, 7.0);
     blob(&mut z, 69.0, 7.0);
     let pair = World::new(z);
-    let s = refined(&World::new(streak_map(3.0, 64.0, 30, 90)).maps()).unwrap();
-    let s = Seg {
-        cx: 64.0,
-        cy: 64.0,
-        theta: 0.0,
-        length: 24.0,
-        snr: 10.0,
-        ..s
-    };
+    let s = across_the_middle(24.0);
     let g = gap(&pair.maps(), &s, true).expect("a dip between the blobs");
     assert!(g.level > 0.3 && g.level < 0.55, "{g:?}");
     // A streak from x 44 to 84 brightening twofold along it.
