@@ -99,11 +99,8 @@ fn main() -> anyhow::Result<()> {
         if inside.is_empty() {
             continue;
         }
-        let med = |f: &dyn Fn(&(f64, f64, f64)) -> f64| {
-            let mut v: Vec<f64> = inside.iter().map(|r| f(r)).collect();
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
-        };
+        let med =
+            |f: &dyn Fn(&(f64, f64, f64)) -> f64| median(inside.iter().map(|r| f(r)).collect());
         eprintln!(
             "{:>10} {:>7}  {:>10.3}  {:>9.3}  {:>8.3}",
             if hi < 1e9 {
@@ -162,9 +159,19 @@ fn template_snr(z: &[f64], w: usize, h: usize, [a, b]: [[f64; 2]; 2], sigma: f64
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let len2 = (dx * dx + dy * dy).max(1e-12);
     let reach = REACH_SIGMA * sigma;
+    // Only the pixels within `reach` of the segment's box can be within `reach` of it.
+    let span = |lo: f64, hi: f64, n: usize| {
+        let from = (lo - reach).floor().max(0.0) as usize;
+        let to = ((hi + reach).ceil().max(-1.0) + 1.0).min(n as f64) as usize;
+        from..to.max(from)
+    };
+    let (xs, ys) = (
+        span(a[0].min(b[0]), a[0].max(b[0]), w),
+        span(a[1].min(b[1]), a[1].max(b[1]), h),
+    );
     let (mut sum, mut norm) = (0.0, 0.0);
-    for y in 0..h {
-        for x in 0..w {
+    for y in ys {
+        for x in xs.clone() {
             let (px, py) = (x as f64 - a[0], y as f64 - a[1]);
             let u = ((px * dx + py * dy) / len2).clamp(0.0, 1.0);
             let d2 = (px - u * dx).powi(2) + (py - u * dy).powi(2);
