@@ -39,6 +39,14 @@ const MAX_LINES: usize = 16;
 const SIDE: (usize, usize) = (3, 8);
 /// The best segment along an examined line seeds step 5 when it is this many sigma.
 const SEGMENT_SIGMA: f64 = 5.0;
+/// A candidate of this stage at least `MIN_LENGTH_PX` long is scored as one of this much more
+/// SNR (`output::confidence`, whose calibration is the other stages'): its noise is the best of
+/// far fewer tests (the lines across the frame and a stretch of each, not every segment of
+/// every line), so noise reaches a lower SNR here. Measured on the faint development set (`bash
+/// scripts/faint-limit-dev.sh 9402 150`, streaks' ends carried, `refine::CARRIED`): found 64 ->
+/// 75 with 2 false boxes both ways at 2, 78 with 6 at 2.5; shorter candidates given it made one
+/// false box on each of two survey development sets (seeds 777 and 778).
+pub(super) const CONFIDENCE_CREDIT: f64 = 2.0;
 
 /// Seeds of the lines through the `w` x `h` clipped map `zc` whose sum stands out, each with
 /// how far beyond its extent to look for its ends. Lines within `skip.1` degrees of `skip.0`

@@ -2,18 +2,19 @@
 //! promises, on input where the answer is known.
 
 use super::Candidate;
-use super::accept::{accept, dip, gap};
+use super::accept::{accept, dip, gap, score};
 use super::explain::{Reason, Seeds};
 use super::explain_away::explain_away;
 use super::flatten::flatten;
 use super::fragments::fragments;
+use super::full_lines::{CONFIDENCE_CREDIT, MIN_LENGTH_PX};
 use super::maps::Maps;
 use super::merge::merge;
 use super::noise::LineNoise;
-use super::output::candidate;
+use super::output::{candidate, confidence};
 use super::params::{Sanitized, StreakParams};
 use super::reach::reach;
-use super::refine::{Regime, Seed, refine};
+use super::refine::{Regime, Seed, best_stretch, carried, refine};
 use super::seeds::{line_noise, local_seeds};
 use super::segment::Seg;
 use super::smooth::{gaussian_kernel, smooth};
@@ -615,4 +616,54 @@ fn a_dimmer_far_part_carries_the_streak_to_the_border() {
     let pedestal = World::new(z);
     let c = candidate(&pedestal.maps(), &bright_part, 0.9).detection;
     assert!((c.x2 - (end as f64 + 1.0)).abs() <= 2.0, "{c:?}");
+}
+
+/// Step 5 for a full-line seed (`Regime::SubNoise`): the most significant stretch of a profile
+/// holds the bright part of a streak whose rest is dimmer (a tumbling object's dim phase);
+/// its end is carried on to the profile's end where the rest holds more than
+/// `refine::CARRIED` (0.25) of the stretch's level, and not where it holds less, nor onto
+/// the empty start.
+#[test]
+fn a_sub_noise_stretch_is_carried_on_by_its_dimmer_rest() {
+    let ta = -250;
+    let profile = |rest: f64| -> Vec<f64> {
+        (0..600)
+            .map(|i| match i {
+                0..100 => 0.0,
+                100..300 => 1.0,
+                _ => rest,
+            })
+            .collect()
+    };
+    let dimmer = profile(0.3);
+    let stretch = best_stretch(&dimmer, ta, 100).unwrap();
+    assert_eq!(stretch, (ta + 100, ta + 299));
+    assert_eq!(carried(&dimmer, ta, stretch), (ta + 100, ta + 599));
+    let faint = profile(0.2);
+    let stretch = best_stretch(&faint, ta, 100).unwrap();
+    assert_eq!(carried(&faint, ta, stretch), stretch);
+}
+
+/// Step 7's score: a full-line candidate at least `MIN_LENGTH_PX` long scores 0.5 in a
+/// megapixel at `CONFIDENCE_CREDIT` less SNR than `confidence_snr`; a shorter one, or another
+/// stage's, scores as its SNR alone says.
+#[test]
+fn a_long_full_line_candidate_is_scored_with_its_credit() {
+    let p = params();
+    let snr = p.confidence_snr - CONFIDENCE_CREDIT;
+    let long = Seg {
+        length: MIN_LENGTH_PX,
+        elongation: 100.0,
+        ..across(snr)
+    };
+    let short = Seg {
+        length: MIN_LENGTH_PX - 1.0,
+        ..long
+    };
+    let mp = 1_048_576.0;
+    assert!((score(&long, Seeds::FullLine, mp, &p) - 0.5).abs() < 1e-6);
+    let plain = confidence(snr, long.elongation, mp, &p);
+    assert!(plain < 0.2, "{plain}");
+    assert_eq!(score(&long, Seeds::Local, mp, &p), plain);
+    assert_eq!(score(&short, Seeds::FullLine, mp, &p), plain);
 }
