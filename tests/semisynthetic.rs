@@ -7,7 +7,7 @@
 #![allow(clippy::disallowed_methods)]
 
 use soig::background::RealFrame;
-use soig::imaging::robust_stats;
+use soig::imaging::{box_mean, robust_stats};
 use soig::rng::{PixelPurpose, pixel_stream};
 
 mod common;
@@ -151,29 +151,8 @@ const CALIBRATED: &str = "NEOS_SCI_2024239174545_cord.fits";
 /// An image less its local level: each pixel minus the mean of the 31 x 31 box around it (a
 /// trail 2-4 px wide keeps ~90% of its signal; a frame's gradient goes).
 fn high_pass(img: &[f32], w: usize, h: usize) -> Vec<f32> {
-    let r = 15;
-    let mut sat = vec![0.0f64; (w + 1) * (h + 1)];
-    for y in 0..h {
-        let mut row = 0.0;
-        for x in 0..w {
-            row += img[y * w + x] as f64;
-            sat[(y + 1) * (w + 1) + x + 1] = sat[y * (w + 1) + x + 1] + row;
-        }
-    }
-    (0..w * h)
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            let (x0, x1, y0, y1) = (
-                x.saturating_sub(r),
-                (x + r + 1).min(w),
-                y.saturating_sub(r),
-                (y + r + 1).min(h),
-            );
-            let s = sat[y1 * (w + 1) + x1] - sat[y0 * (w + 1) + x1] - sat[y1 * (w + 1) + x0]
-                + sat[y0 * (w + 1) + x0];
-            (img[i] as f64 - s / ((x1 - x0) * (y1 - y0)) as f64) as f32
-        })
-        .collect()
+    let mean = box_mean(img, w, h, 15);
+    img.iter().zip(mean).map(|(v, m)| v - m).collect()
 }
 
 /// Side of the tiles in which `line_energy` looks for straight pieces of a trail: an arc of

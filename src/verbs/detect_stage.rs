@@ -348,13 +348,15 @@ fn yolo_run(
         name: "yolo".into(),
         description: format!(
             "YOLOv8 {} through ONNX Runtime, conf {}, NMS IoU {}",
-            d.model_name
-                .as_deref()
-                .unwrap_or("train/model.onnx (trained by this run)"),
+            d.model
+                .as_ref()
+                .map_or("train/model.onnx (trained by this run)", |m| m
+                    .name
+                    .as_str()),
             d.conf,
             d.yolo.iou
         ),
-        model_sha256: match &d.model_sha256 {
+        model_sha256: match d.model.as_ref().and_then(|m| m.sha256.as_ref()) {
             Some(sha) => Some(sha.clone()),
             None => Some(crate::hash::sha256_file(path)?.0),
         },

@@ -138,8 +138,8 @@ pub(crate) fn run_plan(
     } else {
         None
     };
-    if let (true, Some(path)) = (plan.stages.detect, &plan.detect.model) {
-        YoloDetector::load(path, plan.detect.yolo)
+    if let (true, Some(model)) = (plan.stages.detect, &plan.detect.model) {
+        YoloDetector::load(&model.path, plan.detect.yolo)
             .map_err(|e| plan.error_at("detect.model", e.to_string()))?;
     }
     let n = plan.images;
@@ -638,7 +638,7 @@ pub(crate) fn finish(
         // A train stage's model, else the campaign's (validation allows one, not both).
         let model = match &trained {
             Some(t) => t.model.clone(),
-            None => plan.detect.model.clone(),
+            None => plan.detect.model.as_ref().map(|m| m.path.clone()),
         };
         detect_and_report(
             plan,

@@ -96,17 +96,24 @@ pub struct DetectPlan {
     /// Survey pointing told of the stars: each image's predicted star trails (`star_trails`).
     pub star_trails: bool,
     pub yolo: YoloParams,
-    /// The campaign's model, resolved against its folder (a train stage's replaces it).
-    pub model: Option<PathBuf>,
-    /// The model as the campaign names it, for the report.
-    pub model_name: Option<String>,
-    pub model_sha256: Option<String>,
+    /// The campaign's model (`detect.model`); a train stage's replaces it.
+    pub model: Option<CampaignModel>,
     /// The report's confidence threshold.
     pub conf: f64,
     /// The report's row kind: pointing, frame and background.
     pub row_kind: String,
     /// Observations from the detections (`artifacts.astrometry`).
     pub astrometry: Option<AstrometryPlan>,
+}
+
+/// The model a campaign names (`detect.model`).
+pub struct CampaignModel {
+    /// Resolved against the campaign's folder.
+    pub path: PathBuf,
+    /// As the campaign names it, for the report.
+    pub name: String,
+    /// `detect.model_sha256`, filled in when the campaign is resolved.
+    pub sha256: Option<String>,
 }
 
 /// What the astrometric report needs of the campaign.
@@ -172,9 +179,11 @@ impl<'c> Plan<'c> {
             told,
             star_trails: told && c.pointing.mode == PointingMode::Survey,
             yolo: yolo_params(d),
-            model: d.model.as_ref().map(|m| campaign.base_dir.join(m)),
-            model_name: d.model.clone(),
-            model_sha256: d.model_sha256.clone(),
+            model: d.model.as_ref().map(|m| CampaignModel {
+                path: campaign.base_dir.join(m),
+                name: m.clone(),
+                sha256: d.model_sha256.clone(),
+            }),
             conf: d.conf,
             row_kind: row_kind(c),
             astrometry,

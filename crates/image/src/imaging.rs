@@ -1,6 +1,6 @@
-//! Image-plane helpers shared across the crate: bilinear sampling between pixel centres and
-//! robust statistics (median and 1.4826 MAD sigma) of pixel values. Images are row-major `f32`
-//! slices with pixel centres at integer coordinates.
+//! Image-plane helpers shared across the crate: bilinear sampling between pixel centres, a box
+//! mean, and robust statistics (median and 1.4826 MAD sigma) of pixel values. Images are
+//! row-major `f32` slices with pixel centres at integer coordinates.
 
 /// Bilinear interpolation between pixel centres (as `cv2.warpAffine` with INTER_LINEAR), in
 /// single precision; a point beyond the outer pixel centres takes the edge value.
@@ -41,4 +41,29 @@ pub fn robust_stats(img: &[f32]) -> (f64, f64) {
     let mut dev: Vec<f32> = v.iter().map(|x| (x - median).abs()).collect();
     let mad = *dev.select_nth_unstable_by(mid, f32::total_cmp).1;
     (median as f64, 1.4826 * mad as f64)
+}
+
+/// The mean over a (2r+1)^2 box, the box clipped at the frame's edges (summed-area table).
+pub fn box_mean(v: &[f32], width: usize, height: usize, r: usize) -> Vec<f32> {
+    let mut sat = vec![0.0f64; (width + 1) * (height + 1)];
+    for y in 0..height {
+        let mut row = 0.0;
+        for x in 0..width {
+            row += v[y * width + x] as f64;
+            sat[(y + 1) * (width + 1) + x + 1] = sat[y * (width + 1) + x + 1] + row;
+        }
+    }
+    let mut out = Vec::with_capacity(v.len());
+    for y in 0..height {
+        let (y0, y1) = (y.saturating_sub(r), (y + r + 1).min(height));
+        for x in 0..width {
+            let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(width));
+            let s = sat[y1 * (width + 1) + x1]
+                - sat[y0 * (width + 1) + x1]
+                - sat[y1 * (width + 1) + x0]
+                + sat[y0 * (width + 1) + x0];
+            out.push((s / ((x1 - x0) * (y1 - y0)) as f64) as f32);
+        }
+    }
+    out
 }

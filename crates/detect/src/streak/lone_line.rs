@@ -308,8 +308,10 @@ pub(super) mod tests {
         ((a, row), (b, row), level)
     }
 
-    fn lone(c: &Candidate, trail_px: f64, z: &[f32], w: usize, h: usize) -> bool {
-        Seams::of(c, trail_px, z, w, h).lone()
+    /// The seams of the line along row 20 from `x0` to `x1`, beside trails `trail_px` long, on
+    /// a 400 x 40 map of `drawn`.
+    fn seams(drawn: &[Drawn], (x0, x1): (f64, f64), trail_px: f64) -> Seams {
+        Seams::of(&line(x0, x1, 20.0), trail_px, &map(400, 40, drawn), 400, 40)
     }
 
     pub(in crate::streak) fn line(x0: f64, x1: f64, row: f64) -> Candidate {
@@ -333,64 +335,43 @@ pub(super) mod tests {
 
     #[test]
     fn an_even_line_three_trails_long_is_lone() {
-        let z = map(400, 40, &[flat(50, 350, 20.0, 4.0)]);
-        assert!(lone(&line(50.0, 350.0, 20.0), 100.0, &z, 400, 40));
+        let even = [flat(50, 350, 20.0, 4.0)];
+        assert!(seams(&even, (50.0, 350.0), 100.0).lone());
         // Not when trails are as long as it (another length is the test).
-        assert!(!lone(&line(50.0, 350.0, 20.0), 200.0, &z, 400, 40));
+        assert!(!seams(&even, (50.0, 350.0), 200.0).lone());
         // Nor when it reaches the frame's edge (a trail cut by it), unless three trails long.
-        let z = map(400, 40, &[flat(0, 250, 20.0, 4.0)]);
-        assert!(!lone(&line(0.0, 250.0, 20.0), 100.0, &z, 400, 40));
-        let z = map(400, 40, &[flat(0, 300, 20.0, 4.0)]);
-        assert!(lone(&line(0.0, 300.0, 20.0), 100.0, &z, 400, 40));
+        assert!(!seams(&[flat(0, 250, 20.0, 4.0)], (0.0, 250.0), 100.0).lone());
+        assert!(seams(&[flat(0, 300, 20.0, 4.0)], (0.0, 300.0), 100.0).lone());
     }
 
     #[test]
     fn two_trails_end_to_end_are_not_lone() {
         // Of unequal brightness (a step at the seam).
-        let z = map(
-            400,
-            40,
-            &[flat(50, 150, 20.0, 6.0), flat(150, 250, 20.0, 3.0)],
-        );
-        assert!(!lone(&line(50.0, 250.0, 20.0), 100.0, &z, 400, 40));
+        let step = [flat(50, 150, 20.0, 6.0), flat(150, 250, 20.0, 3.0)];
+        assert!(!seams(&step, (50.0, 250.0), 100.0).lone());
         // Overlapping by a third of their length (a bump where they overlap).
-        let z = map(
-            400,
-            40,
-            &[flat(50, 150, 20.0, 4.0), flat(117, 217, 20.0, 4.0)],
-        );
-        assert!(!lone(&line(50.0, 217.0, 20.0), 100.0, &z, 400, 40));
+        let bump = [flat(50, 150, 20.0, 4.0), flat(117, 217, 20.0, 4.0)];
+        assert!(!seams(&bump, (50.0, 217.0), 100.0).lone());
         // With a gap between them.
-        let z = map(
-            400,
-            40,
-            &[flat(50, 150, 20.0, 4.0), flat(170, 270, 20.0, 4.0)],
-        );
-        assert!(!lone(&line(50.0, 270.0, 20.0), 100.0, &z, 400, 40));
+        let gap = [flat(50, 150, 20.0, 4.0), flat(170, 270, 20.0, 4.0)];
+        assert!(!seams(&gap, (50.0, 270.0), 100.0).lone());
         // An even line of the same extent is lone.
-        let z = map(400, 40, &[flat(50, 217, 20.0, 4.0)]);
-        assert!(lone(&line(50.0, 217.0, 20.0), 100.0, &z, 400, 40));
+        assert!(seams(&[flat(50, 217, 20.0, 4.0)], (50.0, 217.0), 100.0).lone());
     }
 
     #[test]
     fn two_slanted_trails_side_by_side_are_a_pair() {
         // Trails of 100 px at 4 degrees to the line through both (slope 0.07, 7 px across
         // over their length): each crosses the line's axis and leaves it.
-        let z = map(
-            400,
-            40,
-            &[
-                ((50, 16.5), (150, 23.5), 4.0),
-                ((120, 16.5), (220, 23.5), 4.0),
-            ],
-        );
-        assert!(Seams::of(&line(50.0, 220.0, 20.0), 100.0, &z, 400, 40).pair());
+        let slanted = [
+            ((50, 16.5), (150, 23.5), 4.0),
+            ((120, 16.5), (220, 23.5), 4.0),
+        ];
+        assert!(seams(&slanted, (50.0, 220.0), 100.0).pair());
         // Debris as long, evenly lit along it, is none.
-        let z = map(400, 40, &[flat(50, 220, 20.0, 6.0)]);
-        assert!(!Seams::of(&line(50.0, 220.0, 20.0), 100.0, &z, 400, 40).pair());
+        assert!(!seams(&[flat(50, 220, 20.0, 6.0)], (50.0, 220.0), 100.0).pair());
         // Nor when shorter than a trail (the two trails' fit is then one even line).
-        let z = map(400, 40, &[flat(50, 130, 20.0, 6.0)]);
-        assert!(!Seams::of(&line(50.0, 130.0, 20.0), 100.0, &z, 400, 40).pair());
+        assert!(!seams(&[flat(50, 130, 20.0, 6.0)], (50.0, 130.0), 100.0).pair());
     }
 
     #[test]

@@ -594,6 +594,18 @@ mod tests {
         }
     }
 
+    /// The sky of one catalogued trail along row `y` from x = 40 to 360, of `electrons`, on the
+    /// map `z` (`w` x `h`), and the default parameters it was made with.
+    fn sky_of_trail(y: f64, electrons: f64, z: &[f32], w: usize, h: usize) -> (Sky, Sanitized) {
+        let trails = [StarTrail {
+            nodes: vec![(40.0, y), (360.0, y)],
+            times_s: Vec::new(),
+            electrons,
+        }];
+        let p = Sanitized::new(&StreakParams::default());
+        (Sky::new(&trails, z, w, h, &p), p)
+    }
+
     #[test]
     fn a_trail_explains_what_runs_along_it_not_a_faint_line_a_few_degrees_off() {
         // A bright trail (level 30) on row 200, and a faint line (0.8, a fraction of a sigma a
@@ -611,13 +623,7 @@ mod tests {
             h,
             &[flat(40, 360, 200.0, 30.0), ((80, y0), (320, y1), 0.8)],
         );
-        let trails = [StarTrail {
-            nodes: vec![(40.0, 200.0), (360.0, 200.0)],
-            times_s: Vec::new(),
-            electrons: 1e5,
-        }];
-        let p = Sanitized::new(&StreakParams::default());
-        let sky = Sky::new(&trails, &z, w, h, &p);
+        let (sky, p) = sky_of_trail(200.0, 1e5, &z, w, h);
         let explains = |s: &Seg| sky.explains(s, &z, w, h, p.trail_tol);
         assert!(
             explains(&seg((100.0, 200.0), (300.0, 200.0))),
@@ -639,13 +645,7 @@ mod tests {
             .map(|k| flat(40, 360, 193.0 + 3.0 * k as f64, 30.0))
             .collect();
         let z = map(w, h, &rows);
-        let trails = [StarTrail {
-            nodes: vec![(40.0, 200.5), (360.0, 200.5)],
-            times_s: Vec::new(),
-            electrons: 1e6,
-        }];
-        let p = Sanitized::new(&StreakParams::default());
-        let sky = Sky::new(&trails, &z, w, h, &p);
+        let (sky, p) = sky_of_trail(200.5, 1e6, &z, w, h);
         let s = seg((50.0, 193.0), (350.0, 208.0));
         assert!(
             !sky.explained_by(&s, &z, w, h, ALONG_DEG, LEVEL_SLACK_SIGMA),

@@ -21,15 +21,26 @@ fn star_field() -> (Vec<f64>, Vec<StarTrail>) {
         .into_iter()
         .enumerate()
     {
-        let amp = NOISE * (2.5 + k as f64);
-        add_segment(&mut img, W, H, 50.0, y, 450.0, y, amp);
-        trails.push(StarTrail {
-            nodes: vec![(50.0, y), (450.0, y)],
-            times_s: Vec::new(),
-            electrons: amp * 400.0,
-        });
+        add_trail(
+            &mut img,
+            &mut trails,
+            (50.0, 450.0),
+            y,
+            NOISE * (2.5 + k as f64),
+        );
     }
     (img, trails)
+}
+
+/// A horizontal star trail along row `y` from `x0` to `x1` of `amp` at its peak, drawn on `img`
+/// and its path predicted in `trails` (its light `amp` per pixel of its length).
+fn add_trail(img: &mut [f64], trails: &mut Vec<StarTrail>, (x0, x1): (f64, f64), y: f64, amp: f64) {
+    add_segment(img, W, H, x0, y, x1, y, amp);
+    trails.push(StarTrail {
+        nodes: vec![(x0, y), (x1, y)],
+        times_s: Vec::new(),
+        electrons: amp * (x1 - x0),
+    });
 }
 
 /// Candidates of confidence 0.5 and more, from the star-aware and the angle-only detector, on
@@ -169,12 +180,7 @@ fn debris_along_most_of_a_faint_stars_trail_is_found_whole() {
         .enumerate()
     {
         let amp = NOISE * if k == 0 { 0.2 } else { 0.4 };
-        add_segment(&mut img, W, H, 50.0, y, 450.0, y, amp);
-        trails.push(StarTrail {
-            nodes: vec![(50.0, y), (450.0, y)],
-            times_s: Vec::new(),
-            electrons: amp * 400.0,
-        });
+        add_trail(&mut img, &mut trails, (50.0, 450.0), y, amp);
     }
     let (found, label) = aware_with_debris(img, &trails, ((150.0, 21.0), (440.0, 21.0)), 3.0, 11);
     found_alone(&found, &label, "along a faint trail");
@@ -202,12 +208,7 @@ fn debris_running_through_overlapping_trails_is_boxed_whole() {
     let (mut img, mut trails) = star_field();
     let amp = 6.0 * NOISE;
     for y in [260.0, 260.5] {
-        add_segment(&mut img, W, H, 120.0, y, 400.0, y, amp);
-        trails.push(StarTrail {
-            nodes: vec![(120.0, y), (400.0, y)],
-            times_s: Vec::new(),
-            electrons: amp * 280.0,
-        });
+        add_trail(&mut img, &mut trails, (120.0, 400.0), y, amp);
     }
     let (found, label) = aware_with_debris(img, &trails, ((20.0, 266.2), (490.0, 253.9)), 4.0, 13);
     found_alone(&found, &label, "through overlapping trails");

@@ -4,7 +4,7 @@
 
 use rand::RngExt;
 use soig_base::rng::{PixelPurpose, pixel_stream};
-use soig_image::imaging::robust_stats;
+use soig_image::imaging::{box_mean, robust_stats};
 
 use super::mask::{clipped_about, components, grow};
 use super::trails::{Rounds, trail_mask};
@@ -203,31 +203,6 @@ pub fn source_mask(pixels: &[f32], width: usize, height: usize) -> Vec<bool> {
         .zip(lines)
         .map(|((t, o), l)| t || o || l)
         .collect()
-}
-
-/// The mean over a (2r+1)^2 box, the box clipped at the frame's edges (summed-area table).
-fn box_mean(v: &[f32], width: usize, height: usize, r: usize) -> Vec<f32> {
-    let mut sat = vec![0.0f64; (width + 1) * (height + 1)];
-    for y in 0..height {
-        let mut row = 0.0;
-        for x in 0..width {
-            row += v[y * width + x] as f64;
-            sat[(y + 1) * (width + 1) + x + 1] = sat[y * (width + 1) + x + 1] + row;
-        }
-    }
-    let mut out = Vec::with_capacity(v.len());
-    for y in 0..height {
-        let (y0, y1) = (y.saturating_sub(r), (y + r + 1).min(height));
-        for x in 0..width {
-            let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(width));
-            let s = sat[y1 * (width + 1) + x1]
-                - sat[y0 * (width + 1) + x1]
-                - sat[y1 * (width + 1) + x0]
-                + sat[y0 * (width + 1) + x0];
-            out.push((s / ((x1 - x0) * (y1 - y0)) as f64) as f32);
-        }
-    }
-    out
 }
 
 /// Neighbourhood searched for a clean pixel to put in a masked one: the noise of the same
