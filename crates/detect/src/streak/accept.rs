@@ -6,6 +6,7 @@ use super::full_lines::{CONFIDENCE_CREDIT, MIN_LENGTH_PX};
 use super::maps::Maps;
 use super::output::confidence;
 use super::params::Sanitized;
+use super::refine::Regime;
 use super::segment::Seg;
 use super::stats::median_of;
 
@@ -14,6 +15,14 @@ use super::stats::median_of;
 const GAP_LEVEL: f64 = 0.5;
 /// ... by more than this many of the chunk's noise sigmas is a gap (see [`gap`]).
 const GAP_SIGMA: f64 = 2.5;
+/// Where stars are points, a resolved segment longer than this is no chain of stars, and a
+/// chunk of it is a gap only where it lies `GAP_SIGMA` below `GAP_LEVEL` of the level (the
+/// dimmest a tumbling streak gets), not below the level (see [`gap`]). Development set
+/// faint-limit-fixed seed 9422 (300 images, `cargo run --example sky_eval`): two streaks of
+/// line SNR 17.5-17.7 (images 169 and 178) whose merged segments failed at a chunk of 0.43
+/// of the level, 2.6 sigma below it, left 3 boxes on parts of them; found after, and no other
+/// box moved. At `PAIR_LENGTH_PX` (64), 8 more false boxes: chains of star blobs.
+const TUMBLE_MIN_PX: f64 = MIN_LENGTH_PX;
 /// Where stars are points, a segment at most this long is tested for a gap at every window
 /// position, not only in its chunks (see [`gap`]): the length of three jitter-smeared star
 /// blobs in a row (the false boxes of faint-limit-fixed seed 9422 at confidence 0.5 are 19-46
@@ -34,10 +43,16 @@ pub(super) fn accept(
     let p = maps.p;
     let (mut cands, mut dropped) = (Vec::new(), Vec::new());
     for (s, seeds) in merged {
-        let failed = if s.length < p.min_length {
+        // A full-line segment shorter than the stage's shortest line is a streak the other
+        // stages resolve, with sharper ends.
+        let least = match seeds {
+            Seeds::FullLine => p.min_length.max(MIN_LENGTH_PX),
+            Seeds::Local | Seeds::LongLine => p.min_length,
+        };
+        let failed = if s.length < least {
             Some(Reason::TooShort {
                 length_px: s.length,
-                limit: p.min_length,
+                limit: least,
             })
         } else if s.elongation < p.min_elongation {
             Some(Reason::NotElongated {
@@ -52,7 +67,7 @@ pub(super) fn accept(
         } else if is_star(&s) {
             Some(Reason::StarTrail)
         } else {
-            gap(maps, &s, points).map(|g| Reason::Gap {
+            gap(maps, &s, points, Regime::of(seeds)).map(|g| Reason::Gap {
                 chunk: g.chunk,
                 chunks: g.chunks,
                 level: g.level,
@@ -114,8 +129,12 @@ pub(super) struct Gap {
 /// 160 test images), so its faintest chunk stays above half the median but for noise; the
 /// sigma test keeps faint streaks, whose chunks are noisy, from failing by chance (0.6 % a
 /// chunk). On 100 fixed-pointing synthetic images it drops 52 of 63 false boxes at
-/// confidence 0.5 and no streak; on 60 semisynthetic ones all 3 and no streak.
-pub(super) fn gap(maps: &Maps, s: &Seg, points: bool) -> Option<Gap> {
+/// confidence 0.5 and no streak; on 60 semisynthetic ones all 3 and no streak. Where stars
+/// are points a long resolved segment's chunk is read against half the level instead
+/// ([`TUMBLE_MIN_PX`]); a full-line segment's (`regime`) against its level: its median is
+/// read over ends carried on into the dark (a line carried 850 px beyond a streak's end, over
+/// empty sky, passed the weaker test on image 72 of that development set).
+pub(super) fn gap(maps: &Maps, s: &Seg, points: bool, regime: Regime) -> Option<Gap> {
     let (ux, uy) = s.dir();
     let (nx, ny) = (-uy, ux);
     let taps = maps.contrast_taps();
@@ -162,12 +181,16 @@ pub(super) fn gap(maps: &Maps, s: &Seg, points: bool) -> Option<Gap> {
         .clamp(2, 8)
         .min(n / 2);
     let used = if maps.p.quiet_side { &plus } else { &taps };
+    // Where stars are points, a long resolved segment is read against the dimmest a tumbling
+    // streak gets.
+    let tumbling = points && regime == Regime::Resolved && s.length > TUMBLE_MIN_PX;
+    let floor = if tumbling { GAP_LEVEL * level } else { level };
     // Samples a..b as a gap of `chunk` of `chunks`, if they are one.
     let gap_at = |a: usize, b: usize, chunk: usize, chunks: usize| {
         let m = (b - a) as f64;
         let mean = vals[a..b].iter().sum::<f64>() / m;
         let sd = maps.contrast_sum_sd(used, s.theta, b - a) / m;
-        (mean < GAP_LEVEL * level && level - mean > GAP_SIGMA * sd).then_some(Gap {
+        (mean < GAP_LEVEL * level && floor - mean > GAP_SIGMA * sd).then_some(Gap {
             chunk,
             chunks,
             level: mean / level,
@@ -175,7 +198,7 @@ pub(super) fn gap(maps: &Maps, s: &Seg, points: bool) -> Option<Gap> {
         })
     };
     let chunked = (0..k).find_map(|c| gap_at(c * n / k, (c + 1) * n / k, c, k));
-    if chunked.is_some() || !points || s.length > PAIR_LENGTH_PX {
+    if chunked.is_some() || !points || s.length > PAIR_LENGTH_PX || regime != Regime::Resolved {
         return chunked;
     }
     // Where stars are points, two or three in a row make a short line whose dips between

@@ -267,7 +267,8 @@ fn merge_keeps_a_sub_noise_streak_whole() {
     assert!(resolved.iter().all(|&l| l < 100.0), "{resolved:?}");
 }
 
-/// Step 7: a streak passes and is scored; a piece too short fails with why.
+/// Step 7: a streak passes and is scored; a piece too short fails with why, and so does a
+/// full-line segment shorter than that stage's shortest line.
 #[test]
 fn accept_scores_a_streak_and_drops_a_short_one() {
     let world = World::new(streak_map(3.0, 64.0, 30, 90));
@@ -278,6 +279,15 @@ fn accept_scores_a_streak_and_drops_a_short_one() {
     assert_eq!(cands.len(), 1);
     assert!(cands[0].2 > 0.0 && cands[0].2 <= 1.0, "{}", cands[0].2);
     assert!(matches!(dropped[0].reason, Reason::TooShort { .. }));
+    // The same streak from the full-line stage is shorter than that stage's lines: the
+    // other stages' (they resolve it, with sharper ends).
+    let (cands, dropped) = accept(&world.maps(), vec![(s, Seeds::FullLine)], &no_star, false);
+    assert!(cands.is_empty());
+    assert!(
+        matches!(dropped[0].reason, Reason::TooShort { limit, .. } if limit == MIN_LENGTH_PX),
+        "{:?}",
+        dropped[0].reason
+    );
     // The star test drops it.
     let (cands, dropped) = accept(
         &world.maps(),
@@ -298,9 +308,9 @@ fn gap_against_the_quieter_side_band() {
     z.iter_mut().zip(&beside).for_each(|(a, b)| *a += b);
     let mut world = World::new(z);
     let s = refined(&World::new(streak_map(3.0, 64.0, 30, 90)).maps()).unwrap();
-    assert!(gap(&world.maps(), &s, false).is_some());
+    assert!(gap(&world.maps(), &s, false, Regime::Resolved).is_some());
     world.p.quiet_side = true;
-    assert_eq!(gap(&world.maps(), &s, false), None);
+    assert_eq!(gap(&world.maps(), &s, false, Regime::Resolved), None);
     // A hole of 17 px in the streak (one of its four chunks of 15 px, at its SNR) is a gap on
     // either side.
     let mut z = streak_map(3.0, 64.0, 30, 90);
@@ -316,7 +326,7 @@ fn gap_against_the_quieter_side_band() {
         },
         ..World::new(z)
     };
-    assert!(gap(&world.maps(), &s, false).is_some());
+    assert!(gap(&world.maps(), &s, false, Regime::Resolved).is_some());
 }
 
 /// A round star blob of peak `amp` at (`cx`, 64), sigma 3 px (a jitter-smeared star), added
@@ -355,13 +365,74 @@ fn gap_between_star_blobs_in_a_row() {
     }
     let world = World::new(z);
     let s = across_the_middle(41.0);
-    assert_eq!(gap(&world.maps(), &s, false), None);
-    let g = gap(&world.maps(), &s, true).expect("a gap between the blobs");
+    assert_eq!(gap(&world.maps(), &s, false, Regime::Resolved), None);
+    let g = gap(&world.maps(), &s, true, Regime::Resolved).expect("a gap between the blobs");
     assert!(g.level < 0.5, "{g:?}");
     let even = World::new(streak_map(5.0, 64.0, 44, 84));
-    assert_eq!(gap(&even.maps(), &s, true), None);
+    assert_eq!(gap(&even.maps(), &s, true, Regime::Resolved), None);
     // A long segment is tested in its chunks only.
-    assert_eq!(gap(&world.maps(), &Seg { length: 65.0, ..s }, true), None);
+    assert_eq!(
+        gap(
+            &world.maps(),
+            &Seg { length: 65.0, ..s },
+            true,
+            Regime::Resolved
+        ),
+        None
+    );
+}
+
+/// Step 7, the gap test where stars are points, on a resolved segment longer than
+/// `TUMBLE_MIN_PX`: a tumbling streak's dim stretch (0.4 of its level) is no gap, a hole is;
+/// elsewhere (stars as trails, or a full-line segment) the dim stretch stays one.
+#[test]
+fn a_tumbling_streaks_dim_stretch_is_no_gap_where_stars_are_points() {
+    let (w, h) = (320usize, 64usize);
+    // A streak along row 32 from x 20 to 299 at 3 (unit noise), x 150..205 at `dim`.
+    let map = |dim: f64| -> Vec<f32> {
+        let mut z = vec![0f32; w * h];
+        for y in 0..h {
+            let d = y as f64 - 32.0;
+            for x in 20..300 {
+                let amp = if (150..205).contains(&x) { dim } else { 3.0 };
+                z[y * w + x] = (amp * (-d * d / (2.0 * SE * SE)).exp()) as f32;
+            }
+        }
+        z
+    };
+    let p = params();
+    let noise = LineNoise::white(&p);
+    let (pixels, bg) = (vec![0u8; w * h], vec![0f32; w * h]);
+    let gap_of = |z: &[f32], points: bool, regime: Regime| {
+        let maps = Maps {
+            w,
+            h,
+            pixels: &pixels,
+            bg: &bg,
+            z,
+            p: &p,
+            noise: &noise,
+            under_trails: None,
+            removed: None,
+            sample_corr: Default::default(),
+        };
+        let s = Seg {
+            cx: 159.5,
+            cy: 32.0,
+            theta: 0.0,
+            length: 280.0,
+            snr: 12.0,
+            flux: 0.0,
+            elongation: 10.0,
+            contrast: true,
+        };
+        gap(&maps, &s, points, regime)
+    };
+    let dim = map(1.2);
+    assert_eq!(gap_of(&dim, true, Regime::Resolved), None);
+    assert!(gap_of(&dim, false, Regime::Resolved).is_some());
+    assert!(gap_of(&dim, true, Regime::SubNoise { min: 100 }).is_some());
+    assert!(gap_of(&map(0.0), true, Regime::Resolved).is_some());
 }
 
 /// Step 7, the dip test where stars are points: two round blobs 10 px apart (their dip at
@@ -374,7 +445,7 @@ fn dip_between_two_close_star_blobs() {
     blob(&mut z, 69.0, 7.0);
     let pair = World::new(z);
     let s = across_the_middle(24.0);
-    let g = gap(&pair.maps(), &s, true).expect("a dip between the blobs");
+    let g = gap(&pair.maps(), &s, true, Regime::Resolved).expect("a dip between the blobs");
     assert!(g.level > 0.3 && g.level < 0.55, "{g:?}");
     // A streak from x 44 to 84 brightening twofold along it.
     let mut z = vec![0f32; W * H];
@@ -385,7 +456,7 @@ fn dip_between_two_close_star_blobs() {
             z[y * W + x] += (amp * (-d2 / (2.0 * SE * SE)).exp()) as f32;
         }
     }
-    assert_eq!(gap(&World::new(z).maps(), &s, true), None);
+    assert_eq!(gap(&World::new(z).maps(), &s, true, Regime::Resolved), None);
     // The dip alone, on profiles: two bumps at 0.37 of their peaks between them are a gap where
     // the dip is significant, not where the noise is as large; an even profile with a ripple
     // has none.
