@@ -515,7 +515,9 @@ fn catalogue_bounds(measured: &[Measured]) -> Vec<Option<f64>> {
             if t.nodes.len() < 2 {
                 return None;
             }
-            let n = bright.partition_point(|b| b.0 >= FAINTER * per_px(t));
+            // Its brightness once, not at each step of the search (a sum over its nodes).
+            let fainter = FAINTER * per_px(t);
+            let n = bright.partition_point(|b| b.0 >= fainter);
             (n >= BOUNDING_TRAILS).then(|| quartile[n - 1])
         })
         .collect()
