@@ -149,6 +149,8 @@ mod union;
 mod unit_noise;
 mod unlisted;
 
+use std::borrow::Cow;
+
 pub use explain::{Dropped, Reason, Seeds};
 use lone_line::{NEAR_DEG, Seams, like_others, trail_length};
 pub use output::Candidate;
@@ -275,7 +277,7 @@ pub(crate) fn on_frame(
     }
     // Too few bright features: the lines a pass told of no trails finds may still share a
     // direction (a frame whose trails are faint but for one or two).
-    let found = pass(pixels, w, h, p, bg.clone(), z.clone(), None, None).0;
+    let found = pass(pixels, w, h, p, &bg, Cow::Borrowed(&z), None, None).0;
     match from_lines(&found, p.psf_sigma) {
         Some(mut m) => {
             let found = along_own_trails(pixels, w, h, p, (bg, z), &mut m);
@@ -298,7 +300,7 @@ fn along_own_trails(
     m: &mut TrailModel,
 ) -> Vec<Candidate> {
     let trail = m.angle_deg;
-    let first = pass(pixels, w, h, p, bg.clone(), z.clone(), Some(trail), None).0;
+    let first = pass(pixels, w, h, p, &bg, Cow::Borrowed(&z), Some(trail), None).0;
     // The star trails are among the lines, so beyond `max_candidates`.
     let along = Sanitized {
         along: Some(trail),
@@ -306,7 +308,17 @@ fn along_own_trails(
         quiet_side: true,
         ..p.clone()
     };
-    let second = pass(pixels, w, h, &along, bg, z.clone(), Some(trail), Some(&[])).0;
+    let second = pass(
+        pixels,
+        w,
+        h,
+        &along,
+        &bg,
+        Cow::Borrowed(&z),
+        Some(trail),
+        Some(&[]),
+    )
+    .0;
     m.settle(&second);
     // Within a degree of the trails a line is debris where its length and profile say that no
     // trail, nor two end to end, explains it; a few degrees off them, where two trails side by
@@ -374,7 +386,7 @@ fn two_passes(
     trail: f64,
     stars: &[StarTrail],
 ) -> Vec<Candidate> {
-    let first = pass(pixels, w, h, p, bg.clone(), z.clone(), Some(trail), None).0;
+    let first = pass(pixels, w, h, p, &bg, Cow::Borrowed(&z), Some(trail), None).0;
     // The second pass finds what the first cannot, along the trails, so it searches only there.
     let along = Sanitized {
         along: Some(trail),
@@ -385,8 +397,8 @@ fn two_passes(
         w,
         h,
         &along,
-        bg,
-        z.clone(),
+        &bg,
+        Cow::Borrowed(&z),
         Some(trail),
         Some(stars),
     )
@@ -428,5 +440,14 @@ pub(crate) fn explained(
         return (Vec::new(), Vec::new());
     }
     let (bg, z) = unit_noise_map(pixels, width, height, p);
-    pass(pixels, width, height, p, bg, z, star_trail_angle_deg, None)
+    pass(
+        pixels,
+        width,
+        height,
+        p,
+        &bg,
+        Cow::Owned(z),
+        star_trail_angle_deg,
+        None,
+    )
 }

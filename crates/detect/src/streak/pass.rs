@@ -2,6 +2,8 @@
 //! subtracts everything along the trails' direction (a survey image) and drops what lies
 //! along it; the star-aware pass subtracts the predicted trails and drops what they explain.
 
+use std::borrow::Cow;
+
 use super::accept::accept;
 use super::explain::{Dropped, Seeds};
 use super::explain_away::explain_away;
@@ -29,15 +31,23 @@ pub(super) fn pass(
     w: usize,
     h: usize,
     p: &Sanitized,
-    bg: Vec<f32>,
-    z: Vec<f32>,
+    bg: &[f32],
+    z: Cow<'_, [f32]>,
     trail: Option<f64>,
     stars: Option<&[StarTrail]>,
 ) -> (Vec<Candidate>, Vec<Dropped>) {
     let trail = trail.filter(|a| a.is_finite());
     // The predicted trails and the map before any is subtracted, which the star test reads.
-    let sky = stars.map(|t| (Sky::new(t, &z, w, h, p), z.clone()));
-    let flat = flatten(z, w, h, p, trail, sky.as_ref().map(|(s, _)| s));
+    // Borrowed where the caller keeps the map (both passes of a survey image start from it):
+    // then only `flatten` copies it.
+    let sky = stars.map(|t| {
+        let z_sky = match &z {
+            Cow::Borrowed(z) => Cow::Borrowed(*z),
+            Cow::Owned(z) => Cow::Owned(z.clone()),
+        };
+        (Sky::new(t, &z, w, h, p), z_sky)
+    });
+    let flat = flatten(z.into_owned(), w, h, p, trail, sky.as_ref().map(|(s, _)| s));
     let noise = line_noise(&flat.zc, w, h, p);
     let local = local_seeds(&flat.zc, w, h, p, &noise);
     let long = long_line_components(&flat.zc, w, h, p);
@@ -67,7 +77,7 @@ pub(super) fn pass(
         w,
         h,
         pixels,
-        bg: &bg,
+        bg,
         z: &flat.z,
         p,
         noise: &noise,

@@ -76,6 +76,9 @@ struct Prepared {
     reach: f64,
     /// Bounding box of the nodes, grown by `reach` and `COVER_SLACK_PX`.
     bbox: [f64; 4],
+    /// The direction from its first node to its last, degrees (-180, 180]: taken once here,
+    /// not for every trail at each segment tested (`explained_by`).
+    deg: f64,
     /// The map's median along the trail.
     level: f64,
     /// The most a star of this brightness can show (see `catalogue_bounds`), where the map
@@ -210,7 +213,10 @@ impl Sky {
                 for &(x, y) in &t.nodes {
                     (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
                 }
+                let (a, b) = (t.nodes[0], t.nodes[t.nodes.len() - 1]);
+                let deg = (b.1 - a.1).atan2(b.0 - a.0).to_degrees();
                 Prepared {
+                    deg,
                     nodes: t.nodes.clone(),
                     samples,
                     reach,
@@ -337,11 +343,7 @@ impl Sky {
                     && t.bbox[1] <= bbox[3]
                     && t.bbox[3] >= bbox[1]
             })
-            .filter(|(t, _)| {
-                let (a, b) = (t.nodes[0], t.nodes[t.nodes.len() - 1]);
-                let deg = (b.1 - a.1).atan2(b.0 - a.0).to_degrees();
-                angle_diff_deg(deg, seg_deg) <= along_deg + slack
-            })
+            .filter(|(t, _)| angle_diff_deg(t.deg, seg_deg) <= along_deg + slack)
             .unzip();
         if near.is_empty() {
             return false;
@@ -513,7 +515,9 @@ fn catalogue_bounds(measured: &[Measured]) -> Vec<Option<f64>> {
             if t.nodes.len() < 2 {
                 return None;
             }
-            let n = bright.partition_point(|b| b.0 >= FAINTER * per_px(t));
+            // Its brightness once, not at each step of the search (a sum over its nodes).
+            let fainter = FAINTER * per_px(t);
+            let n = bright.partition_point(|b| b.0 >= fainter);
             (n >= BOUNDING_TRAILS).then(|| quartile[n - 1])
         })
         .collect()

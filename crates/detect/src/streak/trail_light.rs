@@ -45,7 +45,7 @@ pub(super) fn shows(nodes: &[(f64, f64)], samples: &[(f64, f64, f64)]) -> bool {
 /// prediction shifts a still pointing by the image's mean jitter; a trail in the image for part
 /// of the exposure follows the jitter of that part only, 2-4 px off on 80-600 e-/px trails of
 /// a rotated survey image, whose light then fell beside their reach and made 4 false boxes
-/// there.
+/// there. `samples`: the path's points with the map's value at each (`bilinear`).
 pub(super) fn wander(
     nodes: &[(f64, f64)],
     samples: &[(f64, f64, f64)],
@@ -64,7 +64,13 @@ pub(super) fn wander(
     // At most about 128 samples make each median.
     let stride = (samples.len() / 128).max(1);
     let level = |d: f64| median_across(z, w, h, samples, stride, (nx, ny), d);
-    let here = level(0.0);
+    // On the path itself the samples hold the map's values already (the same bilinear reads).
+    let on_path: Vec<f64> = samples.iter().step_by(stride).map(|s| s.2).collect();
+    let here = median_of(&on_path);
+    // A trail that shows where predicted is not lost: the offsets beside it need no reading.
+    if here.is_nan() || here >= SHOWS_SIGMA {
+        return None;
+    }
     let (d, best) = (-WANDER_PX..=WANDER_PX)
         .filter(|&d| d != 0)
         .map(|d| (d as f64, level(d as f64)))

@@ -11,10 +11,14 @@ use crate::scene::{Pointing, Scene, SurveyTrack, TargetTrack};
 use crate::sensor::Sensor;
 use soig_sky::photometry::photon_rate;
 use soig_sky::stars::Star;
-use soig_sky::{Turn, angle_deg, radec_deg, radec_unit};
+use soig_sky::{Turn, Vec3, angle_deg, dot, radec_deg, radec_unit};
 
 /// Spacing of the time nodes along a survey star trail, pixels.
 pub(super) const SURVEY_NODE_SPACING_PX: f64 = 4.0;
+/// Nodes projected beyond those of a survey star that can be near the image, on each side:
+/// `Path::at` over the star's exposure reads at most two beyond its near ones (the node before
+/// the first and after the last, and a time's rounding one more); three to spare.
+const NODE_MARGIN: usize = 3;
 
 /// A star as traced in an image.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -167,17 +171,48 @@ pub(super) fn for_each_source(
                 .fold(0.0, f64::max);
             let (x0, y0) = (-0.5 - margin - 2.0, -0.5 - margin - 2.0);
             let (x1, y1) = (width - 0.5 + margin + 2.0, height - 0.5 + margin + 2.0);
-            let far_deg = tan.reach_deg([x0, x1], [y0, y1]) + turned.to_degrees();
+            let reach_deg = tan.reach_deg([x0, x1], [y0, y1]);
+            let far_deg = reach_deg + turned.to_degrees();
+            // The same test node by node, as a dot product: a node whose direction lies
+            // farther than `reach_deg` from the tangent point is near no pixel, and only the
+            // nodes around those that can be near are projected (the arc tangents and sines of
+            // the projection were most of this loop; over half a survey star's nodes lie off
+            // the image). The two pixels of slack in `reach_deg` cover the rounding.
+            let cos_reach = reach_deg.to_radians().cos();
+            let mut dirs: Vec<Vec3> = vec![[0.0; 3]; nodes];
             for star in &scene.exposure.stars {
                 let (mut first, mut last) = (None, None);
                 let v = radec_unit(star.ra_deg, star.dec_deg);
                 if angle_deg(v, centre) > far_deg {
                     continue;
                 }
+                let (mut lo, mut hi) = (None, None);
+                for (i, (dir, turn)) in dirs.iter_mut().zip(&turns).enumerate() {
+                    *dir = match turn {
+                        Some(turn) => turn.apply(v),
+                        None => v,
+                    };
+                    if dot(*dir, centre) >= cos_reach {
+                        lo.get_or_insert(i);
+                        hi = Some(i);
+                    }
+                }
+                let (Some(lo), Some(hi)) = (lo, hi) else {
+                    continue;
+                };
+                // Projected from `NODE_MARGIN` nodes before the first that can be near to as
+                // many after the last: every node a photon's time reads (`Path::at` between
+                // the node before the first near one and the node after the last) and
+                // `render::trails` keeps; the others are never read (NaN, as off the sky).
+                let range = lo.saturating_sub(NODE_MARGIN)..=(hi + NODE_MARGIN).min(nodes - 1);
                 for (i, (node, turn)) in trail.iter_mut().zip(&turns).enumerate() {
+                    if !range.contains(&i) {
+                        *node = (f64::NAN, f64::NAN);
+                        continue;
+                    }
                     // `Scene::pixel_at`, to the bit.
                     let (ra, dec) = match turn {
-                        Some(turn) => radec_deg(turn.apply(v)),
+                        Some(_) => radec_deg(dirs[i]),
                         None => (star.ra_deg, star.dec_deg),
                     };
                     *node = tan.pixel(ra, dec).unwrap_or((f64::NAN, f64::NAN));
