@@ -268,6 +268,7 @@ fn the_raw_dark_frame_gives_no_confident_box_and_explains_what_it_dropped() {
                 "not-elongated",
                 "low-snr",
                 "gap",
+                "outline",
                 "duplicate",
                 "over-cap"
             ]

@@ -2,7 +2,7 @@
 //! significant enough, is no star's, and has no gap; a candidate is scored by its confidence.
 
 use super::explain::{Dropped, Reason, Seeds};
-use super::full_lines::{CONFIDENCE_CREDIT, MIN_LENGTH_PX};
+use super::full_lines::{CONFIDENCE_CREDIT, MIN_LENGTH_PX, along_outline, outline};
 use super::maps::Maps;
 use super::output::confidence;
 use super::params::Sanitized;
@@ -42,6 +42,8 @@ pub(super) fn accept(
 ) -> (Vec<(Seg, Seeds, f64)>, Vec<Dropped>) {
     let p = maps.p;
     let (mut cands, mut dropped) = (Vec::new(), Vec::new());
+    // Full lines along the frame's outline are its edge (`full_lines::OUTLINE_PX`).
+    let edge = outline(p.footprint, maps.w, maps.h);
     for (s, seeds) in merged {
         // A full-line segment shorter than the stage's shortest line is a streak the other
         // stages resolve, with sharper ends.
@@ -59,6 +61,8 @@ pub(super) fn accept(
                 elongation: s.elongation,
                 limit: p.min_elongation,
             })
+        } else if seeds == Seeds::FullLine && along_outline((s.cx, s.cy), s.theta, &edge) {
+            Some(Reason::Outline)
         } else if s.snr < p.min_snr {
             Some(Reason::LowSnr {
                 snr: s.snr,
@@ -182,8 +186,16 @@ pub(super) fn gap(maps: &Maps, s: &Seg, points: bool, regime: Regime) -> Option<
         .min(n / 2);
     let used = if maps.p.quiet_side { &plus } else { &taps };
     // Where stars are points, a long resolved segment is read against the dimmest a tumbling
-    // streak gets.
-    let tumbling = points && regime == Regime::Resolved && s.length > TUMBLE_MIN_PX;
+    // streak gets; one along the frame's outline is not (a raw frame's columns beside its
+    // overscan: the NEOSSat dark frame of `tests/detect_frames.rs`).
+    let tumbling = points
+        && regime == Regime::Resolved
+        && s.length > TUMBLE_MIN_PX
+        && !along_outline(
+            (s.cx, s.cy),
+            s.theta,
+            &outline(maps.p.footprint, maps.w, maps.h),
+        );
     let floor = if tumbling { GAP_LEVEL * level } else { level };
     // Samples a..b as a gap of `chunk` of `chunks`, if they are one.
     let gap_at = |a: usize, b: usize, chunk: usize, chunks: usize| {

@@ -50,6 +50,9 @@ pub enum Reason {
         level: f64,
         sigma: f64,
     },
+    /// Acceptance: a full-line segment along the frame's outline (its footprint's, else its
+    /// border): the edge, not a streak.
+    Outline,
     /// Explaining away: too little of it lies away from a better candidate.
     Duplicate,
     /// `max_candidates` better candidates were already kept.
@@ -65,7 +68,8 @@ impl Reason {
             Reason::TooShort { .. }
             | Reason::NotElongated { .. }
             | Reason::LowSnr { .. }
-            | Reason::Gap { .. } => "accept",
+            | Reason::Gap { .. }
+            | Reason::Outline => "accept",
             Reason::Duplicate => "explaining away",
             Reason::OverCap { .. } => "output",
         }
@@ -98,6 +102,7 @@ impl fmt::Display for Reason {
                 "a gap: chunk {} of {chunks} at {level:.2} of its level, {sigma:.1} sigma below",
                 chunk + 1
             ),
+            Reason::Outline => f.write_str("a full line along the frame's outline (its edge)"),
             Reason::Duplicate => {
                 f.write_str("within duplicate_distance_px of a better candidate for the most part")
             }

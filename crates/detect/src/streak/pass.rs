@@ -9,7 +9,7 @@ use super::explain::{Dropped, Seeds};
 use super::explain_away::explain_away;
 use super::flatten::flatten;
 use super::fragments::fragments;
-use super::full_lines::{along_outline, full_line_components};
+use super::full_lines::full_line_components;
 use super::maps::Maps;
 use super::merge::merge;
 use super::output::{Candidate, candidate};
@@ -64,14 +64,6 @@ pub(super) fn pass(
         }
         (None, None) => full_line_components(&flat.zc, w, h, None),
         _ => Vec::new(),
-    };
-    // Lines along a padded or rotated frame's outline are its edge (`along_outline`).
-    let full: Vec<_> = match &p.footprint {
-        Some(f) => full
-            .into_iter()
-            .filter(|(c, _)| !along_outline(c, f))
-            .collect(),
-        None => full,
     };
     let maps = Maps {
         w,

@@ -387,12 +387,12 @@ fn gap_between_star_blobs_in_a_row() {
 /// elsewhere (stars as trails, or a full-line segment) the dim stretch stays one.
 #[test]
 fn a_tumbling_streaks_dim_stretch_is_no_gap_where_stars_are_points() {
-    let (w, h) = (320usize, 64usize);
-    // A streak along row 32 from x 20 to 299 at 3 (unit noise), x 150..205 at `dim`.
+    let (w, h) = (320usize, 100usize);
+    // A streak along row 50 from x 20 to 299 at 3 (unit noise), x 150..205 at `dim`.
     let map = |dim: f64| -> Vec<f32> {
         let mut z = vec![0f32; w * h];
         for y in 0..h {
-            let d = y as f64 - 32.0;
+            let d = y as f64 - 50.0;
             for x in 20..300 {
                 let amp = if (150..205).contains(&x) { dim } else { 3.0 };
                 z[y * w + x] = (amp * (-d * d / (2.0 * SE * SE)).exp()) as f32;
@@ -418,7 +418,7 @@ fn a_tumbling_streaks_dim_stretch_is_no_gap_where_stars_are_points() {
         };
         let s = Seg {
             cx: 159.5,
-            cy: 32.0,
+            cy: 50.0,
             theta: 0.0,
             length: 280.0,
             snr: 12.0,
