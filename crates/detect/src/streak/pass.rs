@@ -40,13 +40,7 @@ pub(super) fn pass(
     // The predicted trails and the map before any is subtracted, which the star test reads.
     // Borrowed where the caller keeps the map (both passes of a survey image start from it):
     // then only `flatten` copies it.
-    let sky = stars.map(|t| {
-        let z_sky = match &z {
-            Cow::Borrowed(z) => Cow::Borrowed(*z),
-            Cow::Owned(z) => Cow::Owned(z.clone()),
-        };
-        (Sky::new(t, &z, w, h, p), z_sky)
-    });
+    let sky = stars.map(|t| (Sky::new(t, &z, w, h, p), z.clone()));
     let flat = flatten(z.into_owned(), w, h, p, trail, sky.as_ref().map(|(s, _)| s));
     let noise = line_noise(&flat.zc, w, h, p);
     let local = local_seeds(&flat.zc, w, h, p, &noise);

@@ -75,8 +75,7 @@ pub(super) fn wander(
         .filter(|&d| d != 0)
         .map(|d| (d as f64, level(d as f64)))
         .fold((0.0, here), |m, c| if c.1 > m.1 { c } else { m });
-    let lost =
-        here < SHOWS_SIGMA && best >= SHOWS_SIGMA && best >= 2.0 * here.max(0.0) + WANDER_GAIN;
+    let lost = best >= SHOWS_SIGMA && best >= 2.0 * here.max(0.0) + WANDER_GAIN;
     (d != 0.0 && lost).then_some(d)
 }
 
