@@ -45,6 +45,7 @@ pub(super) fn accept(
     // Full lines along the frame's outline are its edge (`full_lines::OUTLINE_PX`).
     let edge = outline(p.footprint, maps.w, maps.h);
     for (s, seeds) in merged {
+        let along_edge = along_outline((s.cx, s.cy), s.theta, &edge);
         // A full-line segment shorter than the stage's shortest line is a streak the other
         // stages resolve, with sharper ends.
         let least = match seeds {
@@ -61,7 +62,7 @@ pub(super) fn accept(
                 elongation: s.elongation,
                 limit: p.min_elongation,
             })
-        } else if seeds == Seeds::FullLine && along_outline((s.cx, s.cy), s.theta, &edge) {
+        } else if seeds == Seeds::FullLine && along_edge {
             Some(Reason::Outline)
         } else if s.snr < p.min_snr {
             Some(Reason::LowSnr {
@@ -71,7 +72,8 @@ pub(super) fn accept(
         } else if is_star(&s) {
             Some(Reason::StarTrail)
         } else {
-            gap(maps, &s, points, Regime::of(seeds)).map(|g| Reason::Gap {
+            let reading = Reading::of(&s, points, Regime::of(seeds), along_edge);
+            gap(maps, &s, reading).map(|g| Reason::Gap {
                 chunk: g.chunk,
                 chunks: g.chunks,
                 level: g.level,
@@ -113,6 +115,39 @@ pub(super) fn score(s: &Seg, seeds: Seeds, area_px: f64, p: &Sanitized) -> f64 {
     confidence(s.snr + credit, s.elongation, area_px, p)
 }
 
+/// How the gap test reads a segment's profile: settled at acceptance from whether stars are
+/// points, the segment's regime and length, and whether it lies along the frame's outline.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Reading {
+    /// In chunks, each against the segment's level.
+    Chunks,
+    /// Where stars are points, a resolved segment of at most [`PAIR_LENGTH_PX`] (two or three
+    /// star blobs in a row make such a line): in chunks, then at every window position, then
+    /// for a dip between point sources ([`dip`]).
+    Pairs,
+    /// Where stars are points, a resolved segment longer than [`TUMBLE_MIN_PX`] and not along
+    /// the outline (a raw frame's columns beside its overscan, the NEOSSat dark frame of
+    /// `tests/detect_frames.rs`, are no tumbling streak): in chunks, each against half the
+    /// level, the dimmest a tumbling streak gets.
+    Tumbling,
+}
+
+impl Reading {
+    /// The reading of segment `s` of `regime`; `points`: the stars are points; `along_edge`:
+    /// `s` lies along the frame's outline (`full_lines::along_outline`).
+    pub(super) fn of(s: &Seg, points: bool, regime: Regime, along_edge: bool) -> Reading {
+        if !points || regime != Regime::Resolved {
+            Reading::Chunks
+        } else if s.length <= PAIR_LENGTH_PX {
+            Reading::Pairs
+        } else if s.length > TUMBLE_MIN_PX && !along_edge {
+            Reading::Tumbling
+        } else {
+            Reading::Chunks
+        }
+    }
+}
+
 /// A chunk of a candidate that holds no streak: which one, its level as a fraction of the
 /// candidate's (for a dip between point sources, [`dip`]: of the lower of the peaks beside it),
 /// and how many noise sigmas below that level it lies.
@@ -135,10 +170,11 @@ pub(super) struct Gap {
 /// chunk). On 100 fixed-pointing synthetic images it drops 52 of 63 false boxes at
 /// confidence 0.5 and no streak; on 60 semisynthetic ones all 3 and no streak. Where stars
 /// are points a long resolved segment's chunk is read against half the level instead
-/// ([`TUMBLE_MIN_PX`]); a full-line segment's (`regime`) against its level: its median is
-/// read over ends carried on into the dark (a line carried 850 px beyond a streak's end, over
-/// empty sky, passed the weaker test on image 72 of that development set).
-pub(super) fn gap(maps: &Maps, s: &Seg, points: bool, regime: Regime) -> Option<Gap> {
+/// ([`Reading::Tumbling`]); a full-line segment's against its level: its median is read over
+/// ends carried on into the dark (a line carried 850 px beyond a streak's end, over empty sky,
+/// passed the weaker test on image 72 of that development set). A short one's is read at
+/// every window position and for dips too ([`Reading::Pairs`]).
+pub(super) fn gap(maps: &Maps, s: &Seg, reading: Reading) -> Option<Gap> {
     let (ux, uy) = s.dir();
     let (nx, ny) = (-uy, ux);
     let taps = maps.contrast_taps();
@@ -185,18 +221,10 @@ pub(super) fn gap(maps: &Maps, s: &Seg, points: bool, regime: Regime) -> Option<
         .clamp(2, 8)
         .min(n / 2);
     let used = if maps.p.quiet_side { &plus } else { &taps };
-    // Where stars are points, a long resolved segment is read against the dimmest a tumbling
-    // streak gets; one along the frame's outline is not (a raw frame's columns beside its
-    // overscan: the NEOSSat dark frame of `tests/detect_frames.rs`).
-    let tumbling = points
-        && regime == Regime::Resolved
-        && s.length > TUMBLE_MIN_PX
-        && !along_outline(
-            (s.cx, s.cy),
-            s.theta,
-            &outline(maps.p.footprint, maps.w, maps.h),
-        );
-    let floor = if tumbling { GAP_LEVEL * level } else { level };
+    let floor = match reading {
+        Reading::Tumbling => GAP_LEVEL * level,
+        Reading::Chunks | Reading::Pairs => level,
+    };
     // Samples a..b as a gap of `chunk` of `chunks`, if they are one.
     let gap_at = |a: usize, b: usize, chunk: usize, chunks: usize| {
         let m = (b - a) as f64;
@@ -210,7 +238,7 @@ pub(super) fn gap(maps: &Maps, s: &Seg, points: bool, regime: Regime) -> Option<
         })
     };
     let chunked = (0..k).find_map(|c| gap_at(c * n / k, (c + 1) * n / k, c, k));
-    if chunked.is_some() || !points || s.length > PAIR_LENGTH_PX || regime != Regime::Resolved {
+    if chunked.is_some() || reading != Reading::Pairs {
         return chunked;
     }
     // Where stars are points, two or three in a row make a short line whose dips between

@@ -2,7 +2,7 @@
 //! promises, on input where the answer is known.
 
 use super::Candidate;
-use super::accept::{accept, dip, gap, score};
+use super::accept::{Reading, accept, dip, gap, score};
 use super::explain::{Reason, Seeds};
 use super::explain_away::explain_away;
 use super::flatten::flatten;
@@ -308,9 +308,9 @@ fn gap_against_the_quieter_side_band() {
     z.iter_mut().zip(&beside).for_each(|(a, b)| *a += b);
     let mut world = World::new(z);
     let s = refined(&World::new(streak_map(3.0, 64.0, 30, 90)).maps()).unwrap();
-    assert!(gap(&world.maps(), &s, false, Regime::Resolved).is_some());
+    assert!(gap(&world.maps(), &s, Reading::Chunks).is_some());
     world.p.quiet_side = true;
-    assert_eq!(gap(&world.maps(), &s, false, Regime::Resolved), None);
+    assert_eq!(gap(&world.maps(), &s, Reading::Chunks), None);
     // A hole of 17 px in the streak (one of its four chunks of 15 px, at its SNR) is a gap on
     // either side.
     let mut z = streak_map(3.0, 64.0, 30, 90);
@@ -326,7 +326,7 @@ fn gap_against_the_quieter_side_band() {
         },
         ..World::new(z)
     };
-    assert!(gap(&world.maps(), &s, false, Regime::Resolved).is_some());
+    assert!(gap(&world.maps(), &s, Reading::Chunks).is_some());
 }
 
 /// A round star blob of peak `amp` at (`cx`, 64), sigma 3 px (a jitter-smeared star), added
@@ -365,26 +365,34 @@ fn gap_between_star_blobs_in_a_row() {
     }
     let world = World::new(z);
     let s = across_the_middle(41.0);
-    assert_eq!(gap(&world.maps(), &s, false, Regime::Resolved), None);
-    let g = gap(&world.maps(), &s, true, Regime::Resolved).expect("a gap between the blobs");
+    assert_eq!(gap(&world.maps(), &s, Reading::Chunks), None);
+    let g = gap(
+        &world.maps(),
+        &s,
+        Reading::of(&s, true, Regime::Resolved, false),
+    )
+    .expect("a gap between the blobs");
     assert!(g.level < 0.5, "{g:?}");
     let even = World::new(streak_map(5.0, 64.0, 44, 84));
-    assert_eq!(gap(&even.maps(), &s, true, Regime::Resolved), None);
-    // A long segment is tested in its chunks only.
     assert_eq!(
         gap(
-            &world.maps(),
-            &Seg { length: 65.0, ..s },
-            true,
-            Regime::Resolved
+            &even.maps(),
+            &s,
+            Reading::of(&s, true, Regime::Resolved, false)
         ),
         None
     );
+    // A long segment is tested in its chunks only.
+    let long = Seg { length: 65.0, ..s };
+    let reading = Reading::of(&long, true, Regime::Resolved, false);
+    assert_eq!(reading, Reading::Chunks);
+    assert_eq!(gap(&world.maps(), &long, reading), None);
 }
 
 /// Step 7, the gap test where stars are points, on a resolved segment longer than
 /// `TUMBLE_MIN_PX`: a tumbling streak's dim stretch (0.4 of its level) is no gap, a hole is;
-/// elsewhere (stars as trails, or a full-line segment) the dim stretch stays one.
+/// elsewhere (stars as trails, a full-line segment, a line along the frame's outline) the dim
+/// stretch stays one.
 #[test]
 fn a_tumbling_streaks_dim_stretch_is_no_gap_where_stars_are_points() {
     let (w, h) = (320usize, 100usize);
@@ -403,7 +411,7 @@ fn a_tumbling_streaks_dim_stretch_is_no_gap_where_stars_are_points() {
     let p = params();
     let noise = LineNoise::white(&p);
     let (pixels, bg) = (vec![0u8; w * h], vec![0f32; w * h]);
-    let gap_of = |z: &[f32], points: bool, regime: Regime| {
+    let gap_of = |z: &[f32], points: bool, regime: Regime, along_edge: bool| {
         let maps = Maps {
             w,
             h,
@@ -426,13 +434,15 @@ fn a_tumbling_streaks_dim_stretch_is_no_gap_where_stars_are_points() {
             elongation: 10.0,
             contrast: true,
         };
-        gap(&maps, &s, points, regime)
+        gap(&maps, &s, Reading::of(&s, points, regime, along_edge))
     };
     let dim = map(1.2);
-    assert_eq!(gap_of(&dim, true, Regime::Resolved), None);
-    assert!(gap_of(&dim, false, Regime::Resolved).is_some());
-    assert!(gap_of(&dim, true, Regime::SubNoise { min: 100 }).is_some());
-    assert!(gap_of(&map(0.0), true, Regime::Resolved).is_some());
+    assert_eq!(gap_of(&dim, true, Regime::Resolved, false), None);
+    assert!(gap_of(&dim, false, Regime::Resolved, false).is_some());
+    assert!(gap_of(&dim, true, Regime::SubNoise { min: 100 }, false).is_some());
+    assert!(gap_of(&map(0.0), true, Regime::Resolved, false).is_some());
+    // Along the frame's outline a long line is the frame's edge, read against its level.
+    assert!(gap_of(&dim, true, Regime::Resolved, true).is_some());
 }
 
 /// Step 7, the dip test where stars are points: two round blobs 10 px apart (their dip at
@@ -445,7 +455,12 @@ fn dip_between_two_close_star_blobs() {
     blob(&mut z, 69.0, 7.0);
     let pair = World::new(z);
     let s = across_the_middle(24.0);
-    let g = gap(&pair.maps(), &s, true, Regime::Resolved).expect("a dip between the blobs");
+    let g = gap(
+        &pair.maps(),
+        &s,
+        Reading::of(&s, true, Regime::Resolved, false),
+    )
+    .expect("a dip between the blobs");
     assert!(g.level > 0.3 && g.level < 0.55, "{g:?}");
     // A streak from x 44 to 84 brightening twofold along it.
     let mut z = vec![0f32; W * H];
@@ -456,7 +471,14 @@ fn dip_between_two_close_star_blobs() {
             z[y * W + x] += (amp * (-d2 / (2.0 * SE * SE)).exp()) as f32;
         }
     }
-    assert_eq!(gap(&World::new(z).maps(), &s, true, Regime::Resolved), None);
+    assert_eq!(
+        gap(
+            &World::new(z).maps(),
+            &s,
+            Reading::of(&s, true, Regime::Resolved, false)
+        ),
+        None
+    );
     // The dip alone, on profiles: two bumps at 0.37 of their peaks between them are a gap where
     // the dip is significant, not where the noise is as large; an even profile with a ripple
     // has none.
