@@ -6,7 +6,7 @@ use super::full_lines::{CONFIDENCE_CREDIT, MIN_LENGTH_PX, along_outline, outline
 use super::maps::Maps;
 use super::output::confidence;
 use super::params::Sanitized;
-use super::refine::Regime;
+use super::refine::{CARRIED, Regime};
 use super::segment::Seg;
 use super::stats::median_of;
 
@@ -28,6 +28,22 @@ const TUMBLE_MIN_PX: f64 = MIN_LENGTH_PX;
 /// blobs in a row (the false boxes of faint-limit-fixed seed 9422 at confidence 0.5 are 19-46
 /// px; its found streaks 67 px and longer).
 const PAIR_LENGTH_PX: f64 = 64.0;
+
+/// Where stars are points, a resolved segment of the other stages at least `MIN_LENGTH_PX`
+/// long is scored with `full_lines::CONFIDENCE_CREDIT` too: noise alone makes no such line
+/// there (development set faint-limit-fixed seed 9422, 300 images: of the local and
+/// long-line stages' accepted segments off the debris, none is over 200 px and none over 100
+/// px reaches SNR 7.7, while 45 on the debris, 200-1300 px long, scored under 0.5 at SNR
+/// 6.5-9.0). Not where its light goes on beyond an end (see [`open_ended`]): it is then the
+/// brighter part of a longer streak, and boxed in part. Measured on that set (`cargo run
+/// --release --example sky_eval`, scored by `scripts/faint_limit.py`): found 181 -> 194, false
+/// boxes 10 -> 11 (the one more: a streak bent off its axis, boxed over half its length),
+/// SNR50 10.6 -> 9.8; without the open-end test 195 found and 15 false boxes (4 more streaks
+/// boxed in part, IoU 0.12-0.46); over 64 or 128 px instead of 96, 192 / 12 and 193 / 13; from
+/// 100 px, 198 / 15. The fixed rows' development sets (seed 777): the same boxes, mAP50-95 of
+/// the semisynthetic two +0.0003. Not where stars are trails: on the survey original
+/// semisynthetic development set (seed 778) it added a false box (P@0.5 1.000 -> 0.989).
+const OPEN_PX: usize = 96;
 
 /// The merged segments that pass the acceptance tests, with their confidence (`score`), best
 /// first by the confidence without the full-line credit (ties by position), and those that
@@ -85,7 +101,12 @@ pub(super) fn accept(
             None => {
                 let area = (maps.w * maps.h) as f64;
                 let plain = confidence(s.snr, s.elongation, area, p);
-                cands.push((s, seeds, score(&s, seeds, area, p), plain));
+                let credited = s.length >= MIN_LENGTH_PX
+                    && match seeds {
+                        Seeds::FullLine => true,
+                        Seeds::Local | Seeds::LongLine => points && !open_ended(maps, &s),
+                    };
+                cands.push((s, seeds, score(&s, credited, area, p), plain));
             }
         }
     }
@@ -103,16 +124,42 @@ pub(super) fn accept(
     (ranked, dropped)
 }
 
-/// The confidence of candidate `s` of stage `seeds` in an image of `area_px` pixels: a
-/// full-line one at least `MIN_LENGTH_PX` long is scored with `CONFIDENCE_CREDIT` more SNR
-/// (its search makes fewer tests); its measured SNR is kept as it is.
-pub(super) fn score(s: &Seg, seeds: Seeds, area_px: f64, p: &Sanitized) -> f64 {
-    let credit = if seeds == Seeds::FullLine && s.length >= MIN_LENGTH_PX {
-        CONFIDENCE_CREDIT
-    } else {
-        0.0
-    };
+/// The confidence of candidate `s` in an image of `area_px` pixels; a `credited` one (a
+/// full-line candidate at least `MIN_LENGTH_PX` long, whose search makes fewer tests; where
+/// stars are points, another stage's as long, see [`OPEN_PX`]) is scored with
+/// `CONFIDENCE_CREDIT` more SNR; its measured SNR is kept as it is.
+pub(super) fn score(s: &Seg, credited: bool, area_px: f64, p: &Sanitized) -> f64 {
+    let credit = if credited { CONFIDENCE_CREDIT } else { 0.0 };
     confidence(s.snr + credit, s.elongation, area_px, p)
+}
+
+/// Whether the light of `s` goes on beyond one of its ends: the mean contrast of the (up to)
+/// [`OPEN_PX`] samples on its axis beyond an end, inside the frame and at least 16 of them,
+/// above `refine::CARRIED` of its level (the median contrast along it): nearer light at half
+/// the level (a tumbling streak's dim phase) than none.
+pub(super) fn open_ended(maps: &Maps, s: &Seg) -> bool {
+    let (ux, uy) = s.dir();
+    let (nx, ny) = (-uy, ux);
+    let taps = maps.contrast_taps();
+    let along: Vec<f64> = s
+        .axis_points()
+        .map(|(x, y)| maps.contrast(&taps, x, y, nx, ny))
+        .collect();
+    if along.is_empty() {
+        return false;
+    }
+    let level = median_of(&along);
+    let (last_x, last_y) = ((maps.w - 1) as f64, (maps.h - 1) as f64);
+    let beyond = |(x0, y0): (f64, f64), (dx, dy): (f64, f64)| {
+        let rest: Vec<f64> = (1..=OPEN_PX)
+            .map(|t| (x0 + t as f64 * dx, y0 + t as f64 * dy))
+            .take_while(|&(x, y)| x >= 0.0 && y >= 0.0 && x <= last_x && y <= last_y)
+            .map(|(x, y)| maps.contrast(&taps, x, y, nx, ny))
+            .collect();
+        rest.len() >= 16 && rest.iter().sum::<f64>() > rest.len() as f64 * CARRIED * level
+    };
+    let (a, b) = s.ends();
+    level > 0.0 && (beyond(a, (-ux, -uy)) || beyond(b, (ux, uy)))
 }
 
 /// How the gap test reads a segment's profile: settled at acceptance from whether stars are

@@ -392,7 +392,7 @@ pub(super) fn best_stretch(prof: &[f64], ta: i64, min: usize) -> Option<(i64, i6
 /// brighter part (image 92: rows 443-1021 of a streak across all 1024, IoU 0.33); at 0.25
 /// (with `full_lines::CONFIDENCE_CREDIT` 2) both such boxes became found streaks and no false
 /// box left at confidence 0.5 was the debris boxed in part; at 0.4 one stayed short.
-const CARRIED: f64 = 0.25;
+pub(super) const CARRIED: f64 = 0.25;
 
 /// The ends of the stretch `(s, e)` of `prof` (axis positions from `ta`), each carried on to
 /// the profile's end where the samples beyond hold more than [`CARRIED`] of its mean level.

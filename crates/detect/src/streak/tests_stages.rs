@@ -2,7 +2,7 @@
 //! promises, on input where the answer is known.
 
 use super::Candidate;
-use super::accept::{Reading, accept, dip, gap, score};
+use super::accept::{Reading, accept, dip, gap, open_ended, score};
 use super::explain::{Reason, Seeds};
 use super::explain_away::explain_away;
 use super::flatten::flatten;
@@ -50,6 +50,8 @@ fn streak_map(amp: f64, y: f64, x0: usize, x1: usize) -> Vec<f32> {
 
 /// What the later stages read, around a given map `z`.
 struct World {
+    w: usize,
+    h: usize,
     pixels: Vec<u8>,
     bg: Vec<f32>,
     z: Vec<f32>,
@@ -60,11 +62,18 @@ struct World {
 
 impl World {
     fn new(z: Vec<f32>) -> World {
+        World::sized(z, W, H)
+    }
+
+    /// A map of `w` x `h` (a line longer than `W` needs a wider one).
+    fn sized(z: Vec<f32>, w: usize, h: usize) -> World {
         let p = params();
         let noise = LineNoise::white(&p);
         World {
-            pixels: vec![0; W * H],
-            bg: vec![0.0; W * H],
+            w,
+            h,
+            pixels: vec![0; w * h],
+            bg: vec![0.0; w * h],
             z,
             p,
             noise,
@@ -74,8 +83,8 @@ impl World {
 
     fn maps(&self) -> Maps<'_> {
         Maps {
-            w: W,
-            h: H,
+            w: self.w,
+            h: self.h,
             pixels: &self.pixels,
             bg: &self.bg,
             z: &self.z,
@@ -408,22 +417,7 @@ fn a_tumbling_streaks_dim_stretch_is_no_gap_where_stars_are_points() {
         }
         z
     };
-    let p = params();
-    let noise = LineNoise::white(&p);
-    let (pixels, bg) = (vec![0u8; w * h], vec![0f32; w * h]);
-    let gap_of = |z: &[f32], points: bool, regime: Regime, along_edge: bool| {
-        let maps = Maps {
-            w,
-            h,
-            pixels: &pixels,
-            bg: &bg,
-            z,
-            p: &p,
-            noise: &noise,
-            under_trails: None,
-            removed: None,
-            sample_corr: Default::default(),
-        };
+    let gap_of = |z: Vec<f32>, points: bool, regime: Regime, along_edge: bool| {
         let s = Seg {
             cx: 159.5,
             cy: 50.0,
@@ -434,15 +428,20 @@ fn a_tumbling_streaks_dim_stretch_is_no_gap_where_stars_are_points() {
             elongation: 10.0,
             contrast: true,
         };
-        gap(&maps, &s, Reading::of(&s, points, regime, along_edge))
+        let world = World::sized(z, w, h);
+        gap(
+            &world.maps(),
+            &s,
+            Reading::of(&s, points, regime, along_edge),
+        )
     };
-    let dim = map(1.2);
-    assert_eq!(gap_of(&dim, true, Regime::Resolved, false), None);
-    assert!(gap_of(&dim, false, Regime::Resolved, false).is_some());
-    assert!(gap_of(&dim, true, Regime::SubNoise { min: 100 }, false).is_some());
-    assert!(gap_of(&map(0.0), true, Regime::Resolved, false).is_some());
+    let dim = || map(1.2);
+    assert_eq!(gap_of(dim(), true, Regime::Resolved, false), None);
+    assert!(gap_of(dim(), false, Regime::Resolved, false).is_some());
+    assert!(gap_of(dim(), true, Regime::SubNoise { min: 100 }, false).is_some());
+    assert!(gap_of(map(0.0), true, Regime::Resolved, false).is_some());
     // Along the frame's outline a long line is the frame's edge, read against its level.
-    assert!(gap_of(&dim, true, Regime::Resolved, true).is_some());
+    assert!(gap_of(dim(), true, Regime::Resolved, true).is_some());
 }
 
 /// Step 7, the dip test where stars are points: two round blobs 10 px apart (their dip at
@@ -737,9 +736,8 @@ fn a_sub_noise_stretch_is_carried_on_by_its_dimmer_rest() {
     assert_eq!(carried(&faint, ta, stretch), stretch);
 }
 
-/// Step 7's score: a full-line candidate at least `MIN_LENGTH_PX` long scores 0.5 in a
-/// megapixel at `CONFIDENCE_CREDIT` less SNR than `confidence_snr`; a shorter one, or another
-/// stage's, scores as its SNR alone says.
+/// Step 7's score: a credited candidate scores 0.5 in a megapixel at `CONFIDENCE_CREDIT` less
+/// SNR than `confidence_snr`; one not credited scores as its SNR alone says.
 #[test]
 fn a_long_full_line_candidate_is_scored_with_its_credit() {
     let p = params();
@@ -754,9 +752,71 @@ fn a_long_full_line_candidate_is_scored_with_its_credit() {
         ..long
     };
     let mp = 1_048_576.0;
-    assert!((score(&long, Seeds::FullLine, mp, &p) - 0.5).abs() < 1e-6);
+    assert!((score(&long, true, mp, &p) - 0.5).abs() < 1e-6);
     let plain = confidence(snr, long.elongation, mp, &p);
     assert!(plain < 0.2, "{plain}");
-    assert_eq!(score(&long, Seeds::Local, mp, &p), plain);
-    assert_eq!(score(&short, Seeds::FullLine, mp, &p), plain);
+    assert_eq!(score(&long, false, mp, &p), plain);
+    assert_eq!(score(&short, false, mp, &p), plain);
+}
+
+/// A horizontal streak on row 30 of a 400 x 60 map: 3 (unit noise) from x `x0` to 249 px on,
+/// `rest` times that from there to the border; and the segment of its first 250 px.
+fn open_world(x0: usize, rest: f64) -> (World, Seg) {
+    let (w, h) = (400, 60);
+    let mut z = vec![0f32; w * h];
+    for y in 0..h {
+        let d = y as f64 - 30.0;
+        let v = 3.0 * (-d * d / (2.0 * SE * SE)).exp();
+        for x in x0..w {
+            z[y * w + x] = (if x < x0 + 250 { v } else { rest * v }) as f32;
+        }
+    }
+    let s = Seg {
+        cx: x0 as f64 + 124.5,
+        cy: 30.0,
+        theta: 0.0,
+        length: 250.0,
+        snr: 8.0,
+        flux: 0.0,
+        elongation: 50.0,
+        contrast: true,
+    };
+    (World::sized(z, w, h), s)
+}
+
+/// Step 7, the open-end test: light at 0.4 of a segment's level on its axis beyond an end (a
+/// tumbling streak's dim phase) leaves it open, at 0.1 it does not; light at its level beyond
+/// an end 30 px before the border leaves it open, 10 px before (under 16 samples) not.
+#[test]
+fn a_segment_whose_light_goes_on_beyond_an_end_is_open() {
+    let open = |x0: usize, rest: f64| {
+        let (world, s) = open_world(x0, rest);
+        open_ended(&world.maps(), &s)
+    };
+    assert!(open(20, 0.4));
+    assert!(!open(20, 0.1));
+    assert!(open(120, 1.0));
+    assert!(!open(140, 1.0));
+}
+
+/// Step 7: where stars are points, a local-stage line of 250 px is scored with the credit,
+/// unless its light goes on beyond an end; where stars are trails, without it.
+#[test]
+fn a_long_line_is_credited_where_stars_are_points_unless_open() {
+    let scored = |rest: f64, points: bool| {
+        let (world, s) = open_world(20, rest);
+        let (cands, dropped) = accept(&world.maps(), vec![(s, Seeds::Local)], &no_star, points);
+        assert!(dropped.is_empty(), "{dropped:?}");
+        let area = (world.w * world.h) as f64;
+        (
+            cands[0].2,
+            score(&s, true, area, &world.p),
+            score(&s, false, area, &world.p),
+        )
+    };
+    let (closed, credited, plain) = scored(0.1, true);
+    assert!(credited > plain);
+    assert_eq!(closed, credited);
+    assert_eq!(scored(0.1, false).0, plain);
+    assert_eq!(scored(0.4, true).0, plain);
 }
