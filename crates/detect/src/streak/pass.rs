@@ -3,6 +3,8 @@
 //! along it; the star-aware pass subtracts the predicted trails and drops what they explain.
 
 use std::borrow::Cow;
+use std::cell::RefCell;
+use std::collections::HashMap;
 
 use super::accept::accept;
 use super::explain::{Dropped, Seeds};
@@ -76,7 +78,18 @@ pub(super) fn pass(
         (None, Some(a)) => StarTest::Along(a),
         (None, None) => StarTest::Round,
     };
-    let is_star = |s: &Seg| star_test.explains(s, w, h, p);
+    // Each segment's answer kept: `accept` asks again of every segment it is given, each
+    // one a fragment or a joined segment that was asked of already (`fragments`, `merge`).
+    let answers: RefCell<HashMap<[u64; 8], bool>> = RefCell::default();
+    let is_star = |s: &Seg| {
+        let key = s.bits();
+        let asked = answers.borrow().get(&key).copied();
+        asked.unwrap_or_else(|| {
+            let star = star_test.explains(s, w, h, p);
+            answers.borrow_mut().insert(key, star);
+            star
+        })
+    };
     // Profiles by contrast (see `refine`), except for the local seeds of survey images, where
     // parallel star trails fall in the side bands (a false candidate at confidence 0.66 in
     // `survey_trails_rejected_and_debris_found`).
