@@ -14,7 +14,7 @@ use super::fragments::fragments;
 use super::full_lines::full_line_components;
 use super::maps::Maps;
 use super::merge::merge;
-use super::output::{Candidate, candidate};
+use super::output::{Candidate, boxed, unboxed};
 use super::params::Sanitized;
 use super::radon::long_line_components;
 use super::reach::reach;
@@ -38,6 +38,25 @@ pub(super) fn pass(
     trail: Option<f64>,
     stars: Option<&[StarTrail]>,
 ) -> (Vec<Candidate>, Vec<Dropped>) {
+    pass_then(pixels, w, h, p, bg, z, (trail, stars), |maps, kept| {
+        kept.into_iter().map(|(s, c)| boxed(maps, &s, c)).collect()
+    })
+}
+
+/// [`pass`] up to the boxes: its candidates, unboxed ([`unboxed`]), each with its segment,
+/// handed to `then` with the pass's maps, on which `then` boxes those it keeps ([`boxed`]);
+/// what `then` returns, and the segments dropped.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn pass_then<R>(
+    pixels: &[u8],
+    w: usize,
+    h: usize,
+    p: &Sanitized,
+    bg: &[f32],
+    z: Cow<'_, [f32]>,
+    (trail, stars): (Option<f64>, Option<&[StarTrail]>),
+    then: impl FnOnce(&Maps, Vec<(Seg, Candidate)>) -> R,
+) -> (R, Vec<Dropped>) {
     let trail = trail.filter(|a| a.is_finite());
     // The predicted trails and the map before any is subtracted, which the star test reads.
     // Borrowed where the caller keeps the map (both passes of a survey image start from it):
@@ -117,11 +136,14 @@ pub(super) fn pass(
     dropped.extend(d);
     let (kept, d) = explain_away(&maps, cands);
     dropped.extend(d);
-    // Boxes; in the star-aware pass each streak is first followed across the trails that
-    // hide it (`reach`).
+    // In the star-aware pass each streak is first followed across the trails that hide it
+    // (`reach`).
     let found = kept
         .into_iter()
-        .map(|(s, score)| candidate(&maps, &reach(&maps, &s), score))
+        .map(|(s, score)| {
+            let s = reach(&maps, &s);
+            (s, unboxed(&maps, &s, score))
+        })
         .collect();
-    (found, dropped)
+    (then(&maps, found), dropped)
 }
