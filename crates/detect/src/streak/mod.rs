@@ -159,7 +159,7 @@ pub use own_trails::{OwnTrails, TrailModel};
 use own_trails::{from_lines, own_trails};
 pub(crate) use params::Sanitized;
 pub use params::{Footprint, StreakParams};
-use pass::{pass, pass_then};
+use pass::{box_all, pass};
 use segment::Seg;
 use segment::angle_diff_deg;
 pub use sky::StarTrail;
@@ -279,7 +279,17 @@ pub(crate) fn on_frame(
     }
     // Too few bright features: the lines a pass told of no trails finds may still share a
     // direction (a frame whose trails are faint but for one or two).
-    let found = pass(pixels, w, h, p, &bg, Cow::Borrowed(&z), None, None).0;
+    let found = pass(
+        pixels,
+        w,
+        h,
+        p,
+        &bg,
+        Cow::Borrowed(&z),
+        (None, None),
+        box_all,
+    )
+    .0;
     match from_lines(&found, p.psf_sigma) {
         Some(mut m) => {
             let found = along_own_trails(pixels, w, h, p, (bg, z), &mut m);
@@ -302,7 +312,17 @@ fn along_own_trails(
     m: &mut TrailModel,
 ) -> Vec<Candidate> {
     let trail = m.angle_deg;
-    let first = pass(pixels, w, h, p, &bg, Cow::Borrowed(&z), Some(trail), None).0;
+    let first = pass(
+        pixels,
+        w,
+        h,
+        p,
+        &bg,
+        Cow::Borrowed(&z),
+        (Some(trail), None),
+        box_all,
+    )
+    .0;
     // The star trails are among the lines, so beyond `max_candidates`.
     let along = Sanitized {
         along: Some(trail),
@@ -317,8 +337,8 @@ fn along_own_trails(
         &along,
         &bg,
         Cow::Borrowed(&z),
-        Some(trail),
-        Some(&[]),
+        (Some(trail), Some(&[])),
+        box_all,
     )
     .0;
     m.settle(&second);
@@ -400,7 +420,7 @@ fn two_passes(
     // is most of a candidate's time, and 162 were fitted for the 98 kept on dev-os.
     let z_ref = Cow::Borrowed(&z[..]);
     let first_pass = (Some(trail), None);
-    pass_then(
+    pass(
         pixels,
         w,
         h,
@@ -410,7 +430,7 @@ fn two_passes(
         first_pass,
         |maps1, first| {
             let second_pass = (Some(trail), Some(stars));
-            pass_then(
+            pass(
                 pixels,
                 w,
                 h,
@@ -492,7 +512,7 @@ pub(crate) fn explained(
         p,
         &bg,
         Cow::Owned(z),
-        star_trail_angle_deg,
-        None,
+        (star_trail_angle_deg, None),
+        box_all,
     )
 }

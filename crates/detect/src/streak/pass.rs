@@ -24,30 +24,13 @@ use super::segment::Seg;
 use super::sky::{Sky, StarTrail};
 use super::star_test::StarTest;
 
-/// The candidates of one pass on the background `bg` and unit-noise map `z` of `pixels`, and
-/// the segments dropped on the way, with why. `trail`: the trails' direction (degrees) of a
-/// survey image; `stars`: the predicted trails, for the star-aware pass.
+/// One pass on the background `bg` and unit-noise map `z` of `pixels`: its candidates,
+/// unboxed ([`unboxed`]), each with its segment, handed to `then` with the pass's maps, on
+/// which `then` boxes those it keeps ([`boxed`]; [`box_all`] boxes every one); what `then`
+/// returns, and the segments dropped on the way, with why. `trail`: the trails' direction
+/// (degrees) of a survey image; `stars`: the predicted trails, for the star-aware pass.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn pass(
-    pixels: &[u8],
-    w: usize,
-    h: usize,
-    p: &Sanitized,
-    bg: &[f32],
-    z: Cow<'_, [f32]>,
-    trail: Option<f64>,
-    stars: Option<&[StarTrail]>,
-) -> (Vec<Candidate>, Vec<Dropped>) {
-    pass_then(pixels, w, h, p, bg, z, (trail, stars), |maps, kept| {
-        kept.into_iter().map(|(s, c)| boxed(maps, &s, c)).collect()
-    })
-}
-
-/// [`pass`] up to the boxes: its candidates, unboxed ([`unboxed`]), each with its segment,
-/// handed to `then` with the pass's maps, on which `then` boxes those it keeps ([`boxed`]);
-/// what `then` returns, and the segments dropped.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn pass_then<R>(
+pub(super) fn pass<R>(
     pixels: &[u8],
     w: usize,
     h: usize,
@@ -146,4 +129,9 @@ pub(super) fn pass_then<R>(
         })
         .collect();
     (then(&maps, found), dropped)
+}
+
+/// Every candidate of a pass boxed on its maps: [`pass`]'s `then` where it keeps them all.
+pub(super) fn box_all(maps: &Maps, kept: Vec<(Seg, Candidate)>) -> Vec<Candidate> {
+    kept.into_iter().map(|(s, c)| boxed(maps, &s, c)).collect()
 }
