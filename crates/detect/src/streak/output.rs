@@ -5,7 +5,6 @@ use super::maps::Maps;
 use super::params::Sanitized;
 use super::segment::Seg;
 use crate::Detection;
-use soig_image::geometry::BoxPx;
 
 /// The reference image area of the confidence: 1024 x 1024 pixels.
 const MEGAPIXEL: f64 = 1_048_576.0;
@@ -47,7 +46,30 @@ pub struct Candidate {
 }
 
 /// The candidate of the kept segment `s` of score `score`, boxed.
+#[cfg(test)]
 pub(super) fn candidate(maps: &Maps, s: &Seg, score: f64) -> Candidate {
+    boxed(maps, s, unboxed(maps, s, score))
+}
+
+/// `c`, the candidate of `s` ([`unboxed`]), with the fitted streak's label box (`fit`); the
+/// padded segment's where it cannot be fitted.
+pub(super) fn boxed(maps: &Maps, s: &Seg, c: Candidate) -> Candidate {
+    let Some(b) = fitted_box(maps, s) else {
+        return c;
+    };
+    let detection = Detection {
+        x1: b.x_min,
+        y1: b.y_min,
+        x2: b.x_max,
+        y2: b.y_max,
+        ..c.detection
+    };
+    Candidate { detection, ..c }
+}
+
+/// [`candidate`] with the padded segment's box: all that tells one candidate from another
+/// (the fitted box, most of a candidate's time, is only its label box).
+pub(super) fn unboxed(maps: &Maps, s: &Seg, score: f64) -> Candidate {
     let p = maps.p;
     let (a, b) = s.ends();
     let (ux, uy) = s.dir();
@@ -57,19 +79,11 @@ pub(super) fn candidate(maps: &Maps, s: &Seg, score: f64) -> Candidate {
     let ex = ((along * ux).powi(2) + (across * uy).powi(2)).sqrt();
     let ey = ((along * uy).powi(2) + (across * ux).powi(2)).sqrt();
     let (w, h) = (maps.w as f64, maps.h as f64);
-    // The fitted streak's label box (`fit`); the padded segment where it cannot be fitted.
-    let padded = BoxPx {
-        x_min: (a.0.min(b.0) - ex + 0.5).clamp(0.0, w),
-        y_min: (a.1.min(b.1) - ey + 0.5).clamp(0.0, h),
-        x_max: (a.0.max(b.0) + ex + 0.5).clamp(0.0, w),
-        y_max: (a.1.max(b.1) + ey + 0.5).clamp(0.0, h),
-    };
-    let boxed = fitted_box(maps, s).unwrap_or(padded);
     let detection = Detection {
-        x1: boxed.x_min,
-        y1: boxed.y_min,
-        x2: boxed.x_max,
-        y2: boxed.y_max,
+        x1: (a.0.min(b.0) - ex + 0.5).clamp(0.0, w),
+        y1: (a.1.min(b.1) - ey + 0.5).clamp(0.0, h),
+        x2: (a.0.max(b.0) + ex + 0.5).clamp(0.0, w),
+        y2: (a.1.max(b.1) + ey + 0.5).clamp(0.0, h),
         score,
         class: p.class,
     };

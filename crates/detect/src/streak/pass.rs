@@ -3,6 +3,8 @@
 //! along it; the star-aware pass subtracts the predicted trails and drops what they explain.
 
 use std::borrow::Cow;
+use std::cell::RefCell;
+use std::collections::HashMap;
 
 use super::accept::accept;
 use super::explain::{Dropped, Seeds};
@@ -12,7 +14,7 @@ use super::fragments::fragments;
 use super::full_lines::full_line_components;
 use super::maps::Maps;
 use super::merge::merge;
-use super::output::{Candidate, candidate};
+use super::output::{Candidate, boxed, unboxed};
 use super::params::Sanitized;
 use super::radon::long_line_components;
 use super::reach::reach;
@@ -22,20 +24,22 @@ use super::segment::Seg;
 use super::sky::{Sky, StarTrail};
 use super::star_test::StarTest;
 
-/// The candidates of one pass on the background `bg` and unit-noise map `z` of `pixels`, and
-/// the segments dropped on the way, with why. `trail`: the trails' direction (degrees) of a
-/// survey image; `stars`: the predicted trails, for the star-aware pass.
+/// One pass on the background `bg` and unit-noise map `z` of `pixels`: its candidates,
+/// unboxed ([`unboxed`]), each with its segment, handed to `then` with the pass's maps, on
+/// which `then` boxes those it keeps ([`boxed`]; [`box_all`] boxes every one); what `then`
+/// returns, and the segments dropped on the way, with why. `trail`: the trails' direction
+/// (degrees) of a survey image; `stars`: the predicted trails, for the star-aware pass.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn pass(
+pub(super) fn pass<R>(
     pixels: &[u8],
     w: usize,
     h: usize,
     p: &Sanitized,
     bg: &[f32],
     z: Cow<'_, [f32]>,
-    trail: Option<f64>,
-    stars: Option<&[StarTrail]>,
-) -> (Vec<Candidate>, Vec<Dropped>) {
+    (trail, stars): (Option<f64>, Option<&[StarTrail]>),
+    then: impl FnOnce(&Maps, Vec<(Seg, Candidate)>) -> R,
+) -> (R, Vec<Dropped>) {
     let trail = trail.filter(|a| a.is_finite());
     // The predicted trails and the map before any is subtracted, which the star test reads.
     // Borrowed where the caller keeps the map (both passes of a survey image start from it):
@@ -76,7 +80,18 @@ pub(super) fn pass(
         (None, Some(a)) => StarTest::Along(a),
         (None, None) => StarTest::Round,
     };
-    let is_star = |s: &Seg| star_test.explains(s, w, h, p);
+    // Each segment's answer kept: `accept` asks again of every segment it is given, each
+    // one a fragment or a joined segment that was asked of already (`fragments`, `merge`).
+    let answers: RefCell<HashMap<[u64; 8], bool>> = RefCell::default();
+    let is_star = |s: &Seg| {
+        let key = s.bits();
+        let asked = answers.borrow().get(&key).copied();
+        asked.unwrap_or_else(|| {
+            let star = star_test.explains(s, w, h, p);
+            answers.borrow_mut().insert(key, star);
+            star
+        })
+    };
     // Profiles by contrast (see `refine`), except for the local seeds of survey images, where
     // parallel star trails fall in the side bands (a false candidate at confidence 0.66 in
     // `survey_trails_rejected_and_debris_found`).
@@ -104,11 +119,19 @@ pub(super) fn pass(
     dropped.extend(d);
     let (kept, d) = explain_away(&maps, cands);
     dropped.extend(d);
-    // Boxes; in the star-aware pass each streak is first followed across the trails that
-    // hide it (`reach`).
+    // In the star-aware pass each streak is first followed across the trails that hide it
+    // (`reach`).
     let found = kept
         .into_iter()
-        .map(|(s, score)| candidate(&maps, &reach(&maps, &s), score))
+        .map(|(s, score)| {
+            let s = reach(&maps, &s);
+            (s, unboxed(&maps, &s, score))
+        })
         .collect();
-    (found, dropped)
+    (then(&maps, found), dropped)
+}
+
+/// Every candidate of a pass boxed on its maps: [`pass`]'s `then` where it keeps them all.
+pub(super) fn box_all(maps: &Maps, kept: Vec<(Seg, Candidate)>) -> Vec<Candidate> {
+    kept.into_iter().map(|(s, c)| boxed(maps, &s, c)).collect()
 }

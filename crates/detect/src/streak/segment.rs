@@ -30,6 +30,28 @@ impl Seg {
             (self.cx + hl * ux, self.cy + hl * uy),
         )
     }
+    /// Every field's bits: the same segment, whatever the stage that measured it.
+    pub(super) fn bits(&self) -> [u64; 8] {
+        let f = [
+            self.cx,
+            self.cy,
+            self.theta,
+            self.length,
+            self.snr,
+            self.flux,
+        ];
+        let [a, b, c, d, e, g] = f.map(f64::to_bits);
+        [
+            a,
+            b,
+            c,
+            d,
+            e,
+            g,
+            self.elongation.to_bits(),
+            u64::from(self.contrast),
+        ]
+    }
     /// The axis points 1 px apart from the centre, whole steps only (the profile samples).
     pub(super) fn axis_points(&self) -> impl Iterator<Item = (f64, f64)> + use<> {
         let (ux, uy) = self.dir();

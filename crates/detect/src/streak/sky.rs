@@ -245,10 +245,13 @@ impl Sky {
     /// bright trail), which is no gap in the streak; and how much was subtracted at each pixel
     /// (where that is more than half a streak's level, the streak is hidden: see `reach`).
     pub(super) fn subtract(&self, z: &mut [f32], w: usize, h: usize) -> (Vec<bool>, Vec<f32>) {
-        let mut stamp = vec![usize::MAX; w * h];
+        // The last trail that visited each pixel: 4 bytes a pixel (a usize's 8 were 8 MB to
+        // fill an image).
+        let mut stamp = vec![u32::MAX; w * h];
         let mut under = vec![false; w * h];
         let mut removed = vec![0.0f32; w * h];
-        for (id, t) in self.trails.iter().enumerate() {
+        let ids = (0..u32::MAX).zip(&self.trails);
+        for (id, t) in ids {
             let Some(profile) = &t.profile else {
                 continue;
             };

@@ -63,7 +63,6 @@ pub(super) fn wander(
     let (nx, ny) = (-uy, ux);
     // At most about 128 samples make each median.
     let stride = (samples.len() / 128).max(1);
-    let level = |d: f64| median_across(z, w, h, samples, stride, (nx, ny), d);
     // On the path itself the samples hold the map's values already (the same bilinear reads).
     let on_path: Vec<f64> = samples.iter().step_by(stride).map(|s| s.2).collect();
     let here = median_of(&on_path);
@@ -71,6 +70,13 @@ pub(super) fn wander(
     if here.is_nan() || here >= SHOWS_SIGMA {
         return None;
     }
+    // An offset whose median is sure to fall short of `lost`'s bar is read no further: it can
+    // be neither lost nor the best of an offset that is (most trails are faint, and most of
+    // their offsets are noise). Unread, it counts as -inf: the best, when lost, is the same.
+    let bar = SHOWS_SIGMA.max(2.0 * here.max(0.0) + WANDER_GAIN);
+    let level = |d: f64| {
+        median_across(z, w, h, samples, stride, (nx, ny), d, bar).unwrap_or(f64::NEG_INFINITY)
+    };
     let (d, best) = (-WANDER_PX..=WANDER_PX)
         .filter(|&d| d != 0)
         .map(|d| (d as f64, level(d as f64)))
@@ -116,7 +122,10 @@ pub(super) fn walk(
 }
 
 /// The map's median `d` px across a path (along its normal `n`) over every `stride`-th of its
-/// points `pts` (x, y, anything).
+/// points `pts` (x, y, anything); None, read no further, once more than half the values read
+/// are below `below` (then so are the middle two and their mean: the median is too). No value
+/// is below -inf: then always the median.
+#[allow(clippy::too_many_arguments)]
 fn median_across(
     z: &[f32],
     w: usize,
@@ -125,13 +134,22 @@ fn median_across(
     stride: usize,
     n: (f64, f64),
     d: f64,
-) -> f64 {
-    let v: Vec<f64> = pts
-        .iter()
-        .step_by(stride)
-        .map(|q| bilinear(z, w, h, q.0 + d * n.0, q.1 + d * n.1) as f64)
-        .collect();
-    median_of(&v)
+    below: f64,
+) -> Option<f64> {
+    let count = pts.len().div_ceil(stride);
+    let (mut under, mut nan) = (0, false);
+    let mut v: Vec<f64> = Vec::with_capacity(count);
+    for q in pts.iter().step_by(stride) {
+        let x = bilinear(z, w, h, q.0 + d * n.0, q.1 + d * n.1) as f64;
+        // A NaN may sort below the rest (`median_of` orders by `total_cmp`): no early answer.
+        nan |= x.is_nan();
+        under += usize::from(x < below);
+        if !nan && 2 * under > count {
+            return None;
+        }
+        v.push(x);
+    }
+    Some(median_of(&v))
 }
 
 /// `t`'s nodes each moved across the trail by `offset(time)` pixels (along (-u_y, u_x), u its
@@ -205,22 +223,24 @@ pub(super) fn jitter_across(
             let (t0, t1) = (t.times_s[k], t.times_s[k + 1]);
             pts.push((x, y, t0 + f * (t1 - t0)));
         });
-        let level = |part: &[(f64, f64, f64)], stride: usize, d: f64| {
-            median_across(z, w, h, part, stride, (nx, ny), d)
+        // The median, or None where it is sure to be below `below` (see `median_across`).
+        let level = |part: &[(f64, f64, f64)], stride: usize, d: f64, below: f64| {
+            median_across(z, w, h, part, stride, (nx, ny), d, below)
         };
         // Only trails that show clearly near their path (judged on about 64 points: most
         // trails are faint, and this is all they cost).
         let stride = (pts.len() / 64).max(2);
-        if pts.len() < 2 * FOLLOW_STEP_PX
-            || (-WANDER_PX..=WANDER_PX).all(|d| level(&pts, stride, d as f64) < FOLLOW_SIGMA)
-        {
+        let faint =
+            |d: i64| level(&pts, stride, d as f64, FOLLOW_SIGMA).is_none_or(|m| m < FOLLOW_SIGMA);
+        if pts.len() < 2 * FOLLOW_STEP_PX || (-WANDER_PX..=WANDER_PX).all(faint) {
             continue;
         }
         let mut c = FOLLOW_STEP_PX;
         while c + FOLLOW_STEP_PX <= pts.len() {
             let part = &pts[c - FOLLOW_STEP_PX..c + FOLLOW_STEP_PX];
             let m: Vec<f64> = (-WANDER_PX..=WANDER_PX)
-                .map(|d| level(part, 2, d as f64))
+                // Every offset's median (none is below -inf).
+                .filter_map(|d| level(part, 2, d as f64, f64::NEG_INFINITY))
                 .collect();
             let k = (0..m.len()).fold(0, |k, j| if m[j] > m[k] { j } else { k });
             // A peak at the search's edge may lie beyond it: no measure.

@@ -3,6 +3,8 @@
 //! streaks the first missed, or a box of the same streak that scores higher and is as long.
 //! Then one streak keeps one box, the longest.
 
+use std::borrow::Borrow;
+
 use super::output::Candidate;
 use super::params::Sanitized;
 use super::segment::{angle_diff_deg, point_segment_distance};
@@ -13,13 +15,14 @@ use super::segment::{angle_diff_deg, point_segment_distance};
 const SAME_LENGTH: f64 = 0.9;
 
 /// The first pass's candidates `first` and the star-aware pass's `second` (trails along
-/// `trail`, degrees) as one list, best first, at most `max_candidates`.
-pub(super) fn union(
-    mut first: Vec<Candidate>,
-    second: Vec<Candidate>,
+/// `trail`, degrees) as one list, best first, at most `max_candidates`. Each may carry more
+/// than its candidate (what boxes it: `two_passes`).
+pub(super) fn union<C: Borrow<Candidate>>(
+    mut first: Vec<C>,
+    second: Vec<C>,
     trail: f64,
     p: &Sanitized,
-) -> Vec<Candidate> {
+) -> Vec<C> {
     // Beyond the tolerance the second pass adds the streaks the first missed, and replaces
     // the first's box of the same streak where it scores higher. The first pass's trail filter
     // (`trail_filter_px` along the trails) removes most of a line up to about 10 degrees off
@@ -27,18 +30,25 @@ pub(super) fn union(
     // 5.6-7 degrees, SNR 60-110, were lost on 200 rotated survey images; and 9 of 21 streaks
     // missed on the 400 of the rotated row, 7.1-9.8 degrees off, SNR 49-350, were boxed by the
     // first pass but scored 0.001-0.47 on what its filter had left of them.
-    let (mut within, beyond): (Vec<Candidate>, Vec<Candidate>) =
-        second.into_iter().partition(|c| near_trail(c, trail, p));
+    let (mut within, beyond): (Vec<C>, Vec<C>) = second
+        .into_iter()
+        .partition(|c| near_trail(c.borrow(), trail, p));
     for c in beyond {
-        match first.iter().position(|k| same_streak(&c, k, p.dup_dist)) {
+        let k = first
+            .iter()
+            .position(|k| same_streak(c.borrow(), k.borrow(), p.dup_dist));
+        match k {
             None => within.push(c),
-            Some(i) if prefer_longer_second(&first[i], &c, p.dup_dist) => first[i] = c,
+            Some(i) if prefer_longer_second(first[i].borrow(), c.borrow(), p.dup_dist) => {
+                first[i] = c
+            }
             Some(_) => {}
         }
     }
     first.extend(within);
     let mut found = one_box_per_streak(first, p.dup_dist);
-    found.sort_by(|a, b| b.detection.score.total_cmp(&a.detection.score));
+    let score = |c: &C| c.borrow().detection.score;
+    found.sort_by(|a, b| score(b).total_cmp(&score(a)));
     found.truncate(p.max_candidates);
     found
 }
@@ -67,11 +77,15 @@ fn prefer_longer_second(first: &Candidate, second: &Candidate, dist: f64) -> boo
 
 /// One streak, one box: longest first, a candidate lying mostly along a longer one (the same
 /// streak from both passes, or a piece of it) is dropped, whatever its score.
-fn one_box_per_streak(mut found: Vec<Candidate>, dist: f64) -> Vec<Candidate> {
-    found.sort_by(|a, b| b.length_px.total_cmp(&a.length_px));
-    let mut kept: Vec<Candidate> = Vec::new();
+fn one_box_per_streak<C: Borrow<Candidate>>(mut found: Vec<C>, dist: f64) -> Vec<C> {
+    let length = |c: &C| c.borrow().length_px;
+    found.sort_by(|a, b| length(b).total_cmp(&length(a)));
+    let mut kept: Vec<C> = Vec::new();
     for c in found {
-        if !kept.iter().any(|k| lies_along(&c, k, dist)) {
+        if !kept
+            .iter()
+            .any(|k| lies_along(c.borrow(), k.borrow(), dist))
+        {
             kept.push(c);
         }
     }
