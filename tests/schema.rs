@@ -194,6 +194,14 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "b0718f5a58db3c86c8306cd058209d7398810426f09b5e9c5d5673e15152b48a",
     ),
     (
+        "results/campaigns/faint-limit-survey-linearised.toml",
+        "0c3f4c3a0fd48d2508740a5751bc768234d5763e370443ed8871fe6ca0d6262c",
+    ),
+    (
+        "results/campaigns/faint-limit-survey-semisynthetic-linearised.toml",
+        "68a43182e4bea2a12dc4bfc9c4cec6624b05b7b5b7be8a13335cb135421ea86d",
+    ),
+    (
         "results/campaigns/results-fixed-original-semisynthetic.toml",
         "147e7e32437371dd26048d97f29c60918947cee87b17c3c1c5455998693fc59e",
     ),

@@ -171,7 +171,7 @@ fn fit(maps: &Maps, s: &Seg) -> Option<Fit> {
 
 /// The range of t for which the point `c + t u` lies inside the convex `footprint` (empty:
 /// lo > hi).
-fn inside(footprint: &Footprint, c: (f64, f64), u: (f64, f64)) -> (f64, f64) {
+pub(super) fn inside(footprint: &Footprint, c: (f64, f64), u: (f64, f64)) -> (f64, f64) {
     let f = footprint;
     // The corners' turning sense: inside lies on that side of every edge.
     let sense: f64 = (0..4)

@@ -113,6 +113,7 @@ mod fit;
 mod flatten;
 mod fragments;
 mod full_lines;
+mod linearise;
 mod lines;
 mod lone_line;
 mod maps;
@@ -152,6 +153,7 @@ mod unlisted;
 use std::borrow::Cow;
 
 pub use explain::{Dropped, Reason, Seeds};
+use linearise::rank_normal;
 use lone_line::{NEAR_DEG, Seams, like_others, trail_length};
 pub use output::Candidate;
 use output::boxed;
@@ -225,7 +227,12 @@ pub(crate) fn among_stars(
     if width < 2 || height < 2 {
         return Vec::new();
     }
-    // Both passes start from the same background and unit-noise map.
+    // Both passes start from the same background and unit-noise map, of the image linearised
+    // where asked (`linearise`).
+    let linear = p
+        .linearise
+        .then(|| rank_normal(pixels, width, height, p.footprint.as_ref()));
+    let pixels = linear.as_deref().unwrap_or(pixels);
     let (bg, z) = unit_noise_map(pixels, width, height, p);
     two_passes(pixels, width, height, p, (bg, z), trail, stars)
 }

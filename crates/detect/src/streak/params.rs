@@ -87,6 +87,12 @@ pub struct StreakParams {
     /// frame taken while slewing) raises both so far that its own bright streak no longer
     /// stands out: there, `false` keeps the zero-median map and the white-noise model.
     pub calibrate_noise: bool,
+    /// Where stars are predicted trails (a catalogue), detect on the image linearised (default
+    /// false): each grey level mapped to its rank's normal quantile (`linearise`), which undoes
+    /// the enhancement's compression of the sky's upper half, so that a faint streak adds to the
+    /// sky as on the sensor. More faint streaks found; boxes fitted on the linearised map,
+    /// whose ends and edges the fit was not tuned on (see `linearise` for what it measured).
+    pub linearise: bool,
     /// Class written into the detections (default 0).
     pub class: u32,
     /// At most this many candidates are returned, best first (default 16).
@@ -125,6 +131,7 @@ impl Default for StreakParams {
             confidence_snr_scale: 1.0,
             confidence_elongation_scale: 3.0,
             calibrate_noise: true,
+            linearise: false,
             class: 0,
             max_candidates: 16,
         }
@@ -311,6 +318,7 @@ pub(crate) struct Sanitized {
     pub(super) class: u32,
     pub(super) max_candidates: usize,
     pub(super) calibrate_noise: bool,
+    pub(super) linearise: bool,
     /// The star-aware pass: the trails' direction (degrees), whose neighbourhood alone the
     /// line filters search (see [`Sanitized::uses`]); `None`: every orientation.
     pub(super) along: Option<f64>,
@@ -374,6 +382,7 @@ impl Sanitized {
             class: p.class,
             max_candidates: p.max_candidates,
             calibrate_noise: p.calibrate_noise,
+            linearise: p.linearise,
             along: None,
             quiet_side: false,
             footprint: None,
