@@ -18,13 +18,14 @@
 
 use super::components::Component;
 use super::params::Footprint;
-use super::radon::binned_unit;
+use super::radon::{SHARED, binned_unit};
 use super::segment::angle_diff_deg;
 use super::stats::median_of;
 
 /// Block size of the binned map: a streak's cross-section (PSF sigma 1.4 px, smoothed again by
 /// step 2) falls within one 4-pixel offset bin or two neighbours, whose sum is also tried.
-const BIN: usize = 4;
+/// The long-line stage's level of the same binning hands its map on.
+const BIN: usize = SHARED;
 /// The shortest line (full-resolution pixels) this stage looks at: shorter ones are steps 3
 /// and 3b's.
 pub(super) const MIN_LENGTH_PX: f64 = 200.0;
@@ -90,19 +91,21 @@ pub(super) fn along_outline((cx, cy): (f64, f64), theta: f64, outline: &Footprin
 
 /// Seeds of the lines through the `w` x `h` clipped map `zc` whose sum stands out, each with
 /// how far beyond its extent to look for its ends. Lines within `skip.1` degrees of `skip.0`
-/// (image axes), the star trails' direction, are left to the other stages.
+/// (image axes), the star trails' direction, are left to the other stages. `binned`: `zc`
+/// binned by `BIN` already (`binned_unit`, as the long-line stage makes it), if made.
 pub(super) fn full_line_components(
     zc: &[f32],
     w: usize,
     h: usize,
     skip: Option<(f64, f64)>,
+    binned: Option<Vec<f32>>,
 ) -> Vec<(Component, f64)> {
     let (bw, bh) = (w / BIN, h / BIN);
     let min_len = MIN_LENGTH_PX / BIN as f64;
     if (bw.max(bh) as f64) < min_len || bw < 2 || bh < 2 {
         return Vec::new();
     }
-    let Some(map) = binned_unit(zc, w, BIN, bw, bh) else {
+    let Some(map) = binned.or_else(|| binned_unit(zc, w, BIN, bw, bh)) else {
         return Vec::new();
     };
     let grid = Grid::new(map, bw, bh);
@@ -595,7 +598,7 @@ mod tests {
         // = 9.3 sigma for the matched filter, under 1.5 sigma on any 51-pixel piece.
         let (a, b) = ((40.0, 100.0), (560.0, 310.0));
         let zc = map_with_line(600, 3, Some((a, b, 0.25)));
-        let seeds = full_line_components(&zc, 600, 600, None);
+        let seeds = full_line_components(&zc, 600, 600, None, None);
         let want = (b.1 - a.1).atan2(b.0 - a.0);
         let hit = seeds.iter().find(|(c, _)| {
             let d = (c.theta - want).rem_euclid(PI);
@@ -621,7 +624,7 @@ mod tests {
         let mut total = 0;
         for seed in 0..16 {
             let zc = map_with_line(600, 100 + seed, None);
-            let seeds = full_line_components(&zc, 600, 600, None).len();
+            let seeds = full_line_components(&zc, 600, 600, None, None).len();
             assert!(seeds <= 4, "noise map {seed}: {seeds} seeds");
             total += seeds;
         }
@@ -629,6 +632,6 @@ mod tests {
         // The same line, the trails along it: the stage leaves it to the others.
         let zc = map_with_line(600, 3, Some(((40.0, 100.0), (560.0, 310.0), 0.25)));
         let along = (210.0f64).atan2(520.0).to_degrees();
-        assert!(full_line_components(&zc, 600, 600, Some((along, 5.0))).is_empty());
+        assert!(full_line_components(&zc, 600, 600, Some((along, 5.0)), None).is_empty());
     }
 }

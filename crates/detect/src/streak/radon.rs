@@ -33,14 +33,15 @@ const MIN_SIDE: usize = 64;
 
 /// Components of the binned line filters, in full-resolution pixel coordinates, each with the
 /// filter length it came from (full-resolution pixels: how far beyond its extent to look for
-/// its ends).
+/// its ends); and the map binned by `SHARED` where it was made (`binned_unit`), which the
+/// full-line stage bins the same map by (one read of the full map fewer).
 pub(super) fn long_line_components(
     zc: &[f32],
     w: usize,
     h: usize,
     p: &Sanitized,
-) -> Vec<(Component, f64)> {
-    let mut out = Vec::new();
+) -> (Vec<(Component, f64)>, Option<Vec<f32>>) {
+    let (mut out, mut shared) = (Vec::new(), None);
     for b in FACTORS {
         let (bw, bh) = (w / b, h / b);
         if bw < MIN_SIDE || bh < MIN_SIDE {
@@ -64,9 +65,15 @@ pub(super) fn long_line_components(
                 (LENGTH * b) as f64,
             ));
         }
+        if b == SHARED {
+            shared = Some(map);
+        }
     }
-    out
+    (out, shared)
 }
+
+/// The binning factor whose map [`long_line_components`] hands on.
+pub(super) const SHARED: usize = 4;
 
 /// The `bw` x `bh` block means of `b` x `b` pixels of `zc` scaled to unit robust noise, so
 /// that the white-noise model of line sums on it is the right floor; `None` for a map with no
