@@ -95,8 +95,27 @@ pub(super) fn binned_unit(
     Some(map)
 }
 
-/// Block means of `b` x `b` pixels (the last partial blocks left out).
+/// Block means of `b` x `b` pixels (the last partial blocks left out). The stage's factors are
+/// built each with its block width known ([`bin_by`]): its sums unrolled, where a width known
+/// only at run time left a loop of one add per pixel.
 fn bin(zc: &[f32], w: usize, b: usize, bw: usize, bh: usize) -> Vec<f32> {
+    match b {
+        2 => bin_by::<2>(zc, w, bw, bh),
+        4 => bin_by::<4>(zc, w, bw, bh),
+        8 => bin_by::<8>(zc, w, bw, bh),
+        _ => bin_at(zc, w, b, bw, bh),
+    }
+}
+
+/// [`bin`] of blocks `B` pixels wide.
+fn bin_by<const B: usize>(zc: &[f32], w: usize, bw: usize, bh: usize) -> Vec<f32> {
+    bin_at(zc, w, B, bw, bh)
+}
+
+/// The body of [`bin`]: each block's rows summed in turn, each row's `b` pixels in order from
+/// -0 (`sum`), whatever the width is known as.
+#[inline(always)]
+fn bin_at(zc: &[f32], w: usize, b: usize, bw: usize, bh: usize) -> Vec<f32> {
     let mut out = vec![0f32; bw * bh];
     let inv = 1.0 / (b * b) as f32;
     for by in 0..bh {
