@@ -18,13 +18,14 @@
 
 use super::components::Component;
 use super::params::Footprint;
-use super::radon::binned_unit;
+use super::radon::{SHARED, binned_unit};
 use super::segment::angle_diff_deg;
 use super::stats::median_of;
 
 /// Block size of the binned map: a streak's cross-section (PSF sigma 1.4 px, smoothed again by
 /// step 2) falls within one 4-pixel offset bin or two neighbours, whose sum is also tried.
-const BIN: usize = 4;
+/// The long-line stage's level of the same binning hands its map on.
+const BIN: usize = SHARED;
 /// The shortest line (full-resolution pixels) this stage looks at: shorter ones are steps 3
 /// and 3b's.
 pub(super) const MIN_LENGTH_PX: f64 = 200.0;
@@ -90,25 +91,29 @@ pub(super) fn along_outline((cx, cy): (f64, f64), theta: f64, outline: &Footprin
 
 /// Seeds of the lines through the `w` x `h` clipped map `zc` whose sum stands out, each with
 /// how far beyond its extent to look for its ends. Lines within `skip.1` degrees of `skip.0`
-/// (image axes), the star trails' direction, are left to the other stages.
+/// (image axes), the star trails' direction, are left to the other stages. `binned`: `zc`
+/// binned by `BIN` already (`binned_unit`, as the long-line stage makes it), if made.
 pub(super) fn full_line_components(
     zc: &[f32],
     w: usize,
     h: usize,
     skip: Option<(f64, f64)>,
+    binned: Option<Vec<f32>>,
 ) -> Vec<(Component, f64)> {
     let (bw, bh) = (w / BIN, h / BIN);
     let min_len = MIN_LENGTH_PX / BIN as f64;
     if (bw.max(bh) as f64) < min_len || bw < 2 || bh < 2 {
         return Vec::new();
     }
-    let Some(map) = binned_unit(zc, w, BIN, bw, bh) else {
+    let Some(map) = binned.or_else(|| binned_unit(zc, w, BIN, bw, bh)) else {
         return Vec::new();
     };
     let grid = Grid::new(map, bw, bh);
-    let shears: Vec<Shear> = Shear::all(bw, bh)
-        .into_iter()
-        .filter(|s| !skip.is_some_and(|(a, tol)| angle_diff_deg(s.axis_deg(), a) <= tol))
+    let shears: Vec<Shear> = Shear::slopes(bw, bh)
+        .filter(|&(along_x, slope)| {
+            !skip.is_some_and(|(a, tol)| angle_diff_deg(axis_deg(along_x, slope), a) <= tol)
+        })
+        .map(|(along_x, slope)| Shear::new(along_x, slope, bw, bh))
         .collect();
     let sums: Vec<Sums> = shears.iter().map(|s| Sums::of(&grid, s, min_len)).collect();
     let mut lines = peaks(&sums);
@@ -152,6 +157,31 @@ impl Grid {
     }
 }
 
+/// The direction of a shear's lines (along x or y, at `slope`), degrees in image axes, [0, 180).
+fn axis_deg(along_x: bool, slope: f64) -> f64 {
+    let a = if along_x {
+        slope.atan2(1.0)
+    } else {
+        1f64.atan2(slope)
+    };
+    a.to_degrees().rem_euclid(180.0)
+}
+
+/// `v.round() as isize` (half away from zero) for |v| below 2^52, without libm's `round`, a
+/// call on the baseline x86-64 target (a quarter of the shears' construction): `v - trunc(v)`
+/// is exact, and so is the comparison with a half.
+fn round_half_away(v: f64) -> isize {
+    let t = v as isize;
+    let f = v - t as f64;
+    if f >= 0.5 {
+        t + 1
+    } else if f <= -0.5 {
+        t - 1
+    } else {
+        t
+    }
+}
+
 /// One direction of the transform: along x, the lines `y = c + slope x` (|slope| <= 1), or
 /// along y, `x = c + slope y` (|slope| < 1). Lane `i` (a column or a row) is shifted by
 /// `round(slope i)`; bin `r` holds the line of intercept `c = r - max_shift`.
@@ -167,20 +197,25 @@ struct Shear {
 }
 
 impl Shear {
-    /// Every slope `1 / lanes` apart: along x from -1 to 1, along y strictly between.
+    /// Every shear: slopes `1 / lanes` apart, along x from -1 to 1, along y strictly between.
+    #[cfg(test)]
     fn all(w: usize, h: usize) -> Vec<Shear> {
+        Shear::slopes(w, h)
+            .map(|(along_x, slope)| Shear::new(along_x, slope, w, h))
+            .collect()
+    }
+
+    /// Every shear's family (along x) and slope, in `all`'s order.
+    fn slopes(w: usize, h: usize) -> impl Iterator<Item = (bool, f64)> {
         let (wi, hi) = (w as isize, h as isize);
-        let mut out: Vec<Shear> = (-wi..=wi)
-            .map(|k| Shear::new(true, k as f64 / wi as f64, w, h))
-            .collect();
-        out.extend((1 - hi..hi).map(|k| Shear::new(false, k as f64 / hi as f64, w, h)));
-        out
+        let x = (-wi..=wi).map(move |k| (true, k as f64 / wi as f64));
+        x.chain((1 - hi..hi).map(move |k| (false, k as f64 / hi as f64)))
     }
 
     fn new(along_x: bool, slope: f64, w: usize, h: usize) -> Shear {
         let (lanes, lane_len) = if along_x { (w, h) } else { (h, w) };
         let shifts: Vec<isize> = (0..lanes)
-            .map(|i| (slope * i as f64).round() as isize)
+            .map(|i| round_half_away(slope * i as f64))
             .collect();
         let max_shift = shifts.iter().copied().max().unwrap_or(0);
         let min_shift = shifts.iter().copied().min().unwrap_or(0);
@@ -193,16 +228,6 @@ impl Shear {
             bins: lane_len + (max_shift - min_shift) as usize,
             shifts,
         }
-    }
-
-    /// The direction of its lines, degrees in image axes, [0, 180).
-    fn axis_deg(&self) -> f64 {
-        let a = if self.along_x {
-            self.slope.atan2(1.0)
-        } else {
-            1f64.atan2(self.slope)
-        };
-        a.to_degrees().rem_euclid(180.0)
     }
 
     /// Where lane `i` starts among the bins.
@@ -230,7 +255,8 @@ impl Shear {
 /// and for two, in units of the spread of its parallels' contrasts.
 struct Sums {
     /// Per bin: the contrast of the line of one bin and of two from it (None: too short, or
-    /// too little beside it), already divided by `scale`.
+    /// too little beside it), already divided by `scale`; empty where none reaches
+    /// `LINE_SIGMA` (see `Sums::of`).
     sigma: Vec<[Option<f32>; 2]>,
     /// The measured spread of the contrasts of one bin and of two (see `contrast`).
     scale: [f64; 2],
@@ -262,6 +288,20 @@ impl Sums {
                 ]
             })
             .collect();
+        // The spread only scales contrasts down (it is at least 1): a shear none of whose
+        // contrasts reaches `LINE_SIGMA` holds no line `peaks` takes, nor one above a
+        // neighbour that it takes, so its spread (two medians of its ~500 contrasts each way)
+        // is not measured: a third of the shears on survey frames. The margin covers the f32
+        // rounding of the contrasts in sigma.
+        let quiet = |c: &[Option<f64>; 2]| c.iter().flatten().all(|&v| v < LINE_SIGMA - 1e-3);
+        if raw.iter().all(quiet) {
+            return Sums {
+                sigma: Vec::new(),
+                scale: [f64::INFINITY; 2],
+                along_x: s.along_x,
+                max_shift: s.max_shift,
+            };
+        }
         let scale = [0, 1].map(|k| spread(raw.iter().filter_map(|c| c[k]).collect()));
         Sums {
             sigma: raw
@@ -558,7 +598,7 @@ mod tests {
         // = 9.3 sigma for the matched filter, under 1.5 sigma on any 51-pixel piece.
         let (a, b) = ((40.0, 100.0), (560.0, 310.0));
         let zc = map_with_line(600, 3, Some((a, b, 0.25)));
-        let seeds = full_line_components(&zc, 600, 600, None);
+        let seeds = full_line_components(&zc, 600, 600, None, None);
         let want = (b.1 - a.1).atan2(b.0 - a.0);
         let hit = seeds.iter().find(|(c, _)| {
             let d = (c.theta - want).rem_euclid(PI);
@@ -584,7 +624,7 @@ mod tests {
         let mut total = 0;
         for seed in 0..16 {
             let zc = map_with_line(600, 100 + seed, None);
-            let seeds = full_line_components(&zc, 600, 600, None).len();
+            let seeds = full_line_components(&zc, 600, 600, None, None).len();
             assert!(seeds <= 4, "noise map {seed}: {seeds} seeds");
             total += seeds;
         }
@@ -592,6 +632,6 @@ mod tests {
         // The same line, the trails along it: the stage leaves it to the others.
         let zc = map_with_line(600, 3, Some(((40.0, 100.0), (560.0, 310.0), 0.25)));
         let along = (210.0f64).atan2(520.0).to_degrees();
-        assert!(full_line_components(&zc, 600, 600, Some((along, 5.0))).is_empty());
+        assert!(full_line_components(&zc, 600, 600, Some((along, 5.0)), None).is_empty());
     }
 }

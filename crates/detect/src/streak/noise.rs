@@ -257,9 +257,12 @@ pub(super) fn measured_at(
                     {
                         let c = [base(&c4[0]), base(&c4[1]), base(&c4[2]), base(&c4[3])];
                         let mut acc = [-0.0f64; 4];
+                        // The four values read first, then added: read and added in turn,
+                        // each bounds check stood between two adds, which stayed scalar.
                         for &o in line {
+                            let v = [0, 1, 2, 3].map(|k| zc[(c[k] + o) as usize] as f64);
                             for k in 0..4 {
-                                acc[k] += zc[(c[k] + o) as usize] as f64;
+                                acc[k] += v[k];
                             }
                         }
                         s4.copy_from_slice(&acc);

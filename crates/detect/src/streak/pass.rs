@@ -48,7 +48,7 @@ pub(super) fn pass<R>(
     let flat = flatten(z.into_owned(), w, h, p, trail, sky.as_ref().map(|(s, _)| s));
     let noise = line_noise(&flat.zc, w, h, p);
     let local = local_seeds(&flat.zc, w, h, p, &noise);
-    let long = long_line_components(&flat.zc, w, h, p);
+    let (long, binned) = long_line_components(&flat.zc, w, h, p);
     // Lines across the frame (`full_lines`): in the star-aware pass with predicted trails
     // subtracted, away from the trails, and where stars are points, at every angle
     // (faint-limit-fixed development seed 9422, 300 images: found 162 -> 181, false boxes 13
@@ -58,9 +58,9 @@ pub(super) fn pass<R>(
     // false boxes for 4 in `tests/own_trails.rs`).
     let full = match (trail, stars) {
         (Some(a), Some(t)) if !t.is_empty() => {
-            full_line_components(&flat.zc, w, h, Some((a, p.trail_tol)))
+            full_line_components(&flat.zc, w, h, Some((a, p.trail_tol)), binned)
         }
-        (None, None) => full_line_components(&flat.zc, w, h, None),
+        (None, None) => full_line_components(&flat.zc, w, h, None, binned),
         _ => Vec::new(),
     };
     let maps = Maps {

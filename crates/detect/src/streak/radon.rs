@@ -33,14 +33,15 @@ const MIN_SIDE: usize = 64;
 
 /// Components of the binned line filters, in full-resolution pixel coordinates, each with the
 /// filter length it came from (full-resolution pixels: how far beyond its extent to look for
-/// its ends).
+/// its ends); and the map binned by `SHARED` where it was made (`binned_unit`), which the
+/// full-line stage bins the same map by (one read of the full map fewer).
 pub(super) fn long_line_components(
     zc: &[f32],
     w: usize,
     h: usize,
     p: &Sanitized,
-) -> Vec<(Component, f64)> {
-    let mut out = Vec::new();
+) -> (Vec<(Component, f64)>, Option<Vec<f32>>) {
+    let (mut out, mut shared) = (Vec::new(), None);
     for b in FACTORS {
         let (bw, bh) = (w / b, h / b);
         if bw < MIN_SIDE || bh < MIN_SIDE {
@@ -64,9 +65,15 @@ pub(super) fn long_line_components(
                 (LENGTH * b) as f64,
             ));
         }
+        if b == SHARED {
+            shared = Some(map);
+        }
     }
-    out
+    (out, shared)
 }
+
+/// The binning factor whose map [`long_line_components`] hands on.
+pub(super) const SHARED: usize = 4;
 
 /// The `bw` x `bh` block means of `b` x `b` pixels of `zc` scaled to unit robust noise, so
 /// that the white-noise model of line sums on it is the right floor; `None` for a map with no
@@ -88,8 +95,27 @@ pub(super) fn binned_unit(
     Some(map)
 }
 
-/// Block means of `b` x `b` pixels (the last partial blocks left out).
+/// Block means of `b` x `b` pixels (the last partial blocks left out). The stage's factors are
+/// built each with its block width known ([`bin_by`]): its sums unrolled, where a width known
+/// only at run time left a loop of one add per pixel.
 fn bin(zc: &[f32], w: usize, b: usize, bw: usize, bh: usize) -> Vec<f32> {
+    match b {
+        2 => bin_by::<2>(zc, w, bw, bh),
+        4 => bin_by::<4>(zc, w, bw, bh),
+        8 => bin_by::<8>(zc, w, bw, bh),
+        _ => bin_at(zc, w, b, bw, bh),
+    }
+}
+
+/// [`bin`] of blocks `B` pixels wide.
+fn bin_by<const B: usize>(zc: &[f32], w: usize, bw: usize, bh: usize) -> Vec<f32> {
+    bin_at(zc, w, B, bw, bh)
+}
+
+/// The body of [`bin`]: each block's rows summed in turn, each row's `b` pixels in order from
+/// -0 (`sum`), whatever the width is known as.
+#[inline(always)]
+fn bin_at(zc: &[f32], w: usize, b: usize, bw: usize, bh: usize) -> Vec<f32> {
     let mut out = vec![0f32; bw * bh];
     let inv = 1.0 / (b * b) as f32;
     for by in 0..bh {

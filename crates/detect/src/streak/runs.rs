@@ -21,7 +21,49 @@ const RUN: usize = 8;
 /// search over every segment was a third of the survey detector's time).
 pub(super) struct Runs {
     boxes: Vec<[f64; 4]>,
+    corridor: Option<Corridor>,
 }
+
+/// The band about a path's chord (its first node to its last) that holds the whole path: the
+/// chord's start and unit direction, and the farthest any node lies from its line (every
+/// point of a segment lies no farther than its ends). A point farther from the line than that
+/// plus a distance is farther from the path than the distance: a test of a few flops, where a
+/// diagonal trail's bounding box holds most of the points it is asked of, each then put to
+/// every run's box (a survey frame's star test spent most of its time so).
+struct Corridor {
+    start: (f64, f64),
+    dir: (f64, f64),
+    half_width: f64,
+}
+
+impl Corridor {
+    fn of(nodes: &[(f64, f64)]) -> Option<Corridor> {
+        let (a, b) = (*nodes.first()?, *nodes.last()?);
+        let len = (b.0 - a.0).hypot(b.1 - a.1);
+        if !(len > 0.0 && len.is_finite()) {
+            return None;
+        }
+        let dir = ((b.0 - a.0) / len, (b.1 - a.1) / len);
+        let off = |q: (f64, f64)| ((q.0 - a.0) * dir.1 - (q.1 - a.1) * dir.0).abs();
+        let half_width = nodes.iter().map(|&q| off(q)).fold(0.0, f64::max);
+        half_width.is_finite().then_some(Corridor {
+            start: a,
+            dir,
+            half_width,
+        })
+    }
+
+    /// Whether `q` lies more than `reach` beyond the band (by more than `MARGIN_PX`).
+    fn beyond(&self, q: (f64, f64), reach: f64) -> bool {
+        let (a, u) = (self.start, self.dir);
+        let off = ((q.0 - a.0) * u.1 - (q.1 - a.1) * u.0).abs();
+        off > self.half_width + reach + MARGIN_PX
+    }
+}
+
+/// What a pruning test leaves beyond a reach: a pixel covers the rounding of a segment
+/// distance, and of a distance from the chord, many times over.
+const MARGIN_PX: f64 = 1.0;
 
 impl Runs {
     pub(super) fn of(nodes: &[(f64, f64)]) -> Runs {
@@ -35,12 +77,15 @@ impl Runs {
                     })
             })
             .collect();
-        Runs { boxes }
+        Runs {
+            boxes,
+            corridor: Corridor::of(nodes),
+        }
     }
 
     /// `distance_to_path(q, nodes)`, the same float, where it is at most `reach`; else None.
-    /// A run whose box lies more than `reach` + 1 px from `q` holds no segment within `reach`
-    /// (the pixel covers the rounding of a segment distance many times over), and the nearest
+    /// A point beyond the path's corridor by more than `reach`, or a run whose box lies more
+    /// than `reach` + `MARGIN_PX` from `q`, holds no segment within `reach`, and the nearest
     /// segment is the same whichever others are left out.
     pub(super) fn distance_within(
         &self,
@@ -48,7 +93,10 @@ impl Runs {
         nodes: &[(f64, f64)],
         reach: f64,
     ) -> Option<f64> {
-        let m = reach + 1.0;
+        if self.corridor.as_ref().is_some_and(|c| c.beyond(q, reach)) {
+            return None;
+        }
+        let m = reach + MARGIN_PX;
         let d = self
             .boxes
             .iter()

@@ -79,15 +79,21 @@ pub(super) fn equalise_edge_noise(z: &mut [f32], w: usize, h: usize, k: &[f32]) 
     let ratio = |n: usize| -> Vec<f32> {
         let r = (k.len() / 2) as isize;
         let base: f64 = k.iter().map(|&v| (v as f64).powi(2)).sum();
+        let of = |var: f64| (base / var).sqrt() as f32;
+        // Where no tap is mirrored the folded kernel is the kernel, each tap alone at its
+        // place: its squares summed in order are the fold's sum (the zeros around add
+        // nothing), so one value serves the interior, where each row's fold was n values.
+        let unfolded = of(k.iter().map(|&kv| kv as f64 * kv as f64).sum());
+        let folded_at = |i: usize| {
+            let mut folded = vec![0f64; n];
+            for (kk, &kv) in k.iter().enumerate() {
+                folded[reflect(i as isize + kk as isize - r, n)] += kv as f64;
+            }
+            of(folded.iter().map(|v| v * v).sum())
+        };
+        let interior = |i: usize| i as isize >= r && i as isize + r < n as isize;
         (0..n)
-            .map(|i| {
-                let mut folded = vec![0f64; n];
-                for (kk, &kv) in k.iter().enumerate() {
-                    folded[reflect(i as isize + kk as isize - r, n)] += kv as f64;
-                }
-                let var: f64 = folded.iter().map(|v| v * v).sum();
-                (base / var).sqrt() as f32
-            })
+            .map(|i| if interior(i) { unfolded } else { folded_at(i) })
             .collect()
     };
     let (fx, fy) = (ratio(w), ratio(h));
@@ -101,4 +107,43 @@ pub(super) fn equalise_edge_noise(z: &mut [f32], w: usize, h: usize, k: &[f32]) 
 /// Correlation of the smoothed unit-noise map at distance d (white noise through a Gaussian).
 pub(super) fn corr(d2: f64, psf_sigma: f64) -> f64 {
     (-d2 / (4.0 * psf_sigma * psf_sigma)).exp()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The interior's one value gives each row's fold bit for bit: against every row folded
+    /// (as before it), on sides shorter and longer than the kernel, for several widths.
+    #[test]
+    fn the_interior_ratio_is_every_row_s_fold() {
+        for sigma in [0.5, 1.4, 2.3] {
+            let k = gaussian_kernel(sigma);
+            for (w, h) in [(1, 9), (3, 5), (17, 40), (64, 7)] {
+                let mut z = vec![1f32; w * h];
+                equalise_edge_noise(&mut z, w, h, &k);
+                let r = (k.len() / 2) as isize;
+                let base: f64 = k.iter().map(|&v| (v as f64).powi(2)).sum();
+                let every = |n: usize| -> Vec<f32> {
+                    (0..n)
+                        .map(|i| {
+                            let mut folded = vec![0f64; n];
+                            for (kk, &kv) in k.iter().enumerate() {
+                                folded[reflect(i as isize + kk as isize - r, n)] += kv as f64;
+                            }
+                            let var: f64 = folded.iter().map(|v| v * v).sum();
+                            (base / var).sqrt() as f32
+                        })
+                        .collect()
+                };
+                let (fx, fy) = (every(w), every(h));
+                for y in 0..h {
+                    for x in 0..w {
+                        let want = 1f32 * (fx[x] * fy[y]);
+                        assert_eq!(z[y * w + x].to_bits(), want.to_bits(), "{w}x{h} {sigma}");
+                    }
+                }
+            }
+        }
+    }
 }
