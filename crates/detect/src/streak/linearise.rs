@@ -8,7 +8,8 @@
 //! above it (5th and 95th percentiles 52 and 190). A streak a fraction of a sigma above the sky
 //! lands in the compressed upper half, so a line sum of grey levels gains less than its
 //! photons' share: along the truth's line of seven faint streaks of that set (line SNR
-//! 8.4-10), a Gaussian matched filter read 5-30 % more SNR after this step. Each grey level
+//! 8.4-10), a Gaussian matched filter read 5-30 % more SNR after this step (every level
+//! ranked, 25 levels a sigma: the first form, in numpy). Each grey level
 //! below [`RANKED_SHARE`] of the ranks is mapped to the normal quantile of its mid-rank share
 //! of the pixels inside the frame's footprint: noise that is a monotonic stretch of Gaussian
 //! noise becomes Gaussian again, whatever the stretch, and a faint streak on it adds linearly.
