@@ -64,7 +64,10 @@ pub(super) fn rank_normal(
 /// How many pixels inside `footprint` (all where None) have each grey level.
 fn histogram(pixels: &[u8], w: usize, h: usize, footprint: Option<&Footprint>) -> [u64; 256] {
     let mut counts = [0u64; 256];
-    let last = w.saturating_sub(1) as f64;
+    if w == 0 {
+        return counts;
+    }
+    let last = (w - 1) as f64;
     for y in 0..h {
         // The row's pixel centres inside the footprint.
         let (lo, hi) = match footprint {
@@ -74,7 +77,7 @@ fn histogram(pixels: &[u8], w: usize, h: usize, footprint: Option<&Footprint>) -
             }
             None => (0.0, last),
         };
-        if w == 0 || lo > hi {
+        if lo > hi {
             continue;
         }
         for &v in &pixels[y * w + lo as usize..=y * w + hi as usize] {
