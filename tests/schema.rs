@@ -154,6 +154,10 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "51b4e0046a486878a8c4af90c3ce8dd4fb195a9ac6babff8b3a66d3c0d38af82",
     ),
     (
+        "campaigns/survey-faint.toml",
+        "8ad089aa967c720bd23028ffc38c4e8ed09d32de58c468612949e45981d1933d",
+    ),
+    (
         "campaigns/collect-quickstart.toml",
         "371096f25008c5f6e2440eea2d542da8ce7fea59d213e36ae3192797d07cbdf8",
     ),
