@@ -7,22 +7,29 @@
 #   faint-limit-survey                -> results/faint-limit/ (survey, synthetic noise)
 #   faint-limit-fixed                 -> results/faint-limit-fixed/ (point stars)
 #   faint-limit-survey-semisynthetic  -> results/faint-limit-survey-semisynthetic/ (real noise)
-#   faint-limit-survey-linearised, faint-limit-survey-semisynthetic-linearised -> results/NAME/
-#     (the first and the third with `[detect.streak] linearise`)
+#   faint-limit-survey-science, faint-limit-survey-calibrated -> results/NAME/ (the third on
+#     the other two real frames: the raw 187 s science frame and the calibrated 10 s one)
+#   faint-limit-survey-linearised, faint-limit-survey-semisynthetic-linearised,
+#   faint-limit-survey-science-linearised, faint-limit-survey-calibrated-linearised ->
+#     results/NAME/ (the first, third and the two before with `[detect.streak] linearise`)
 #
-#   bash scripts/faint-limit.sh [NAME...]   # default all five; runs under RUNS (default runs/)
+#   bash scripts/faint-limit.sh [NAME...]   # default all nine; runs under RUNS (default runs/)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SOIG=${SOIG:-target/release/soig}
 RUNS=${RUNS:-runs}
 names=("$@")
 [ ${#names[@]} -gt 0 ] || names=(faint-limit-survey faint-limit-fixed faint-limit-survey-semisynthetic
-    faint-limit-survey-linearised faint-limit-survey-semisynthetic-linearised)
+    faint-limit-survey-science faint-limit-survey-calibrated faint-limit-survey-linearised
+    faint-limit-survey-semisynthetic-linearised faint-limit-survey-science-linearised
+    faint-limit-survey-calibrated-linearised)
 for name in "${names[@]}"; do
     case $name in
         faint-limit-survey) dest=results/faint-limit ;;
-        faint-limit-fixed | faint-limit-survey-semisynthetic | faint-limit-survey-linearised | \
-            faint-limit-survey-semisynthetic-linearised) dest=results/$name ;;
+        faint-limit-fixed | faint-limit-survey-semisynthetic | faint-limit-survey-science | \
+            faint-limit-survey-calibrated | faint-limit-survey-linearised | \
+            faint-limit-survey-semisynthetic-linearised | faint-limit-survey-science-linearised | \
+            faint-limit-survey-calibrated-linearised) dest=results/$name ;;
         *) echo "faint-limit.sh: no faint-limit campaign $name" >&2; exit 2 ;;
     esac
     out="$RUNS/$name"

@@ -198,6 +198,22 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
         "b0718f5a58db3c86c8306cd058209d7398810426f09b5e9c5d5673e15152b48a",
     ),
     (
+        "results/campaigns/faint-limit-survey-science.toml",
+        "c81aa244cc24188da2f3b573cf9941466d90bad18967aff792eebd1b8cf22e51",
+    ),
+    (
+        "results/campaigns/faint-limit-survey-calibrated.toml",
+        "0f6f44798f37c64243c951ed466d18c51cbf10078a115cbd54e6409e252cafce",
+    ),
+    (
+        "results/campaigns/faint-limit-survey-science-linearised.toml",
+        "48ee614e2cef57ec7f36761e9842ee6080a3f2d705321e2ef1f710fbc611a50f",
+    ),
+    (
+        "results/campaigns/faint-limit-survey-calibrated-linearised.toml",
+        "22953dc6453ad7e312985b9862d0b7cb370c58615d22335730a461cb9c0fda41",
+    ),
+    (
         "results/campaigns/faint-limit-survey-linearised.toml",
         "0c3f4c3a0fd48d2508740a5751bc768234d5763e370443ed8871fe6ca0d6262c",
     ),
