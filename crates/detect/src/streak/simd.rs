@@ -31,7 +31,7 @@ macro_rules! avx2_dispatch {
 
 #[cfg(test)]
 mod tests {
-    use super::super::gather::{axis_sum, axis_sums};
+    use super::super::gather::{axis_sum, axis_sums, contrast, contrast_at};
     use super::super::maps::Maps;
     use super::super::noise::{LineNoise, measured, measured_at};
     use super::super::params::{Sanitized, StreakParams};
@@ -77,6 +77,24 @@ mod tests {
                 removed: None,
                 sample_corr: Default::default(),
             };
+            // Contrast samples (15 taps, and fewer: padded lanes) inside, at and beyond the
+            // edges.
+            let taps = maps.contrast_taps();
+            for (x, y) in [
+                (50.3, 40.7),
+                (0.2, 3.9),
+                (w as f64 - 1.5, h as f64 + 3.0),
+                (-9.0, -2.0),
+            ] {
+                for (nx, ny) in [(0.6, 0.8), (-1.0, 0.0), (0.28, -0.96)] {
+                    for n in [taps.len(), 5, 1] {
+                        let t = &taps[..n];
+                        let a = contrast(&z, (w, h), t, (x, y), (nx, ny));
+                        let b = contrast_at(&z, (w, h), t, (x, y), (nx, ny));
+                        assert_eq!(a.to_bits(), b.to_bits(), "{w}x{h} at ({x}, {y}) {n} taps");
+                    }
+                }
+            }
             // The gathered sums of a level's axes, four a vector, against one angle's axes a
             // sample at a time: axes inside, crossing the edges (clamped samples) and beside
             // the map, 1 to 9 a angle (padded lanes), every stride.
