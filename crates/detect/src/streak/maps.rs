@@ -3,6 +3,7 @@
 //! the predicted trails were subtracted. Its methods sample the maps: profile samples across an
 //! axis and the noise of their sums.
 
+use super::gather;
 use super::noise::LineNoise;
 use super::params::Sanitized;
 use super::smooth::corr;
@@ -62,11 +63,10 @@ impl Maps<'_> {
         taps
     }
 
-    /// Contrast sample at (x, y) with the normal (nx, ny) (see [`Maps::contrast_taps`]).
+    /// Contrast sample at (x, y) with the normal (nx, ny) (see [`Maps::contrast_taps`]): its
+    /// taps' samples read four a vector (`gather`), the same bits as one at a time.
     pub(super) fn contrast(&self, taps: &[(f64, f64)], x: f64, y: f64, nx: f64, ny: f64) -> f64 {
-        taps.iter()
-            .map(|&(u, a)| a * self.z_at(x + u * nx, y + u * ny))
-            .sum()
+        gather::contrast(self.z, (self.w, self.h), taps, (x, y), (nx, ny))
     }
 
     /// Range of t for which (cx, cy) + t (ux, uy) lies inside the pixel-centre rectangle.

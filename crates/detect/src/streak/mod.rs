@@ -113,6 +113,7 @@ mod fit;
 mod flatten;
 mod fragments;
 mod full_lines;
+mod gather;
 mod linearise;
 mod lines;
 mod lone_line;

@@ -6,6 +6,7 @@ use std::f64::consts::PI;
 
 use super::explain::Seeds;
 use super::full_lines::MIN_LENGTH_PX;
+use super::gather::{Axis, axis_sums};
 use super::maps::Maps;
 use super::segment::{Point, Seg, point_segment_distance};
 use super::stats::median_of;
@@ -61,25 +62,46 @@ impl Regime {
     }
 }
 
-avx2_dispatch! {
-    /// For the axes of orientation `theta` through (cx, cy) + k du n, k = -nu..=nu (n the
-    /// normal): the axis point and z clipped to +-`clip` summed along the axis over integer t
-    /// in [-half, half] inside the image, every `stride`-th t from the least of any axis. The axes
-    /// lie within a few pixels of each other, so they are summed together, t by t (each in
-    /// increasing t, as alone): their samples share cache lines, where one axis at a time
-    /// streamed the whole band in again for each.
-    pub(super) fn axis_scores(
-        maps: &Maps,
-        centre: Point,
-        theta: f64,
-        half: f64,
-        clip: f64,
-        lateral: (f64, i32),
-        stride: usize,
-    ) -> Vec<(f64, Point)> = axis_scores_at
+/// The axes of a search level, angle by angle (`thetas`), each angle's `2 nu + 1` axes through
+/// (cx, cy) + k du n, k = -nu..=nu (n the normal), summed over integer t in [-half, half]
+/// inside the image, every `stride`-th t from the least of the angle's axes (`gather`). The
+/// axes of all the level's angles go to the gathers together: lanes of four.
+pub(super) fn level_axes(
+    maps: &Maps,
+    (cx, cy): Point,
+    thetas: &[f64],
+    half: f64,
+    (du, nu): (f64, i32),
+) -> Vec<Axis> {
+    let mut out = Vec::with_capacity(thetas.len() * (2 * nu + 1) as usize);
+    for &theta in thetas {
+        let (ux, uy) = (theta.cos(), theta.sin());
+        let (nx, ny) = (-uy, ux);
+        let first = out.len();
+        for k in -nu..=nu {
+            let (x, y) = (cx + k as f64 * du * nx, cy + k as f64 * du * ny);
+            let (lo, hi) = maps.t_range(x, y, ux, uy);
+            let a = (-half).max(lo).ceil() as i64;
+            let b = half.min(hi).floor() as i64;
+            out.push(Axis {
+                x,
+                y,
+                ux,
+                uy,
+                from: 0,
+                a,
+                b,
+            });
+        }
+        let from = out[first..].iter().map(|a| a.a).min().unwrap_or(0);
+        out[first..].iter_mut().for_each(|a| a.from = from);
+    }
+    out
 }
 
-#[inline(always)]
+/// The scalar axis search, one angle: the reference `level_axes` and `gather` give the bits
+/// of (`simd`'s test).
+#[cfg(test)]
 pub(super) fn axis_scores_at(
     maps: &Maps,
     (cx, cy): Point,
@@ -146,12 +168,14 @@ pub(super) fn refine(maps: &Maps, seed: &Seed) -> Option<Seg> {
         (step / 256.0, 3, 0.125, 1, 1),
     ] {
         let (mut bs, mut bx, mut by, mut bt) = (f64::NEG_INFINITY, cx, cy, th);
-        for i in -nth..=nth {
-            let t2 = th + i as f64 * dth;
-            for (s, (x, y)) in axis_scores(maps, (cx, cy), t2, half, clip, (du, nu), stride) {
-                if s > bs {
-                    (bs, bx, by, bt) = (s, x, y, t2);
-                }
+        let thetas: Vec<f64> = (-nth..=nth).map(|i| th + i as f64 * dth).collect();
+        let axes = level_axes(maps, (cx, cy), &thetas, half, (du, nu));
+        let sums = axis_sums(maps.z, (maps.w, maps.h), &axes, clip, stride);
+        // The best in the order of angles, then axes, as one angle at a time took them.
+        let per = (2 * nu + 1) as usize;
+        for (k, (&s, ax)) in sums.iter().zip(&axes).enumerate() {
+            if s > bs {
+                (bs, bx, by, bt) = (s, ax.x, ax.y, thetas[k / per]);
             }
         }
         (cx, cy, th) = (bx, by, bt);

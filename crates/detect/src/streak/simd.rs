@@ -31,10 +31,11 @@ macro_rules! avx2_dispatch {
 
 #[cfg(test)]
 mod tests {
+    use super::super::gather::{axis_sum, axis_sums, contrast, contrast_at};
     use super::super::maps::Maps;
     use super::super::noise::{LineNoise, measured, measured_at};
     use super::super::params::{Sanitized, StreakParams};
-    use super::super::refine::{axis_scores, axis_scores_at};
+    use super::super::refine::{axis_scores_at, level_axes};
     use super::super::smooth::{gaussian_kernel, smooth, smooth_at};
     use super::super::trails::{subtract_side_means, subtract_side_means_at};
     use rand::SeedableRng;
@@ -76,16 +77,60 @@ mod tests {
                 removed: None,
                 sample_corr: Default::default(),
             };
-            for theta in [0.1, 0.25, 1.3] {
-                let at = (w as f64 / 2.0, 25.0 + w as f64 / 8.0);
-                let a = axis_scores(&maps, at, theta, 60.0, 4.0, (0.5, 4), 2);
-                let b = axis_scores_at(&maps, at, theta, 60.0, 4.0, (0.5, 4), 2);
-                let bits = |v: &[(f64, (f64, f64))]| {
-                    v.iter()
-                        .map(|(s, (x, y))| [s.to_bits(), x.to_bits(), y.to_bits()])
-                        .collect::<Vec<_>>()
-                };
-                assert_eq!(bits(&a), bits(&b));
+            // Contrast samples (15 taps, and fewer: padded lanes) inside, at and beyond the
+            // edges.
+            let taps = maps.contrast_taps();
+            for (x, y) in [
+                (50.3, 40.7),
+                (0.2, 3.9),
+                (w as f64 - 1.5, h as f64 + 3.0),
+                (-9.0, -2.0),
+            ] {
+                for (nx, ny) in [(0.6, 0.8), (-1.0, 0.0), (0.28, -0.96)] {
+                    for n in [taps.len(), 5, 1] {
+                        let t = &taps[..n];
+                        let a = contrast(&z, (w, h), t, (x, y), (nx, ny));
+                        let b = contrast_at(&z, (w, h), t, (x, y), (nx, ny));
+                        assert_eq!(a.to_bits(), b.to_bits(), "{w}x{h} at ({x}, {y}) {n} taps");
+                    }
+                }
+            }
+            // The gathered sums of a level's axes, four a vector, against one angle's axes a
+            // sample at a time: axes inside, crossing the edges (clamped samples) and beside
+            // the map, 1 to 9 a angle (padded lanes), every stride.
+            let centres = [
+                (w as f64 / 2.0, 25.0 + w as f64 / 8.0),
+                (3.0, h as f64 - 2.5),
+                (-4.0, 10.0),
+            ];
+            for (at, nu, stride) in [(centres[0], 4, 2), (centres[1], 2, 4), (centres[2], 1, 1)] {
+                for theta in [0.1, 0.25, 1.3, -0.7] {
+                    for nu in [0, nu] {
+                        let a = axis_scores_at(&maps, at, theta, 60.0, 4.0, (0.5, nu), stride);
+                        let axes = level_axes(&maps, at, &[theta], 60.0, (0.5, nu));
+                        let sums = axis_sums(&z, (w, h), &axes, 4.0, stride);
+                        let b: Vec<(f64, (f64, f64))> = sums
+                            .iter()
+                            .zip(&axes)
+                            .map(|(&s, ax)| (s, (ax.x, ax.y)))
+                            .collect();
+                        let bits = |v: &[(f64, (f64, f64))]| {
+                            v.iter()
+                                .map(|(s, (x, y))| [s.to_bits(), x.to_bits(), y.to_bits()])
+                                .collect::<Vec<_>>()
+                        };
+                        assert_eq!(
+                            bits(&a),
+                            bits(&b),
+                            "{w}x{h} at {at:?} theta {theta} nu {nu}"
+                        );
+                        let one: Vec<u64> = axes
+                            .iter()
+                            .map(|ax| axis_sum(&z, (w, h), ax, 4.0, stride).to_bits())
+                            .collect();
+                        assert_eq!(one, sums.iter().map(|s| s.to_bits()).collect::<Vec<_>>());
+                    }
+                }
             }
         }
     }
