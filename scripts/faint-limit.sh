@@ -24,14 +24,16 @@ names=("$@")
     faint-limit-survey-semisynthetic-linearised faint-limit-survey-science-linearised
     faint-limit-survey-calibrated-linearised)
 for name in "${names[@]}"; do
+    # Every faint-limit campaign of results/campaigns/ writes results/NAME/, but the first's
+    # (committed before the others as results/faint-limit/).
     case $name in
         faint-limit-survey) dest=results/faint-limit ;;
-        faint-limit-fixed | faint-limit-survey-semisynthetic | faint-limit-survey-science | \
-            faint-limit-survey-calibrated | faint-limit-survey-linearised | \
-            faint-limit-survey-semisynthetic-linearised | faint-limit-survey-science-linearised | \
-            faint-limit-survey-calibrated-linearised) dest=results/$name ;;
-        *) echo "faint-limit.sh: no faint-limit campaign $name" >&2; exit 2 ;;
+        faint-limit-*) dest=results/$name ;;
+        *) dest= ;;
     esac
+    if [ -z "$dest" ] || [ ! -f "results/campaigns/$name.toml" ]; then
+        echo "faint-limit.sh: no faint-limit campaign $name" >&2; exit 2
+    fi
     out="$RUNS/$name"
     "$SOIG" run "results/campaigns/$name.toml" --out "$out" --quiet
     python3 scripts/faint_limit.py "$out" "$dest"

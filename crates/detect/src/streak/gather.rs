@@ -32,12 +32,11 @@ pub(super) fn axis_sums(
 ) -> Vec<f64> {
     #[cfg(target_arch = "x86_64")]
     {
-        // Indices as i32 and finite points (a NaN truncates out of the map, not to 0).
-        let fits = w >= 1 && h >= 1 && w.checked_mul(h).is_some_and(|n| n <= i32::MAX as usize);
+        // Finite points: a NaN truncates out of the map, not to 0.
         let finite = axes
             .iter()
             .all(|a| [a.x, a.y, a.ux, a.uy].iter().all(|v| v.is_finite()));
-        if fits && finite && clip.is_finite() && std::arch::is_x86_feature_detected!("avx2") {
+        if finite && clip.is_finite() && gathers_read(w, h) {
             // SAFETY: the CPU has AVX2 (checked on the line above); every index the gathers
             // read is clamped into the map (finite points, checked too).
             return unsafe { avx2::sums(z, w, h, axes, clip, stride.max(1)) };
@@ -46,6 +45,16 @@ pub(super) fn axis_sums(
     axes.iter()
         .map(|ax| axis_sum(z, (w, h), ax, clip, stride))
         .collect()
+}
+
+/// Whether the AVX2 gathers can read a `w` x `h` map: the CPU has AVX2, and the map is not
+/// empty and its indices (y w + x) fit the gathers' i32.
+#[cfg(target_arch = "x86_64")]
+fn gathers_read(w: usize, h: usize) -> bool {
+    w >= 1
+        && h >= 1
+        && w.checked_mul(h).is_some_and(|n| n <= i32::MAX as usize)
+        && std::arch::is_x86_feature_detected!("avx2")
 }
 
 /// One axis's sum, a sample at a time: the reference the vector build gives the bits of.
@@ -80,10 +89,9 @@ pub(super) fn contrast(
 ) -> f64 {
     #[cfg(target_arch = "x86_64")]
     {
-        let fits = w >= 1 && h >= 1 && w.checked_mul(h).is_some_and(|n| n <= i32::MAX as usize);
         let finite =
             [x, y, n.0, n.1].iter().all(|v| v.is_finite()) && taps.iter().all(|t| t.0.is_finite());
-        if fits && finite && taps.len() <= 32 && std::arch::is_x86_feature_detected!("avx2") {
+        if finite && taps.len() <= 32 && gathers_read(w, h) {
             // SAFETY: the CPU has AVX2 (checked on the line above); every index the gathers
             // read is clamped into the map (finite points, checked too).
             return unsafe { avx2::contrast(z, (w, h), taps, (x, y), n) };
