@@ -54,8 +54,7 @@ fn main() -> anyhow::Result<()> {
         .map(|e| e.map(|e| e.path()))
         .collect::<Result<_, _>>()?;
     pngs.sort();
-    let (mut found, mut total) = ([0usize; 3], [0usize; 3]);
-    let (mut fp, mut tp) = (0usize, 0usize);
+    let mut tally = Tally::default();
     let mut ms = Vec::new();
     for png in &pngs {
         let stem = png.file_stem().unwrap().to_string_lossy().into_owned();
@@ -113,19 +112,68 @@ fn main() -> anyhow::Result<()> {
         let (cands, _) = detector.detect_measuring(frame, told);
         ms.push(t.elapsed().as_secs_f64() * 1e3);
         eprintln!("TIME {stem} {:.0}", ms[ms.len() - 1]);
-        let mut text = String::new();
-        for c in &cands {
-            let d = &c.detection;
-            text += &format!(
-                "0 {:.6} {:.6} {:.6} {:.6} {:.6}\n",
-                0.5 * (d.x1 + d.x2) / w as f64,
-                0.5 * (d.y1 + d.y2) / h as f64,
-                (d.x2 - d.x1) / w as f64,
-                (d.y2 - d.y1) / h as f64,
-                d.score
-            );
-        }
-        std::fs::write(out.join(format!("{stem}.txt")), text)?;
+        std::fs::write(out.join(format!("{stem}.txt")), yolo_lines(&cands, w, h))?;
+        tally.add(&stem, &truth, trail, &cands);
+    }
+    ms.sort_by(f64::total_cmp);
+    let Tally {
+        found,
+        total,
+        tp,
+        fp,
+    } = tally;
+    println!(
+        "images {}  recall 0-2: {}/{}  2-7: {}/{}  7-90: {}/{}  TP {tp} FP {fp}  P@0.5 {:.3}  median {:.1} ms  mean {:.1} ms  max {:.1} ms",
+        pngs.len(),
+        found[0],
+        total[0],
+        found[1],
+        total[1],
+        found[2],
+        total[2],
+        tp as f64 / (tp + fp).max(1) as f64,
+        ms[ms.len() / 2],
+        ms.iter().sum::<f64>() / ms.len() as f64,
+        ms[ms.len() - 1]
+    );
+    Ok(())
+}
+
+/// The candidates as YOLO-format prediction lines (`cls xc yc w h score`, normalised).
+fn yolo_lines(cands: &[soig::detect::streak::Candidate], w: usize, h: usize) -> String {
+    let mut text = String::new();
+    for c in cands {
+        let d = &c.detection;
+        text += &format!(
+            "0 {:.6} {:.6} {:.6} {:.6} {:.6}\n",
+            0.5 * (d.x1 + d.x2) / w as f64,
+            0.5 * (d.y1 + d.y2) / h as f64,
+            (d.x2 - d.x1) / w as f64,
+            (d.y2 - d.y1) / h as f64,
+            d.score
+        );
+    }
+    text
+}
+
+/// Recall at confidence 0.5 and IoU 0.5 by angle band to the trails (0-2, 2-7, 7-90
+/// degrees), and the true and false positives at that confidence.
+#[derive(Default)]
+struct Tally {
+    found: [usize; 3],
+    total: [usize; 3],
+    tp: usize,
+    fp: usize,
+}
+
+impl Tally {
+    fn add(
+        &mut self,
+        stem: &str,
+        truth: &serde_json::Value,
+        trail: Option<f64>,
+        cands: &[soig::detect::streak::Candidate],
+    ) {
         // The label box and the streak's angle to the trails (as the report bins it).
         let b = &truth["label_box_final_px"];
         let label = [
@@ -149,16 +197,16 @@ fn main() -> anyhow::Result<()> {
         } else {
             2
         };
-        total[band] += 1;
+        self.total[band] += 1;
         let mut matched = false;
         for c in cands.iter().filter(|c| c.detection.score >= 0.5) {
             let d = &c.detection;
             let iou = iou(&label, &[d.x1, d.y1, d.x2, d.y2]);
             if iou >= 0.5 && !matched {
                 matched = true;
-                tp += 1;
+                self.tp += 1;
             } else {
-                fp += 1;
+                self.fp += 1;
                 eprintln!(
                     "FP {stem} band {band} score {:.3} iou {iou:.2} len {:.0} orient {:.1} ends {:?}",
                     d.score, c.length_px, c.orientation_deg, c.ends
@@ -166,7 +214,7 @@ fn main() -> anyhow::Result<()> {
             }
         }
         if matched {
-            found[band] += 1;
+            self.found[band] += 1;
         } else {
             eprintln!(
                 "MISS {stem} band {band} angle {angle:.2} snr {:.1}",
@@ -174,22 +222,6 @@ fn main() -> anyhow::Result<()> {
             );
         }
     }
-    ms.sort_by(f64::total_cmp);
-    println!(
-        "images {}  recall 0-2: {}/{}  2-7: {}/{}  7-90: {}/{}  TP {tp} FP {fp}  P@0.5 {:.3}  median {:.1} ms  mean {:.1} ms  max {:.1} ms",
-        pngs.len(),
-        found[0],
-        total[0],
-        found[1],
-        total[1],
-        found[2],
-        total[2],
-        tp as f64 / (tp + fp).max(1) as f64,
-        ms[ms.len() / 2],
-        ms.iter().sum::<f64>() / ms.len() as f64,
-        ms[ms.len() - 1]
-    );
-    Ok(())
 }
 
 fn iou(a: &[f64; 4], b: &[f64; 4]) -> f64 {

@@ -126,9 +126,13 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
     let coco = assert_coco_agrees_with_soig_eval(&py, &export, &out);
     assert_eq!(coco["categories"], serde_json::json!(["debris"]));
 
-    // astropy-regions reads the truth back (0-based pixels, as soig's), and each detection's
-    // polygon is its COCO box moved from the PNG's padded frame to the FITS pixels. The files
-    // hold a thousandth of a pixel: 5e-4 px, and float noise beside it.
+    assert_ds9_regions_agree(&py, &export, &out);
+}
+
+/// astropy-regions reads the truth back (0-based pixels, as soig's), and each detection's
+/// polygon is its COCO box moved from the PNG's padded frame to the FITS pixels.
+fn assert_ds9_regions_agree(py: &Path, export: &Path, out: &Path) {
+    // The files hold a thousandth of a pixel: 5e-4 px, and float noise beside it.
     let tol = 5.0e-4 + 1e-9;
     let stems: Vec<String> = json(&export.join("coco/test.json"))["images"]
         .as_array()
@@ -148,7 +152,7 @@ fn exports_agree_with_labels_truth_and_soig_eval() {
         .collect();
     let mut args = vec!["regions"];
     args.extend(files.iter().map(String::as_str));
-    let read = export_readers(&py, &args);
+    let read = export_readers(py, &args);
     let dets = json(&export.join("coco/detections_streak.json"));
     let close = |a: &[f64], b: &[f64]| {
         a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < tol)

@@ -434,7 +434,13 @@ fn attack(row: &Row, fixture: &Path, root: &Path) -> Vec<String> {
     }
     check("fifo", changes(&before, &snapshot(&dir), &[]));
 
-    // A full disk.
+    full_disk(row, fixture, root, &mut check);
+    kill_then_again(row, fixture, root, &mut check);
+    problems
+}
+
+/// A full disk: a 16 MiB tmpfs, filled, holds the output (needs root to mount).
+fn full_disk(row: &Row, fixture: &Path, root: &Path, check: &mut impl FnMut(&str, Vec<String>)) {
     if nix_is_root() {
         let dir = case(fixture, root, &format!("{}-full-disk", row.verb));
         let vol = dir.join("vol");
@@ -474,9 +480,16 @@ fn attack(row: &Row, fixture: &Path, root: &Path) -> Vec<String> {
             row.verb
         );
     }
+}
 
-    // Killed just before the output moves into place, or between a file's temporary and its
-    // rename, then run again.
+/// Killed just before the output moves into place, or between a file's temporary and its
+/// rename, then run again.
+fn kill_then_again(
+    row: &Row,
+    fixture: &Path,
+    root: &Path,
+    check: &mut impl FnMut(&str, Vec<String>),
+) {
     for phase in ["rename", "write"] {
         let what = format!("kill at {phase}");
         let dir = case(fixture, root, &format!("{}-kill-{phase}", row.verb));
@@ -495,7 +508,6 @@ fn attack(row: &Row, fixture: &Path, root: &Path) -> Vec<String> {
             check(&what, vec!["changed notes.txt".into()]);
         }
     }
-    problems
 }
 
 #[test]

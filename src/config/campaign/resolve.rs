@@ -36,7 +36,6 @@ pub(super) fn resolve(
     file: &CampaignFile,
     base_dir: &Path,
 ) -> Result<(CampaignFile, World), (String, String)> {
-    let fail = |field: &str, message: String| (field.to_string(), message);
     let window_start = parse_epoch(&file.window.start).map_err(|m| fail("window.start", m))?;
     let window_end = parse_epoch(&file.window.end).map_err(|m| fail("window.end", m))?;
     if window_end <= window_start {
@@ -93,16 +92,71 @@ pub(super) fn resolve(
             ),
         ));
     }
-    // An object SGP4 cannot propagate anywhere in the window (decayed before it opens,
-    // or diverged) would fail every scene draw, ending in "no acceptable scene" after
-    // max_attempts draws: refuse it here, naming its field and its TLE.
+    all_propagate(
+        file,
+        &resolved,
+        base_dir,
+        orbit,
+        &debris,
+        (window_start, window_end),
+    )?;
+    check_frames(&resolved, base_dir)?;
+    pin_model(&mut resolved, base_dir)?;
+    let population = match resolved.population.as_mut() {
+        // A ground observer is refused with a population (`validate`): none to leave out.
+        Some(p) => resolve_population(p, base_dir, observer.orbit().map(|o| o.norad), window_start)
+            .map_err(|(f, m)| fail(&format!("population.{f}"), m))?,
+        None => Vec::new(),
+    };
+    if let Stars::Catalog { path: p, .. } = &resolved.stars {
+        let full = base_dir.join(p);
+        if !full.is_file() {
+            return Err(fail(
+                "stars.path",
+                format!("star catalogue {} does not exist", full.display()),
+            ));
+        }
+    }
+    if let Some(o) = orbit {
+        survey_drift(&resolved, o, window_start)?;
+    }
+
+    let ground = ground_gate(&resolved, &observer, &debris, (window_start, window_end))?;
+
+    let world = World {
+        observer,
+        debris,
+        population,
+        ground,
+        window_start,
+        window_end,
+    };
+    Ok((resolved, world))
+}
+
+/// The error of the campaign field `field`.
+fn fail(field: &str, message: String) -> (String, String) {
+    (field.to_string(), message)
+}
+
+/// An object SGP4 cannot propagate anywhere in the window (decayed before it opens, or
+/// diverged) would fail every scene draw, ending in "no acceptable scene" after max_attempts
+/// draws: refuse it here, naming its field and its TLE.
+fn all_propagate(
+    file: &CampaignFile,
+    resolved: &CampaignFile,
+    base_dir: &Path,
+    orbit: Option<&Body>,
+    debris: &[Body],
+    (window_start, window_end): (Epoch, Epoch),
+) -> Result<(), (String, String)> {
     let specs = orbit
         .map(|o| ("observer".to_string(), &file.observer, o))
         .into_iter()
         .chain(
             file.debris
                 .iter()
-                .zip(&debris)
+                .zip(debris)
                 .enumerate()
                 .map(|(i, (spec, body))| (format!("debris[{i}]"), spec, body)),
         );
@@ -119,7 +173,7 @@ pub(super) fn resolve(
                 (Some(f), _, _) => {
                     let full = base_dir.join(f);
                     let line = std::fs::read_to_string(&full).ok().and_then(|t| {
-                        let [l1, _] = resolved_tle(&resolved, &field)?;
+                        let [l1, _] = resolved_tle(resolved, &field)?;
                         t.lines().position(|l| l.trim_end() == l1).map(|n| n + 1)
                     });
                     let at = line.map(|n| format!("line {n} of ")).unwrap_or_default();
@@ -134,6 +188,11 @@ pub(super) fn resolve(
             ));
         }
     }
+    Ok(())
+}
+
+/// A semisynthetic campaign's frames: at least one, each a regular file, and a share in 0..=1.
+fn check_frames(resolved: &CampaignFile, base_dir: &Path) -> Result<(), (String, String)> {
     if let Background::Frames { paths, share } = &resolved.background {
         if paths.is_empty() {
             return Err(fail("background.paths", "name at least one frame".into()));
@@ -154,6 +213,12 @@ pub(super) fn resolve(
             }
         }
     }
+    Ok(())
+}
+
+/// A detector model must be a regular file; its sha256 is recorded (so the campaign's hash
+/// pins it) and must match a given `model_sha256`.
+fn pin_model(resolved: &mut CampaignFile, base_dir: &Path) -> Result<(), (String, String)> {
     if let Some(model) = &resolved.detect.model {
         let full = base_dir.join(model);
         crate::input_file::regular(&full)
@@ -176,53 +241,36 @@ pub(super) fn resolve(
         }
         resolved.detect.model_sha256 = Some(sha);
     }
-    let population = match resolved.population.as_mut() {
-        // A ground observer is refused with a population (`validate`): none to leave out.
-        Some(p) => resolve_population(p, base_dir, observer.orbit().map(|o| o.norad), window_start)
-            .map_err(|(f, m)| fail(&format!("population.{f}"), m))?,
-        None => Vec::new(),
-    };
-    if let Stars::Catalog { path: p, .. } = &resolved.stars {
-        let full = base_dir.join(p);
-        if !full.is_file() {
+    Ok(())
+}
+
+/// The boresight of a survey turns at the observer's orbital rate: beyond a few degrees of
+/// drift the star cone and the trails grow without bound, so refuse it up front.
+fn survey_drift(
+    resolved: &CampaignFile,
+    o: &Body,
+    window_start: Epoch,
+) -> Result<(), (String, String)> {
+    if resolved.pointing.mode != PointingMode::Survey {
+        return Ok(());
+    }
+    let p = &o.propagator;
+    let t1 = window_start + hifitime::Duration::from_seconds(1.0);
+    if let (Ok(a), Ok(b)) = (p.position_teme_km(window_start), p.position_teme_km(t1)) {
+        let drift = crate::sky::angle_deg(a, b) * resolved.exposure.max_s;
+        if drift > MAX_SURVEY_DRIFT_DEG {
             return Err(fail(
-                "stars.path",
-                format!("star catalogue {} does not exist", full.display()),
+                "exposure.max_s",
+                format!(
+                    "survey pointing would drift {drift:.1} deg in {} s (the observer turns {:.3} deg/s); \
+                 at most {MAX_SURVEY_DRIFT_DEG} deg is supported: shorten the exposure",
+                    resolved.exposure.max_s,
+                    drift / resolved.exposure.max_s
+                ),
             ));
         }
     }
-    if let (Some(o), PointingMode::Survey) = (orbit, resolved.pointing.mode) {
-        // The boresight turns at the observer's orbital rate: beyond a few degrees of drift
-        // the star cone and the trails grow without bound, so refuse it up front.
-        let p = &o.propagator;
-        let t1 = window_start + hifitime::Duration::from_seconds(1.0);
-        if let (Ok(a), Ok(b)) = (p.position_teme_km(window_start), p.position_teme_km(t1)) {
-            let drift = crate::sky::angle_deg(a, b) * resolved.exposure.max_s;
-            if drift > MAX_SURVEY_DRIFT_DEG {
-                return Err(fail(
-                    "exposure.max_s",
-                    format!(
-                        "survey pointing would drift {drift:.1} deg in {} s (the observer turns {:.3} deg/s); \
-                         at most {MAX_SURVEY_DRIFT_DEG} deg is supported: shorten the exposure",
-                        resolved.exposure.max_s,
-                        drift / resolved.exposure.max_s
-                    ),
-                ));
-            }
-        }
-    }
-
-    let ground = ground_gate(&resolved, &observer, &debris, (window_start, window_end))?;
-
-    let world = World {
-        observer,
-        debris,
-        population,
-        ground,
-        window_start,
-        window_end,
-    };
-    Ok((resolved, world))
+    Ok(())
 }
 
 /// A placed object named twice (one NORAD number in two `debris` entries, by the same TLE or

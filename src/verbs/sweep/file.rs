@@ -171,93 +171,7 @@ impl Experiment {
             }),
             message,
         };
-        if file.axes.is_empty() {
-            return Err(at(None, "axis", "give at least one [[axis]]".into()));
-        }
-        if file.seeds == 0 {
-            return Err(at(None, "seeds", "must be at least 1".into()));
-        }
-        let mut columns = Vec::new();
-        for (i, axis) in file.axes.iter().enumerate() {
-            let values = axis_values(axis).map_err(|(key, m)| at(Some(i), key, m))?;
-            if values.is_empty() {
-                return Err(at(Some(i), "values", "the axis has no values".into()));
-            }
-            columns.push(values);
-        }
-        if file.mode == Mode::Zip
-            && let Some(i) = columns.iter().position(|c| c.len() != columns[0].len())
-        {
-            return Err(at(
-                Some(i),
-                "values",
-                format!(
-                    "mode = \"zip\" needs axes of equal length: axis[0] has {}, axis[{i}] has {}",
-                    columns[0].len(),
-                    columns[i].len()
-                ),
-            ));
-        }
-        for (i, values) in columns.iter().enumerate() {
-            let mut seen = std::collections::HashSet::new();
-            if let Some(v) = values.iter().find(|v| !seen.insert(*v)) {
-                return Err(at(
-                    Some(i),
-                    "values",
-                    format!("holds {v} twice: each value is one point"),
-                ));
-            }
-        }
-        // Each replicate sets `seed`, which would silently replace a swept or fixed seed.
-        if file.seeds > 1 {
-            if let Some(i) = file.axes.iter().position(|a| a.field.trim() == "seed") {
-                return Err(at(
-                    Some(i),
-                    "field",
-                    format!(
-                        "a `seed` axis is replaced by the seed of each of the `seeds` = {} replicates: sweep `seed` or give `seeds`, not both",
-                        file.seeds
-                    ),
-                ));
-            }
-            if file
-                .set
-                .iter()
-                .any(|s| s.split('=').next().map(str::trim) == Some("seed"))
-            {
-                return Err(at(
-                    None,
-                    "set",
-                    format!(
-                        "`seed` is replaced by the seed of each of the `seeds` = {} replicates: set one or the other",
-                        file.seeds
-                    ),
-                ));
-            }
-        }
-        let points_count = match file.mode {
-            Mode::Zip => columns[0].len() as u64,
-            Mode::Grid => columns
-                .iter()
-                .try_fold(1u64, |n, c| n.checked_mul(c.len() as u64))
-                .unwrap_or(u64::MAX),
-        };
-        let runs = points_count.saturating_mul(u64::from(file.seeds));
-        if runs > MAX_RUNS {
-            let (axis, key) = if file.seeds > 1 {
-                (None, "seeds")
-            } else {
-                (None, "axis")
-            };
-            return Err(at(
-                axis,
-                key,
-                format!(
-                    "{points_count} point(s) times {} seed replicate(s) is {runs} runs, beyond the limit of {MAX_RUNS}: fewer values or replicates, or several experiments",
-                    file.seeds
-                ),
-            ));
-        }
+        let columns = checked_columns(&file, &at)?;
         let base = dir_of(path).join(&file.base);
         let base_campaign = Campaign::load(&base)
             .map_err(|e| at(None, "base", format!("the base campaign is refused: {e}")))?;
@@ -278,72 +192,7 @@ impl Experiment {
                 ),
             ));
         }
-        let mut points = Vec::new();
-        for combo in combinations(&columns, file.mode) {
-            let settings: Vec<Setting> = combo
-                .iter()
-                .enumerate()
-                .map(|(a, &v)| Setting {
-                    field: file.axes[a].field.clone(),
-                    value: columns[a][v].clone(),
-                })
-                .collect();
-            let group = point_name(&settings);
-            for replicate in 0..file.seeds {
-                let mut sets = file.set.clone();
-                sets.extend(settings.iter().map(|s| format!("{}={}", s.field, s.value)));
-                let mut name = group.clone();
-                if file.seeds > 1 {
-                    sets.push(format!(
-                        "seed={}",
-                        base_campaign.resolved.seed + replicate as u64
-                    ));
-                    name = format!("{group},rep={replicate}");
-                }
-                let campaign = Campaign::load_with_overrides(&base, &sets).map_err(|e| {
-                    let label = e.file.to_string_lossy();
-                    if file.set.iter().any(|s| label == format!("--set {s}")) {
-                        return at(None, "set", format!("refused by the campaign: {e}"));
-                    }
-                    // The axis whose value the campaign refused answers for it.
-                    let a = settings
-                        .iter()
-                        .position(|s| {
-                            e.file
-                                .to_string_lossy()
-                                .contains(&format!("--set {}=", s.field))
-                        })
-                        .or_else(|| {
-                            e.field
-                                .as_ref()
-                                .and_then(|f| settings.iter().position(|s| f.starts_with(&s.field)))
-                        })
-                        .unwrap_or(0);
-                    // An unknown path is the `field`'s fault, anything else the value's.
-                    let key = if e.message.contains("unknown field") {
-                        "field"
-                    } else {
-                        "values"
-                    };
-                    at(
-                        Some(a),
-                        key,
-                        format!(
-                            "`{}` = {} is refused by the campaign: {e}",
-                            settings[a].field, settings[a].value
-                        ),
-                    )
-                })?;
-                points.push(Point {
-                    folder: point_folder(&settings, replicate),
-                    settings: settings.clone(),
-                    replicate,
-                    name,
-                    group: group.clone(),
-                    campaign,
-                });
-            }
-        }
+        let points = expand(&file, &columns, &base, base_campaign.resolved.seed, &at)?;
         let seconds = points
             .iter()
             .map(|p| {
@@ -562,4 +411,175 @@ fn dir_of(path: &Path) -> PathBuf {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     }
+}
+
+/// The error of a key of the experiment file, or of one axis' key, at its line.
+type At<'a> = dyn Fn(Option<usize>, &str, String) -> CampaignError + 'a;
+
+/// Each axis' values, checked: at least one axis and one seed, no axis empty or holding a value
+/// twice, zip axes of equal length, a seed given once, and the runs within `MAX_RUNS`.
+fn checked_columns(file: &ExperimentFile, at: &At) -> Result<Vec<Vec<String>>, CampaignError> {
+    if file.axes.is_empty() {
+        return Err(at(None, "axis", "give at least one [[axis]]".into()));
+    }
+    if file.seeds == 0 {
+        return Err(at(None, "seeds", "must be at least 1".into()));
+    }
+    let mut columns = Vec::new();
+    for (i, axis) in file.axes.iter().enumerate() {
+        let values = axis_values(axis).map_err(|(key, m)| at(Some(i), key, m))?;
+        if values.is_empty() {
+            return Err(at(Some(i), "values", "the axis has no values".into()));
+        }
+        columns.push(values);
+    }
+    if file.mode == Mode::Zip
+        && let Some(i) = columns.iter().position(|c| c.len() != columns[0].len())
+    {
+        return Err(at(
+            Some(i),
+            "values",
+            format!(
+                "mode = \"zip\" needs axes of equal length: axis[0] has {}, axis[{i}] has {}",
+                columns[0].len(),
+                columns[i].len()
+            ),
+        ));
+    }
+    for (i, values) in columns.iter().enumerate() {
+        let mut seen = std::collections::HashSet::new();
+        if let Some(v) = values.iter().find(|v| !seen.insert(*v)) {
+            return Err(at(
+                Some(i),
+                "values",
+                format!("holds {v} twice: each value is one point"),
+            ));
+        }
+    }
+    // Each replicate sets `seed`, which would silently replace a swept or fixed seed.
+    if file.seeds > 1 {
+        if let Some(i) = file.axes.iter().position(|a| a.field.trim() == "seed") {
+            return Err(at(
+                Some(i),
+                "field",
+                format!(
+                    "a `seed` axis is replaced by the seed of each of the `seeds` = {} replicates: sweep `seed` or give `seeds`, not both",
+                    file.seeds
+                ),
+            ));
+        }
+        if file
+            .set
+            .iter()
+            .any(|s| s.split('=').next().map(str::trim) == Some("seed"))
+        {
+            return Err(at(
+                None,
+                "set",
+                format!(
+                    "`seed` is replaced by the seed of each of the `seeds` = {} replicates: set one or the other",
+                    file.seeds
+                ),
+            ));
+        }
+    }
+    let points_count = match file.mode {
+        Mode::Zip => columns[0].len() as u64,
+        Mode::Grid => columns
+            .iter()
+            .try_fold(1u64, |n, c| n.checked_mul(c.len() as u64))
+            .unwrap_or(u64::MAX),
+    };
+    let runs = points_count.saturating_mul(u64::from(file.seeds));
+    if runs > MAX_RUNS {
+        let (axis, key) = if file.seeds > 1 {
+            (None, "seeds")
+        } else {
+            (None, "axis")
+        };
+        return Err(at(
+            axis,
+            key,
+            format!(
+                "{points_count} point(s) times {} seed replicate(s) is {runs} runs, beyond the limit of {MAX_RUNS}: fewer values or replicates, or several experiments",
+                file.seeds
+            ),
+        ));
+    }
+    Ok(columns)
+}
+
+/// The experiment's points: each combination of the axes' values (`columns`) for each seed
+/// replicate, its campaign the base campaign with the file's `set` and the point's values.
+fn expand(
+    file: &ExperimentFile,
+    columns: &[Vec<String>],
+    base: &Path,
+    base_seed: u64,
+    at: &At,
+) -> Result<Vec<Point>, CampaignError> {
+    let mut points = Vec::new();
+    for combo in combinations(columns, file.mode) {
+        let settings: Vec<Setting> = combo
+            .iter()
+            .enumerate()
+            .map(|(a, &v)| Setting {
+                field: file.axes[a].field.clone(),
+                value: columns[a][v].clone(),
+            })
+            .collect();
+        let group = point_name(&settings);
+        for replicate in 0..file.seeds {
+            let mut sets = file.set.clone();
+            sets.extend(settings.iter().map(|s| format!("{}={}", s.field, s.value)));
+            let mut name = group.clone();
+            if file.seeds > 1 {
+                sets.push(format!("seed={}", base_seed + replicate as u64));
+                name = format!("{group},rep={replicate}");
+            }
+            let campaign = Campaign::load_with_overrides(base, &sets).map_err(|e| {
+                let label = e.file.to_string_lossy();
+                if file.set.iter().any(|s| label == format!("--set {s}")) {
+                    return at(None, "set", format!("refused by the campaign: {e}"));
+                }
+                // The axis whose value the campaign refused answers for it.
+                let a = settings
+                    .iter()
+                    .position(|s| {
+                        e.file
+                            .to_string_lossy()
+                            .contains(&format!("--set {}=", s.field))
+                    })
+                    .or_else(|| {
+                        e.field
+                            .as_ref()
+                            .and_then(|f| settings.iter().position(|s| f.starts_with(&s.field)))
+                    })
+                    .unwrap_or(0);
+                // An unknown path is the `field`'s fault, anything else the value's.
+                let key = if e.message.contains("unknown field") {
+                    "field"
+                } else {
+                    "values"
+                };
+                at(
+                    Some(a),
+                    key,
+                    format!(
+                        "`{}` = {} is refused by the campaign: {e}",
+                        settings[a].field, settings[a].value
+                    ),
+                )
+            })?;
+            points.push(Point {
+                folder: point_folder(&settings, replicate),
+                settings: settings.clone(),
+                replicate,
+                name,
+                group: group.clone(),
+                campaign,
+            });
+        }
+    }
+    Ok(points)
 }

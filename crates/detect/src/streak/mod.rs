@@ -142,6 +142,8 @@ mod tests;
 #[cfg(test)]
 mod tests_fit;
 #[cfg(test)]
+mod tests_gaps;
+#[cfg(test)]
 mod tests_sky;
 #[cfg(test)]
 mod tests_stages;

@@ -10,6 +10,7 @@ use super::Jitter;
 use crate::scene::{Pointing, Scene, SurveyTrack, TargetTrack};
 use crate::sensor::Sensor;
 use soig_sky::photometry::photon_rate;
+use soig_sky::projection::Tan;
 use soig_sky::stars::Star;
 use soig_sky::{Turn, Vec3, angle_deg, dot, radec_deg, radec_unit};
 
@@ -56,6 +57,80 @@ impl Path<'_> {
                 (p.0 + f * (q.0 - p.0), p.1 + f * (q.1 - p.1))
             }
         }
+    }
+}
+
+/// The time grid of a turning pointing's star trails: each node's camera turn (None: not
+/// turned), and how far from the tangent point a direction can lie and still be near the
+/// image (`far_deg` at some node, `cos_reach` at a given one).
+struct TrailGrid {
+    turns: Vec<Option<Turn>>,
+    step: f64,
+    centre: Vec3,
+    far_deg: f64,
+    cos_reach: f64,
+}
+
+impl TrailGrid {
+    /// A star's trail: its nodes written into `trail` (`dirs` is scratch, one per node), and
+    /// the part of the exposure (t_a, t_b) while it is near the image; None where it is near
+    /// at no node.
+    fn trace(
+        &self,
+        star: &Star,
+        tan: &Tan,
+        near: &impl Fn(f64, f64) -> bool,
+        dirs: &mut [Vec3],
+        trail: &mut [(f64, f64)],
+    ) -> Option<(f64, f64)> {
+        let nodes = trail.len();
+        let (mut first, mut last) = (None, None);
+        let v = radec_unit(star.ra_deg, star.dec_deg);
+        if angle_deg(v, self.centre) > self.far_deg {
+            return None;
+        }
+        let (mut lo, mut hi) = (None, None);
+        for (i, (dir, turn)) in dirs.iter_mut().zip(&self.turns).enumerate() {
+            *dir = match turn {
+                Some(turn) => turn.apply(v),
+                None => v,
+            };
+            if dot(*dir, self.centre) >= self.cos_reach {
+                lo.get_or_insert(i);
+                hi = Some(i);
+            }
+        }
+        let (Some(lo), Some(hi)) = (lo, hi) else {
+            return None;
+        };
+        // Projected from `NODE_MARGIN` nodes before the first that can be near to as
+        // many after the last: every node a photon's time reads (`Path::at` between
+        // the node before the first near one and the node after the last) and
+        // `render::trails` keeps; the others are never read (NaN, as off the sky).
+        let range = lo.saturating_sub(NODE_MARGIN)..=(hi + NODE_MARGIN).min(nodes - 1);
+        for (i, (node, turn)) in trail.iter_mut().zip(&self.turns).enumerate() {
+            if !range.contains(&i) {
+                *node = (f64::NAN, f64::NAN);
+                continue;
+            }
+            // `Scene::pixel_at`, to the bit.
+            let (ra, dec) = match turn {
+                Some(_) => radec_deg(dirs[i]),
+                None => (star.ra_deg, star.dec_deg),
+            };
+            *node = tan.pixel(ra, dec).unwrap_or((f64::NAN, f64::NAN));
+            if near(node.0, node.1) {
+                first.get_or_insert(i);
+                last = Some(i);
+            }
+        }
+        let (Some(a), Some(b)) = (first, last) else {
+            return None;
+        };
+        // One node of slack on each side covers a trail entering between nodes.
+        let t_a = a.saturating_sub(1) as f64 * self.step;
+        let t_b = ((b + 1).min(nodes - 1)) as f64 * self.step;
+        Some((t_a, t_b))
     }
 }
 
@@ -179,54 +254,18 @@ pub(super) fn for_each_source(
             // the projection were most of this loop; over half a survey star's nodes lie off
             // the image). The two pixels of slack in `reach_deg` cover the rounding.
             let cos_reach = reach_deg.to_radians().cos();
+            let grid = TrailGrid {
+                turns,
+                step,
+                centre,
+                far_deg,
+                cos_reach,
+            };
             let mut dirs: Vec<Vec3> = vec![[0.0; 3]; nodes];
             for star in &scene.exposure.stars {
-                let (mut first, mut last) = (None, None);
-                let v = radec_unit(star.ra_deg, star.dec_deg);
-                if angle_deg(v, centre) > far_deg {
-                    continue;
-                }
-                let (mut lo, mut hi) = (None, None);
-                for (i, (dir, turn)) in dirs.iter_mut().zip(&turns).enumerate() {
-                    *dir = match turn {
-                        Some(turn) => turn.apply(v),
-                        None => v,
-                    };
-                    if dot(*dir, centre) >= cos_reach {
-                        lo.get_or_insert(i);
-                        hi = Some(i);
-                    }
-                }
-                let (Some(lo), Some(hi)) = (lo, hi) else {
+                let Some((t_a, t_b)) = grid.trace(star, &tan, &near, &mut dirs, &mut trail) else {
                     continue;
                 };
-                // Projected from `NODE_MARGIN` nodes before the first that can be near to as
-                // many after the last: every node a photon's time reads (`Path::at` between
-                // the node before the first near one and the node after the last) and
-                // `render::trails` keeps; the others are never read (NaN, as off the sky).
-                let range = lo.saturating_sub(NODE_MARGIN)..=(hi + NODE_MARGIN).min(nodes - 1);
-                for (i, (node, turn)) in trail.iter_mut().zip(&turns).enumerate() {
-                    if !range.contains(&i) {
-                        *node = (f64::NAN, f64::NAN);
-                        continue;
-                    }
-                    // `Scene::pixel_at`, to the bit.
-                    let (ra, dec) = match turn {
-                        Some(_) => radec_deg(dirs[i]),
-                        None => (star.ra_deg, star.dec_deg),
-                    };
-                    *node = tan.pixel(ra, dec).unwrap_or((f64::NAN, f64::NAN));
-                    if near(node.0, node.1) {
-                        first.get_or_insert(i);
-                        last = Some(i);
-                    }
-                }
-                let (Some(a), Some(b)) = (first, last) else {
-                    continue;
-                };
-                // One node of slack on each side covers a trail entering between nodes.
-                let t_a = a.saturating_sub(1) as f64 * step;
-                let t_b = ((b + 1).min(nodes - 1)) as f64 * step;
                 let pixel = tan
                     .pixel(star.ra_deg, star.dec_deg)
                     .unwrap_or((f64::NAN, f64::NAN));
