@@ -674,3 +674,36 @@ fn defaults_pass_the_check_and_bad_values_name_their_field() {
         assert!(fields.contains_key(f), "{f} is not a field");
     }
 }
+
+/// What the contrast keeps of a line's SNR: in white noise (lines of 300-680 px, 0.6-1.4 noise
+/// sigmas at the peak, 20 images) the detector's measured SNR is a median 0.83 of the matched
+/// filter's (2026-12-01: 0.834 on 40 such lines). Theory for its taps on the smoothed map: 0.85,
+/// the side bands' six samples a side, 1 px apart, correlated at 0.9, adding 37 % of a centre
+/// sample's noise variance. The band is 4 times the median's spread over 20 lines (each ratio
+/// varies by about 0.04).
+#[test]
+fn the_contrast_keeps_most_of_the_line_snr() {
+    let (w, h) = (1024usize, 1024usize);
+    let mut kept = Vec::new();
+    for k in 0..20u64 {
+        let mut rng = ChaCha8Rng::seed_from_u64(7000 + k);
+        let mut img = vec![0.0; w * h];
+        let (amp, len) = (0.6 + 0.04 * k as f64, 300.0 + 20.0 * k as f64);
+        let th = rng.random_range(0.0..PI);
+        let t = add_streak(&mut img, (w, h), len, th, amp, &mut rng);
+        let pix = quantise(&img, &mut rng);
+        // The matched filter's: sqrt(sum of profile^2) / sigma = amp sqrt(len sqrt(pi) PSF).
+        let ideal = amp * (len * PI.sqrt() * PSF).sqrt();
+        let c = detect_streaks(&pix, w, h, &StreakParams::default(), None);
+        if let Some(m) = c.iter().find(|c| iou(&t.boxx, &c.detection) >= 0.5) {
+            kept.push(m.snr / ideal);
+        }
+    }
+    assert!(kept.len() >= 18, "{kept:?}");
+    kept.sort_by(f64::total_cmp);
+    let median = kept[kept.len() / 2];
+    assert!(
+        (0.79..=0.87).contains(&median),
+        "the contrast keeps {median:.3}"
+    );
+}
