@@ -112,7 +112,12 @@ fn main() -> anyhow::Result<()> {
         let (cands, _) = detector.detect_measuring(frame, told);
         ms.push(t.elapsed().as_secs_f64() * 1e3);
         eprintln!("TIME {stem} {:.0}", ms[ms.len() - 1]);
-        std::fs::write(out.join(format!("{stem}.txt")), yolo_lines(&cands, w, h))?;
+        // The detect stage's lines (`soig eval` reads them back to the bit).
+        let lines: String = cands
+            .iter()
+            .map(|c| soig::report::yolo_prediction_line(&c.detection, w, h))
+            .collect();
+        std::fs::write(out.join(format!("{stem}.txt")), lines)?;
         tally.add(&stem, &truth, trail, &cands);
     }
     ms.sort_by(f64::total_cmp);
@@ -137,23 +142,6 @@ fn main() -> anyhow::Result<()> {
         ms[ms.len() - 1]
     );
     Ok(())
-}
-
-/// The candidates as YOLO-format prediction lines (`cls xc yc w h score`, normalised).
-fn yolo_lines(cands: &[soig::detect::streak::Candidate], w: usize, h: usize) -> String {
-    let mut text = String::new();
-    for c in cands {
-        let d = &c.detection;
-        text += &format!(
-            "0 {:.6} {:.6} {:.6} {:.6} {:.6}\n",
-            0.5 * (d.x1 + d.x2) / w as f64,
-            0.5 * (d.y1 + d.y2) / h as f64,
-            (d.x2 - d.x1) / w as f64,
-            (d.y2 - d.y1) / h as f64,
-            d.score
-        );
-    }
-    text
 }
 
 /// Recall at confidence 0.5 and IoU 0.5 by angle band to the trails (0-2, 2-7, 7-90
