@@ -12,6 +12,8 @@ bash scripts/setup.sh
 cargo clippy --workspace --all-targets --release --locked -- -D warnings
 # The training relay's adopt, checked before it copies (standard library only, seconds).
 python3 scripts/relay_adopt_test.py
+# The faint limit's smooth fit against scipy's figures (standard library only, seconds).
+python3 scripts/faint_limit_fit_test.py
 # --release: the tests reuse the dependencies the quickstart's release build compiled (the test
 # profile would build every one of them again).
 SOIG_REQUIRE_ONNXRUNTIME=1 SOIG_REQUIRE_EXPORT_READERS=1 cargo test --release --locked "$@"
