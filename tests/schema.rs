@@ -99,11 +99,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/paper-survey-original-semisynthetic-small.toml",
-        "48a4d4d38c1ba9737a469dfcc3a193dafe855217031bc0dbe21dc7cbd2f5c573",
+        "f90186fbc3e7c2b1444ee721e88ab5e9cbaa0f513cc5fd26a651e4e81bdb3682",
     ),
     (
         "campaigns/paper-survey-original-semisynthetic.toml",
-        "015ac0c414ce4204c5803ad4901f5b2c2e3325b31ca24db28b0a75cd66d5daf5",
+        "8f3c7493f041c8f0fb7e710eee67f9650dbd2e992ba14fd1f5195c6cb9f29980",
     ),
     (
         "campaigns/paper-survey-original-small.toml",
@@ -115,11 +115,11 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "campaigns/paper-survey-rotated-semisynthetic-small.toml",
-        "4a712527953e7a040c1f37bd72f2a1b6ceb79388539cc3d97df7b07bdaef03fe",
+        "d796c191eebee732dc6926f7b660ceef08ad4b5241b32b61d086647aa9a7bb72",
     ),
     (
         "campaigns/paper-survey-rotated-semisynthetic.toml",
-        "0e4caafb3e3c8e293245ad0bd19a42df1bc86bdacabd067541496fafbed66f65",
+        "06758e5ac1539de61b2ec277e10583e3508c3b577e831ddc579276325a5aef7b",
     ),
     (
         "campaigns/paper-survey-rotated-small.toml",
@@ -239,7 +239,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/results-survey-original-semisynthetic.toml",
-        "9141bfda7ddb9d8b098ecdb7fa5497ba1e36493a0a35dc35225ade1ca6776ace",
+        "428bbfe47688e6f5f3ec64a422af2906da6df875f18649a42b2434b69c5c1851",
     ),
     (
         "results/campaigns/results-survey-original-synthetic.toml",
@@ -249,7 +249,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     // adopts a stage of `survey-rotated` (last: stage 2, 2026-11-30).
     (
         "results/campaigns/results-survey-rotated-semisynthetic.toml",
-        "d7f8a580e035689e95c921b8c2b54f06f69cf51dabf585144135c662f74ca3d8",
+        "0091cb578076ab83c725433c066d78a584832356589012ed9d0feacb83ee0f2d",
     ),
     (
         "results/campaigns/results-survey-rotated-synthetic.toml",
