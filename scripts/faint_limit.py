@@ -8,7 +8,9 @@ and recall count); every other box of confidence >= 0.5 is a false positive.
 Writes into OUT_DIR: curve.csv (recall by half-octave SNR bin, with a 68% Wilson interval),
 objects.csv (each object: SNR, magnitude, found) and summary.json (the SNR at 50% recall on the
 isotonic fit of found against SNR, per object, interpolated linearly between the fit's steps; the
-precision at confidence 0.5, overall and above that SNR). Standard library only.
+precision at confidence 0.5, overall and above that SNR; and `snr50_fit` with its 68 % interval,
+the smooth fit of scripts/faint_limit_fit.py, steadier than the isotonic steps). Standard
+library only.
 
     python3 scripts/faint_limit.py RUN_OUTPUT OUT_DIR [--detector streak] [--predictions DIR]
 """
@@ -18,6 +20,10 @@ import glob
 import json
 import math
 import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from faint_limit_fit import fitted  # noqa: E402
 
 CONF = 0.5
 IOU = 0.5
@@ -183,6 +189,9 @@ def main():
         "conf": CONF,
         "iou": IOU,
     }
+    # The fit of objects.csv as written (SNR to 4 decimals), so that faint_limit_fit.py on the
+    # file gives these figures to the last digit.
+    summary.update(fitted([(math.log(float(f"{o['snr']:.4f}")), o["found"]) for o in objects]))
     with open(os.path.join(a.out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=2)
         f.write("\n")

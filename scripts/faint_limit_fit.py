@@ -130,25 +130,49 @@ def profile_interval(data, best, value, drop=0.5):
     return bounds
 
 
-def summarise(path):
-    data = read(path)
+def fitted(data):
+    """The fit's figures for a summary: `snr50_fit`, its 68 % interval (None where unbounded),
+    plateau and width; all None where recall never passes 0.5 (no object found above half of
+    those at least as bright: there is no 50 % point to fit)."""
+    none = {"snr50_fit": None, "snr50_fit_lo68": None, "snr50_fit_hi68": None,
+            "fit_plateau": None, "fit_width": None}
+    ranked = sorted(data, reverse=True)
+    found = 0
+    for n, (_, k) in enumerate(ranked, 1):
+        found += k
+        if found > n / 2 and n >= 10:
+            break
+    else:
+        return none
     best, value = fit(data)
     x50, log_w, alpha = best
     interval = profile_interval(data, best, value)
+    return {
+        "snr50_fit": math.exp(x50),
+        "snr50_fit_lo68": math.exp(interval[0]) if interval else None,
+        "snr50_fit_hi68": math.exp(interval[1]) if interval else None,
+        "fit_plateau": 0.5 + 0.5 * sigmoid(alpha),
+        "fit_width": math.exp(log_w),
+    }
+
+
+def summarise(path):
+    data = read(path)
     isotonic = None
     summary = os.path.join(os.path.dirname(path), "summary.json")
     if os.path.exists(summary):
         isotonic = json.load(open(summary)).get("snr50")
+    f = fitted(data)
     return {
         "set": os.path.basename(os.path.dirname(os.path.abspath(path))),
         "objects": len(data),
         "found": sum(k for _, k in data),
         "snr50_isotonic": isotonic,
-        "snr50": math.exp(x50),
-        "snr50_lo68": math.exp(interval[0]) if interval else None,
-        "snr50_hi68": math.exp(interval[1]) if interval else None,
-        "plateau": 0.5 + 0.5 * sigmoid(alpha),
-        "width": math.exp(log_w),
+        "snr50": f["snr50_fit"],
+        "snr50_lo68": f["snr50_fit_lo68"],
+        "snr50_hi68": f["snr50_fit_hi68"],
+        "plateau": f["fit_plateau"],
+        "width": f["fit_width"],
     }
 
 
@@ -161,6 +185,9 @@ def main():
     print("|---|---|---|---|---|---|---|---|")
     for path in paths:
         s = summarise(path)
+        if s["snr50"] is None:
+            print(f"| {s['set']} | {s['objects']} | {s['found']} | - | - | - | - | - |")
+            continue
         iso = f"{s['snr50_isotonic']:.2f}" if s["snr50_isotonic"] else "-"
         ci = (f"{s['snr50_lo68']:.2f}-{s['snr50_hi68']:.2f}" if s["snr50_lo68"]
               else "unbounded")
