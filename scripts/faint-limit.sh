@@ -42,12 +42,4 @@ for name in "${names[@]}"; do
     "$SOIG" verify "$out" | sed -n 's/.*digest //p' > "$dest"/digest.txt
 done
 # The smooth fit of every committed set, with its interval (results/faint-limit-fit.md).
-{
-    echo "# The faint limits, fitted"
-    echo
-    echo "Written by \`bash scripts/faint-limit.sh\` (\`python3 scripts/faint_limit_fit.py\`): each set's"
-    echo "objects.csv, the maximum-likelihood logistic in ln SNR with a plateau, its SNR of 50 % recall"
-    echo "and that SNR's 68 % profile-likelihood interval, beside faint_limit.py's isotonic SNR50."
-    echo
-    python3 scripts/faint_limit_fit.py results/faint-limit*/objects.csv
-} > results/faint-limit-fit.md
+python3 scripts/faint_limit_fit.py results/faint-limit*/objects.csv > results/faint-limit-fit.md

@@ -18,8 +18,8 @@ jumps with single objects near the threshold, and 300 objects resolve it only to
 Standard library only, like faint_limit.py.
 
     python3 scripts/faint_limit_fit.py results/faint-limit*/objects.csv
-        -> a Markdown table: set, objects, found, isotonic SNR50 (faint_limit.py's),
-           fitted SNR50 and its 68 % interval, plateau a, width w
+        -> Markdown (results/faint-limit-fit.md): a table of set, objects, found, isotonic
+           SNR50 (faint_limit.py's), fitted SNR50 and its 68 % interval, plateau a, width w
 """
 import csv
 import json
@@ -157,42 +157,48 @@ def fitted(data):
 
 
 def summarise(path):
+    """`fitted` of one objects.csv, with the set's name, its counts and faint_limit.py's
+    isotonic SNR50 (from the summary.json beside it, where there is one)."""
     data = read(path)
     isotonic = None
     summary = os.path.join(os.path.dirname(path), "summary.json")
     if os.path.exists(summary):
         isotonic = json.load(open(summary)).get("snr50")
-    f = fitted(data)
     return {
         "set": os.path.basename(os.path.dirname(os.path.abspath(path))),
         "objects": len(data),
         "found": sum(k for _, k in data),
         "snr50_isotonic": isotonic,
-        "snr50": f["snr50_fit"],
-        "snr50_lo68": f["snr50_fit_lo68"],
-        "snr50_hi68": f["snr50_fit_hi68"],
-        "plateau": f["fit_plateau"],
-        "width": f["fit_width"],
+        **fitted(data),
     }
+
+
+HEADING = """# The faint limits, fitted
+
+Written by `bash scripts/faint-limit.sh` (`python3 scripts/faint_limit_fit.py`): each set's
+objects.csv, the maximum-likelihood logistic in ln SNR with a plateau, its SNR of 50 % recall
+and that SNR's 68 % profile-likelihood interval, beside faint_limit.py's isotonic SNR50.
+"""
 
 
 def main():
     paths = sys.argv[1:]
     if not paths:
         raise SystemExit(__doc__)
+    print(HEADING)
     print("| set | objects | found | SNR50 (isotonic) | SNR50 (fit) | 68 % interval "
           "| plateau a | width w (ln SNR) |")
     print("|---|---|---|---|---|---|---|---|")
     for path in paths:
         s = summarise(path)
-        if s["snr50"] is None:
+        if s["snr50_fit"] is None:
             print(f"| {s['set']} | {s['objects']} | {s['found']} | - | - | - | - | - |")
             continue
         iso = f"{s['snr50_isotonic']:.2f}" if s["snr50_isotonic"] else "-"
-        ci = (f"{s['snr50_lo68']:.2f}-{s['snr50_hi68']:.2f}" if s["snr50_lo68"]
+        ci = (f"{s['snr50_fit_lo68']:.2f}-{s['snr50_fit_hi68']:.2f}" if s["snr50_fit_lo68"]
               else "unbounded")
-        print(f"| {s['set']} | {s['objects']} | {s['found']} | {iso} | {s['snr50']:.2f} "
-              f"| {ci} | {s['plateau']:.3f} | {s['width']:.3f} |")
+        print(f"| {s['set']} | {s['objects']} | {s['found']} | {iso} | {s['snr50_fit']:.2f} "
+              f"| {ci} | {s['fit_plateau']:.3f} | {s['fit_width']:.3f} |")
 
 
 if __name__ == "__main__":
