@@ -502,6 +502,11 @@ mod tests {
             edit(&mut edited[k]);
             parse_tles(&join(&edited)).unwrap_err()
         };
+        // The error of the catalogue with `from` replaced by `to` on line `k`, its checksum
+        // recomputed (so that the field, not the checksum, is what is wrong).
+        let replaced = |k: usize, from: &str, to: &str| {
+            error_after(k, &|l| *l = with_checksum(&l.replacen(from, to, 1)))
+        };
 
         // 40386 line 1, true checksum 6.
         let err = error_after(4, &|l| l.replace_range(68..69, "7"));
@@ -523,19 +528,14 @@ mod tests {
             }
         );
 
-        let err = error_after(11, &|l| {
-            *l = with_checksum(&l.replacen("41335", "41336", 1))
-        });
-        assert!(
-            matches!(
-                err,
-                TleError::CatalogueMismatch {
-                    line: 12,
-                    line1_number: 11,
-                    ..
-                }
-            ),
-            "{err}"
+        assert_eq!(
+            replaced(11, "41335", "41336"),
+            TleError::CatalogueMismatch {
+                line: 12,
+                line1_number: 11,
+                line1_id: "41335".into(),
+                line2_id: "41336".into(),
+            }
         );
 
         assert_eq!(
@@ -547,21 +547,15 @@ mod tests {
             }
         );
 
-        let err = error_after(5, &|l| {
-            *l = with_checksum(&l.replacen("50.6833", "50.6x33", 1))
-        });
-        assert!(
-            matches!(
-                err,
-                TleError::BadField {
-                    line: 6,
-                    field: "inclination",
-                    first: 9,
-                    last: 16,
-                    ..
-                }
-            ),
-            "{err}"
+        assert_eq!(
+            replaced(5, "50.6833", "50.6x33"),
+            TleError::BadField {
+                line: 6,
+                field: "inclination",
+                first: 9,
+                last: 16,
+                text: " 50.6x33".into(),
+            }
         );
 
         assert_eq!(
