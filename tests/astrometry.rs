@@ -13,7 +13,9 @@ mod common;
 use std::io::Write as _;
 use std::path::Path;
 
-use common::{arg, json, ok, python_with_astropy, quickstart_with, repo, scratch, soig};
+use common::{
+    arg, assert_refused, json, ok, python_with_astropy, quickstart_with, repo, scratch, soig,
+};
 use soig::detect::Detection;
 use soig::observations::{FrameSky, Line, observe};
 use soig::report::astrometry::{TruthObject, offset_arcsec, residual};
@@ -216,11 +218,9 @@ fn astrometry_needs_the_detect_stage() {
         ],
         &out,
     );
-    assert!(!o.status.success());
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        err.contains("artifacts.astrometry") && err.contains("detect"),
-        "{err}"
+    assert_refused(
+        &o,
+        "`artifacts.astrometry`: the astrometry is of the detect stage's",
     );
 }
 

@@ -18,8 +18,8 @@ fn soig(args: &[&str], threads: Option<usize>) -> Output {
 
 mod common;
 use common::{
-    CampaignToml, ELEMENTS_40649, arg, assert_refused, json, ort_available, repo, scratch,
-    tle_file, tle_object,
+    CampaignToml, ELEMENTS_40649, arg, assert_refused, json, ort_available, repo, run_report,
+    scratch, tle_file, tle_object,
 };
 
 /// A small, fast campaign: 256 px images, few samples.
@@ -383,10 +383,7 @@ fn committed_model_detects_the_quickstart_debris() {
     if !ort_available() {
         return;
     }
-    let (_tmp, out) = scratch("quickstart");
-    let campaign = repo("campaigns/quickstart.toml");
-    run_ok(&campaign, &out, None);
-    let report = json(&out.join("report/report.json"));
+    let (_tmp, _, report) = run_report("campaigns/quickstart.toml", &[]);
     let yolo = report["detectors"]
         .as_array()
         .unwrap()

@@ -13,7 +13,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{arg, eval_json, json, ok, ort_available, repo, scratch, soig};
+use common::{arg, eval_json, ort_available, run_report};
 
 /// `soig eval` of detector `name`'s predictions in `mode`, as JSON.
 fn eval(out: &Path, name: &str, mode: &str) -> serde_json::Value {
@@ -29,18 +29,8 @@ fn report_metrics_are_soig_eval_of_the_runs_own_files() {
     if !ort_available() {
         return;
     }
-    let (_tmp, out) = scratch("multi");
-    let campaign = repo("campaigns/quickstart-multi.toml");
-    ok(soig(&[
-        "run",
-        arg(&campaign),
-        "--set",
-        "images=40",
-        "--quiet",
-        "--out",
-        arg(&out),
-    ]));
-    let report = json(&out.join("report/report.json"));
+    let (_tmp, out, report) =
+        run_report("campaigns/quickstart-multi.toml", &["--set", "images=40"]);
     let detectors = report["detectors"].as_array().unwrap();
     assert_eq!(detectors.len(), 2, "{report}");
     let close = |a: &serde_json::Value, b: &serde_json::Value, what: &str| {

@@ -95,6 +95,23 @@ pub fn run_quickstart(args: &[&str], out: &Path) -> Output {
     soig(&all)
 }
 
+/// `soig run` of the repository's campaign `campaign` with `args`, quietly into a fresh
+/// folder, which must succeed: the folder (keep it alive), the output in it and its
+/// report/report.json.
+pub fn run_report(
+    campaign: &str,
+    args: &[&str],
+) -> (tempfile::TempDir, PathBuf, serde_json::Value) {
+    let (tmp, out) = scratch("run");
+    let campaign = repo(campaign);
+    let mut all = vec!["run", arg(&campaign)];
+    all.extend(args);
+    all.extend(["--quiet", "--out", arg(&out)]);
+    ok(soig(&all));
+    let report = json(&out.join("report/report.json"));
+    (tmp, out, report)
+}
+
 /// `soig run CAMPAIGN --out OUT --quiet` on `threads` rayon threads, which must succeed; its
 /// digest.
 pub fn run_on_threads(campaign: &Path, out: &Path, threads: &str) -> String {
