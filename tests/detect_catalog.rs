@@ -13,6 +13,7 @@ use soig::campaign::Campaign;
 use soig::detect_frames::catalog::FrameSky;
 use soig::experiment;
 use soig::frames::Frame;
+use soig::imaging::point_segment_distance;
 
 mod common;
 use common::{CampaignToml, arg, leo_and_geo, ok, python_with_astropy, run_quiet, soig};
@@ -282,14 +283,7 @@ fn debris_and_other(frame: &serde_json::Value, t0: [f64; 2], t1: [f64; 2]) -> (u
 
 /// Distance from `q` to the segment `a`-`b`.
 fn to_segment(q: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let l2 = dx * dx + dy * dy;
-    let t = if l2 > 0.0 {
-        (((q[0] - a[0]) * dx + (q[1] - a[1]) * dy) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a[0] + t * dx - q[0]).hypot(a[1] + t * dy - q[1])
+    point_segment_distance((q[0], q[1]), (a[0], a[1]), (b[0], b[1]))
 }
 
 /// The star-aware pass on soig's survey FITS, told only the catalogue: in each of the four

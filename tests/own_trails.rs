@@ -9,8 +9,9 @@
 
 mod independent;
 
-use independent::{Rng, Segment, Sensor, distance, frame};
+use independent::{Rng, Segment, Sensor, frame};
 use soig::detect::streak::{OwnTrails, StreakParams, detect_streaks, detect_streaks_on_frame};
+use soig::imaging::point_segment_distance as distance;
 
 const SIZE: usize = 512;
 const SENSOR: Sensor = Sensor {

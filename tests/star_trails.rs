@@ -6,6 +6,7 @@
 #![allow(clippy::disallowed_methods)]
 
 use soig::campaign::Campaign;
+use soig::imaging::point_segment_distance;
 use soig::render::trails::star_trails;
 
 mod common;
@@ -23,16 +24,7 @@ fn campaign(mode: &str, sensor: &str) -> Campaign {
 
 /// Distance from `q` to the polyline `nodes`, and the signed lateral offset from its chord.
 fn distance(q: (f64, f64), nodes: &[[f64; 2]]) -> f64 {
-    let seg = |a: [f64; 2], b: [f64; 2]| {
-        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-        let l2 = dx * dx + dy * dy;
-        let t = if l2 > 0.0 {
-            (((q.0 - a[0]) * dx + (q.1 - a[1]) * dy) / l2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        (a[0] + t * dx - q.0).hypot(a[1] + t * dy - q.1)
-    };
+    let seg = |a: [f64; 2], b: [f64; 2]| point_segment_distance(q, (a[0], a[1]), (b[0], b[1]));
     if nodes.len() == 1 {
         return seg(nodes[0], nodes[0]);
     }

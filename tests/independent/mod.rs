@@ -157,15 +157,3 @@ pub fn frame(w: usize, h: usize, sensor: &Sensor, segs: &[Segment], rng: &mut Rn
         })
         .collect()
 }
-
-/// Distance from `p` to the segment `a`-`b`.
-pub fn distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
-    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-    let l2 = dx * dx + dy * dy;
-    let t = if l2 > 0.0 {
-        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a.0 + t * dx - p.0).hypot(a.1 + t * dy - p.1)
-}

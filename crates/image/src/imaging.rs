@@ -1,6 +1,7 @@
 //! Image-plane helpers shared across the crate: bilinear sampling between pixel centres, a box
-//! mean, and robust statistics (median and 1.4826 MAD sigma) of pixel values. Images are
-//! row-major `f32` slices with pixel centres at integer coordinates.
+//! mean, robust statistics (median and 1.4826 MAD sigma) of pixel values, and a point's
+//! distance from a segment. Images are row-major `f32` slices with pixel centres at integer
+//! coordinates.
 
 /// Bilinear interpolation between pixel centres (as `cv2.warpAffine` with INTER_LINEAR), in
 /// single precision; a point beyond the outer pixel centres takes the edge value.
@@ -26,6 +27,21 @@ pub fn bilinear(img: &[f32], width: usize, height: usize, x: f64, y: f64) -> f32
     let top = at(i, j) * (1.0 - fx) + at(i1, j) * fx;
     let bottom = at(i, j1) * (1.0 - fx) + at(i1, j1) * fx;
     top * (1.0 - fy) + bottom * fy
+}
+
+/// Distance from `p` to the segment `a`-`b` (a point where `a` is `b`).
+// Inlined across crates: the streak detector measures it in its per-sample loops.
+#[inline]
+pub fn point_segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let l2 = dx * dx + dy * dy;
+    let t = if l2 > 0.0 {
+        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (ex, ey) = (a.0 + t * dx - p.0, a.1 + t * dy - p.1);
+    (ex * ex + ey * ey).sqrt()
 }
 
 /// Median and robust standard deviation (1.4826 MAD) of the finite pixels of an image: the sky

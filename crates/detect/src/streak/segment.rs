@@ -1,6 +1,9 @@
 //! The geometry every stage shares: a refined segment and the distances and angles between
 //! segments.
 
+/// Distance from a point to a segment (the detector's own, shared with the tests that judge it).
+pub(super) use soig_image::imaging::point_segment_distance;
+
 /// A point (x, y) in pixel-centre coordinates.
 pub(super) type Point = (f64, f64);
 
@@ -61,19 +64,6 @@ impl Seg {
         let tb = (hl - 0.5).floor() as i64;
         (ta..=tb).map(move |t| (cx + t as f64 * ux, cy + t as f64 * uy))
     }
-}
-
-/// Distance from `p` to the segment `a`-`b`.
-pub(super) fn point_segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
-    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-    let l2 = dx * dx + dy * dy;
-    let t = if l2 > 0.0 {
-        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let (ex, ey) = (a.0 + t * dx - p.0, a.1 + t * dy - p.1);
-    (ex * ex + ey * ey).sqrt()
 }
 
 /// Absolute difference of two axis orientations in degrees, modulo 180 (result in [0, 90]).
