@@ -62,22 +62,28 @@ fn run_with(
     seed: u64,
 ) -> (Vec<Candidate>, Vec<Candidate>, Option<[f64; 4]>) {
     let (mut img, trails) = star_field();
-    let label = debris.map(|(a, b)| {
-        let mut alone = vec![0.0; W * H];
-        add_segment(&mut alone, W, H, a.0, a.1, b.0, b.1, sigmas * NOISE);
-        img.iter_mut().zip(&alone).for_each(|(v, d)| *v += d);
-        truth_box(&alone, W, H)
-    });
+    let label = debris.map(|ends| add_debris(&mut img, ends, sigmas));
     let pixels = quantise(&img, &mut ChaCha8Rng::seed_from_u64(seed));
     let p = StreakParams::default();
-    let confident = |c: &Candidate| c.detection.score >= 0.5;
     let aware = detect_streaks_among_stars(&pixels, W, H, &p, Some(0.0), Some(&trails));
     let angle_only = detect_streaks(&pixels, W, H, &p, Some(0.0));
-    (
-        aware.into_iter().filter(confident).collect(),
-        angle_only.into_iter().filter(confident).collect(),
-        label,
-    )
+    (confident(aware), confident(angle_only), label)
+}
+
+/// A debris streak of `sigmas` noise sigmas from `a` to `b` added to `img`: its label box.
+fn add_debris(img: &mut [f64], (a, b): ((f64, f64), (f64, f64)), sigmas: f64) -> [f64; 4] {
+    let mut alone = vec![0.0; W * H];
+    add_segment(&mut alone, W, H, a.0, a.1, b.0, b.1, sigmas * NOISE);
+    img.iter_mut().zip(&alone).for_each(|(v, d)| *v += d);
+    truth_box(&alone, W, H)
+}
+
+/// The candidates of confidence 0.5 and more.
+fn confident(found: Vec<Candidate>) -> Vec<Candidate> {
+    found
+        .into_iter()
+        .filter(|c| c.detection.score >= 0.5)
+        .collect()
 }
 
 /// Candidates of confidence 0.5 and more from the star-aware detector on `img` (noise-free,
@@ -86,26 +92,15 @@ fn run_with(
 fn aware_with_debris(
     mut img: Vec<f64>,
     trails: &[StarTrail],
-    (a, b): ((f64, f64), (f64, f64)),
+    ends: ((f64, f64), (f64, f64)),
     sigmas: f64,
     seed: u64,
 ) -> (Vec<Candidate>, [f64; 4]) {
-    let mut alone = vec![0.0; W * H];
-    add_segment(&mut alone, W, H, a.0, a.1, b.0, b.1, sigmas * NOISE);
-    img.iter_mut().zip(&alone).for_each(|(v, d)| *v += d);
+    let label = add_debris(&mut img, ends, sigmas);
     let pixels = quantise(&img, &mut ChaCha8Rng::seed_from_u64(seed));
-    let found = detect_streaks_among_stars(
-        &pixels,
-        W,
-        H,
-        &StreakParams::default(),
-        Some(0.0),
-        Some(trails),
-    )
-    .into_iter()
-    .filter(|c| c.detection.score >= 0.5)
-    .collect();
-    (found, truth_box(&alone, W, H))
+    let p = StreakParams::default();
+    let found = detect_streaks_among_stars(&pixels, W, H, &p, Some(0.0), Some(trails));
+    (confident(found), label)
 }
 
 /// The debris is the one confident candidate, at IoU 0.5 with its label.
@@ -116,6 +111,13 @@ fn found_alone(found: &[Candidate], label: &[f64; 4], what: &str) {
         overlap >= 0.5,
         "{what}: IoU {overlap:.2} with {label:?}: {found:#?}"
     );
+}
+
+/// Debris of `sigmas` from `a` to `b` on the star field is the star-aware detector's one
+/// confident candidate ([`run_with`], [`found_alone`]).
+fn debris_found_alone(ends: ((f64, f64), (f64, f64)), sigmas: f64, seed: u64, what: &str) {
+    let (aware, _, label) = run_with(Some(ends), sigmas, seed);
+    found_alone(&aware, &label.unwrap(), what);
 }
 
 #[test]
@@ -133,16 +135,15 @@ fn debris_parallel_to_the_trails_beside_one_is_found() {
 fn debris_at_one_and_three_degrees_to_the_trails_is_found() {
     for (deg, seed) in [(1.0f64, 2), (3.0, 3)] {
         let rise = 300.0 * deg.to_radians().tan();
-        let (aware, _, label) = run(Some(((100.0, 250.0), (400.0, 250.0 + rise))), seed);
-        found_alone(&aware, &label.unwrap(), &format!("{deg} deg"));
+        let ends = ((100.0, 250.0), (400.0, 250.0 + rise));
+        debris_found_alone(ends, 3.0, seed, &format!("{deg} deg"));
     }
 }
 
 #[test]
 fn debris_crossing_star_trails_is_found() {
     // At 30 degrees across the trails at y = 140 and 220.
-    let (aware, _, label) = run(Some(((150.0, 100.0), (400.0, 244.3))), 4);
-    found_alone(&aware, &label.unwrap(), "crossing");
+    debris_found_alone(((150.0, 100.0), (400.0, 244.3)), 3.0, 4, "crossing");
 }
 
 #[test]
@@ -160,8 +161,7 @@ fn debris_over_the_whole_of_a_faint_trail_is_found() {
     // brighter in the catalogue (within 1.5 times: the 3.5-sigma one) show far less than the
     // debris, so the trail does not explain it (it did when a trail wholly under a candidate
     // explained whatever lay on it: an SNR-900 streak was lost so).
-    let (aware, _, label) = run_with(Some(((30.0, 58.0), (470.0, 61.8))), 8.0, 9);
-    found_alone(&aware, &label.unwrap(), "over a faint trail");
+    debris_found_alone(((30.0, 58.0), (470.0, 61.8)), 8.0, 9, "over a faint trail");
 }
 
 #[test]
@@ -192,8 +192,12 @@ fn debris_beside_the_whole_of_a_trail_is_found_whole() {
     // end: the streak is in the trail's median at every offset on its side, and subtracted
     // with the star's light it was lost but for the 30 px beyond (the trail's profile, made
     // symmetric about its path, keeps only the star: `symmetric`).
-    let (aware, _, label) = run_with(Some(((50.0, 65.0), (480.0, 65.0))), 4.0, 12);
-    found_alone(&aware, &label.unwrap(), "beside a whole trail");
+    debris_found_alone(
+        ((50.0, 65.0), (480.0, 65.0)),
+        4.0,
+        12,
+        "beside a whole trail",
+    );
 }
 
 #[test]
