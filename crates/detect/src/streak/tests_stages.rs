@@ -407,6 +407,30 @@ fn smoothed_noise(seed: u64) -> Vec<f32> {
     z.iter().map(|&v| (v as f64 / sd) as f32).collect()
 }
 
+/// The far end `reach` gives, on the noise of `seed`, a streak of `level` from x 10 to
+/// `streak_to` along row 64 and the trails' subtraction `removed`, to the refined segment of
+/// its first 51 px (x 10 to 61, edges).
+fn reached_end(level: f64, streak_to: usize, removed: Vec<f32>, seed: u64) -> f64 {
+    let mut z = smoothed_noise(seed);
+    for (v, s) in z.iter_mut().zip(streak_map(level, 64.0, 10, streak_to)) {
+        *v += s;
+    }
+    let mut world = World::new(z);
+    world.removed = Some(removed);
+    let seg = Seg {
+        cx: 35.5,
+        cy: 64.0,
+        theta: 0.0,
+        length: 51.0,
+        snr: 10.0,
+        flux: 0.0,
+        elongation: 5.0,
+        contrast: true,
+    };
+    let r = reach(&world.maps(), &seg);
+    r.cx + 0.5 * r.length
+}
+
 /// `reach` in the star-aware pass, nothing hidden: a faint streak whose refined segment already
 /// ends where the streak does is not carried on into the noise beyond it. Each piece's gain is
 /// read on the line the streak was followed along; read on the best of the offsets searched
@@ -415,28 +439,8 @@ fn smoothed_noise(seed: u64) -> Vec<f32> {
 /// any machine.
 #[test]
 fn reach_does_not_follow_noise_beyond_the_end() {
-    let level = 1.5;
     let moved = (0..60u64)
-        .filter(|&seed| {
-            let mut z = smoothed_noise(seed);
-            for (v, s) in z.iter_mut().zip(streak_map(level, 64.0, 10, 60)) {
-                *v += s;
-            }
-            let mut world = World::new(z);
-            world.removed = Some(vec![0.0; W * H]);
-            let seg = Seg {
-                cx: 35.5,
-                cy: 64.0,
-                theta: 0.0,
-                length: 51.0,
-                snr: 10.0,
-                flux: 0.0,
-                elongation: 5.0,
-                contrast: true,
-            };
-            let r = reach(&world.maps(), &seg);
-            r.cx + 0.5 * r.length > seg.cx + 0.5 * seg.length + 16.0
-        })
+        .filter(|&seed| reached_end(1.5, 60, vec![0.0; W * H], seed) > 61.0 + 16.0)
         .count();
     assert!(moved <= 3, "the end moved on {moved} of 60 seeds");
 }
@@ -450,50 +454,29 @@ fn reach_does_not_follow_noise_beyond_the_end() {
 /// before). Seeded: the counts are the same on any machine.
 #[test]
 fn reach_does_not_follow_a_trail_on_noise() {
-    let hidden_from = |x0: usize, x1: usize| -> Vec<f32> {
+    let hidden_to = |x1: usize| -> Vec<f32> {
         let mut r = vec![0.0f32; W * H];
         for y in 54..=74 {
-            for x in x0..=x1 {
-                r[y * W + x] = 10.0;
-            }
+            r[y * W + 61..=y * W + x1].fill(10.0);
         }
         r
     };
-    let seg = Seg {
-        cx: 35.5,
-        cy: 64.0,
-        theta: 0.0,
-        length: 51.0,
-        snr: 10.0,
-        flux: 0.0,
-        elongation: 5.0,
-        contrast: true,
+    let ends = |level, streak_to, hide_to| {
+        (0..60u64).map(move |seed| reached_end(level, streak_to, hidden_to(hide_to), seed))
     };
-    let end = |level: f64, streak_to: usize, hide_to: usize, seed: u64| {
-        let mut z = smoothed_noise(seed);
-        for (v, s) in z.iter_mut().zip(streak_map(level, 64.0, 10, streak_to)) {
-            *v += s;
-        }
-        let mut world = World::new(z);
-        world.removed = Some(hidden_from(61, hide_to));
-        let r = reach(&world.maps(), &seg);
-        r.cx + 0.5 * r.length
-    };
-    let seed_ends =
-        |level, streak_to, hide_to| (0..60u64).map(move |s| end(level, streak_to, hide_to, s));
-    let carried = seed_ends(1.0, 60, 110).filter(|&e| e > 61.0 + 16.0).count();
+    let carried = ends(1.0, 60, 110).filter(|&e| e > 61.0 + 16.0).count();
     assert!(
         carried <= 12,
         "carried along the trail on {carried} of 60 seeds"
     );
-    let followed = seed_ends(3.0, 100, 100)
+    let followed = ends(3.0, 100, 100)
         .filter(|&e| (e - 100.5).abs() < 16.0)
         .count();
     assert!(
         followed >= 57,
         "followed under the trail on {followed} of 60 seeds"
     );
-    let to_edge = seed_ends(1.5, W - 1, W - 1).filter(|&e| e > 110.0).count();
+    let to_edge = ends(1.5, W - 1, W - 1).filter(|&e| e > 110.0).count();
     assert!(
         to_edge >= 57,
         "followed to the edge on {to_edge} of 60 seeds"
