@@ -333,11 +333,10 @@ pub(super) fn steady_centre_line(pieces: &mut [(f64, f64, f64)]) {
             .map_or(0.0, |k| k.1);
     }
     if pieces.len() >= OFFSET_MEDIAN_PIECES {
-        let half = OFFSET_MEDIAN_PIECES / 2;
         let offsets: Vec<f64> = pieces.iter().map(|p| p.1).collect();
-        for (i, p) in pieces.iter_mut().enumerate() {
-            let window = &offsets[i.saturating_sub(half)..(i + half + 1).min(offsets.len())];
-            p.1 = super::stats::median_of(window);
+        let line = super::stats::running_median(&offsets, OFFSET_MEDIAN_PIECES);
+        for (p, o) in pieces.iter_mut().zip(line) {
+            p.1 = o;
         }
     }
 }
@@ -354,11 +353,12 @@ fn smooth_brightness(pieces: &mut [(f64, f64, f64)], med: f64) {
     if n == 1 {
         return;
     }
-    let half = n / 2;
     let bright: Vec<f64> = pieces.iter().map(|p| p.2).collect();
-    for (i, p) in pieces.iter_mut().enumerate() {
-        let window = &bright[i.saturating_sub(half)..(i + half + 1).min(bright.len())];
-        p.2 = super::stats::median_of(window);
+    for (p, b) in pieces
+        .iter_mut()
+        .zip(super::stats::running_median(&bright, n))
+    {
+        p.2 = b;
     }
 }
 

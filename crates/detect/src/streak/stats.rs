@@ -79,6 +79,15 @@ pub(super) fn median_of(v: &[f64]) -> f64 {
     }
 }
 
+/// The running median of `v` over windows of `n` values centred on each (`n / 2` either side,
+/// fewer at the ends), by [`median_of`].
+pub(super) fn running_median(v: &[f64], n: usize) -> Vec<f64> {
+    let half = n / 2;
+    (0..v.len())
+        .map(|i| median_of(&v[i.saturating_sub(half)..(i + half + 1).min(v.len())]))
+        .collect()
+}
+
 /// `f64::total_cmp`'s key: the bits as a signed integer, a negative's flipped but for the
 /// sign, so that integer order is `total_cmp`'s order.
 fn total_key(x: f64) -> i64 {
