@@ -24,6 +24,10 @@ pub(super) struct Maps<'a> {
     /// at each (see `Sky::subtract`).
     pub(super) under_trails: Option<&'a [bool]>,
     pub(super) removed: Option<&'a [f32]>,
+    /// The stars are points: no trail direction given or measured (fixed pointing, or a frame
+    /// whose stars share no direction). Acceptance and the confidence then reckon with pairs
+    /// and chains of star blobs.
+    pub(super) points: bool,
     /// [`Maps::contrast_sum_sd`]'s correlations of two contrast samples `d` px apart along
     /// the axis, per set of taps, taken once a pass: each is 225 exponentials, and the sd is
     /// asked for hundreds of times an image (3 % of the detector's time).

@@ -73,6 +73,7 @@ pub(super) fn pass<R>(
         noise: &noise,
         under_trails: flat.under_trails.as_deref(),
         removed: flat.removed.as_deref(),
+        points: sky.is_none() && trail.is_none(),
         sample_corr: Default::default(),
     };
     let star_test = match (&sky, trail) {
@@ -114,8 +115,8 @@ pub(super) fn pass<R>(
         let segs = merge(&maps, frags, Regime::of(seeds), &is_star);
         merged.extend(segs.into_iter().map(|s| (s, seeds)));
     }
-    let points = matches!(star_test, StarTest::Round);
-    let (cands, d) = accept(&maps, merged, &is_star, points);
+    debug_assert_eq!(maps.points, matches!(star_test, StarTest::Round));
+    let (cands, d) = accept(&maps, merged, &is_star);
     dropped.extend(d);
     let (kept, d) = explain_away(&maps, cands);
     dropped.extend(d);

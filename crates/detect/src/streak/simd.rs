@@ -75,6 +75,7 @@ mod tests {
                 noise: &noise,
                 under_trails: None,
                 removed: None,
+                points: true,
                 sample_corr: Default::default(),
             };
             // Contrast samples (15 taps, and fewer: padded lanes) inside, at and beyond the

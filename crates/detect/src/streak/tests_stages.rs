@@ -2,7 +2,7 @@
 //! promises, on input where the answer is known.
 
 use super::Candidate;
-use super::accept::{accept, open_ended, score};
+use super::accept::{PAIR_BOX_PX, accept, open_ended, pair_score, score};
 use super::explain::{Reason, Seeds};
 use super::explain_away::explain_away;
 use super::flatten::flatten;
@@ -58,6 +58,8 @@ pub(super) struct World {
     pub(super) p: Sanitized,
     pub(super) noise: LineNoise,
     pub(super) removed: Option<Vec<f32>>,
+    /// The stars are points (`Maps::points`).
+    pub(super) points: bool,
 }
 
 impl World {
@@ -78,6 +80,7 @@ impl World {
             p,
             noise,
             removed: None,
+            points: true,
         }
     }
 
@@ -92,6 +95,7 @@ impl World {
             noise: &self.noise,
             under_trails: None,
             removed: self.removed.as_deref(),
+            points: self.points,
             sample_corr: Default::default(),
         }
     }
@@ -280,17 +284,18 @@ fn merge_keeps_a_sub_noise_streak_whole() {
 /// full-line segment shorter than that stage's shortest line.
 #[test]
 fn accept_scores_a_streak_and_drops_a_short_one() {
-    let world = World::new(streak_map(3.0, 64.0, 30, 90));
+    let mut world = World::new(streak_map(3.0, 64.0, 30, 90));
+    world.points = false;
     let s = refined(&world.maps()).unwrap();
     let short = Seg { length: 10.0, ..s };
     let merged = vec![(short, Seeds::Local), (s, Seeds::Local)];
-    let (cands, dropped) = accept(&world.maps(), merged, &no_star, false);
+    let (cands, dropped) = accept(&world.maps(), merged, &no_star);
     assert_eq!(cands.len(), 1);
     assert!(cands[0].2 > 0.0 && cands[0].2 <= 1.0, "{}", cands[0].2);
     assert!(matches!(dropped[0].reason, Reason::TooShort { .. }));
     // The same streak from the full-line stage is shorter than that stage's lines: the
     // other stages' (they resolve it, with sharper ends).
-    let (cands, dropped) = accept(&world.maps(), vec![(s, Seeds::FullLine)], &no_star, false);
+    let (cands, dropped) = accept(&world.maps(), vec![(s, Seeds::FullLine)], &no_star);
     assert!(cands.is_empty());
     assert!(
         matches!(dropped[0].reason, Reason::TooShort { limit, .. } if limit == MIN_LENGTH_PX),
@@ -298,12 +303,7 @@ fn accept_scores_a_streak_and_drops_a_short_one() {
         dropped[0].reason
     );
     // The star test drops it.
-    let (cands, dropped) = accept(
-        &world.maps(),
-        vec![(s, Seeds::Local)],
-        &|_: &Seg| true,
-        false,
-    );
+    let (cands, dropped) = accept(&world.maps(), vec![(s, Seeds::Local)], &|_: &Seg| true);
     assert!(cands.is_empty() && dropped[0].reason == Reason::StarTrail);
 }
 
@@ -659,8 +659,9 @@ fn a_segment_whose_light_goes_on_beyond_an_end_is_open() {
 #[test]
 fn a_long_line_is_credited_where_stars_are_points_unless_open() {
     let scored = |rest: f64, points: bool| {
-        let (world, s) = open_world(20, rest);
-        let (cands, dropped) = accept(&world.maps(), vec![(s, Seeds::Local)], &no_star, points);
+        let (mut world, s) = open_world(20, rest);
+        world.points = points;
+        let (cands, dropped) = accept(&world.maps(), vec![(s, Seeds::Local)], &no_star);
         assert!(dropped.is_empty(), "{dropped:?}");
         let area = (world.w * world.h) as f64;
         (
@@ -674,4 +675,32 @@ fn a_long_line_is_credited_where_stars_are_points_unless_open() {
     assert_eq!(closed, credited);
     assert_eq!(scored(0.1, false).0, plain);
     assert_eq!(scored(0.4, true).0, plain);
+}
+
+/// Step 8, the box: where stars are points, a candidate whose fitted box is at most
+/// `PAIR_BOX_PX` across (two star blobs side by side) is scored with the pair debit; a longer
+/// one keeps its score, and so does a short one where stars are trails.
+#[test]
+fn a_short_box_is_debited_where_stars_are_points() {
+    let scored = |x0: usize, x1: usize, points: bool| {
+        let mut world = World::new(streak_map(3.0, 64.0, x0, x1));
+        world.points = points;
+        let maps = world.maps();
+        let s = refined(&maps).unwrap();
+        let c = candidate(&maps, &s, 0.9);
+        let d = &c.detection;
+        let across = (d.x2 - d.x1).hypot(d.y2 - d.y1);
+        let area = (world.w * world.h) as f64;
+        (across, d.score, pair_score(&s, area, &world.p))
+    };
+    // A 20 px line: its box is short.
+    let (across, debited, pair) = scored(50, 70, true);
+    assert!(across <= PAIR_BOX_PX, "{across}");
+    assert_eq!(debited, pair);
+    assert!(pair < 0.9);
+    assert_eq!(scored(50, 70, false).1, 0.9);
+    // A 60 px line: its box is longer.
+    let (across, kept, _) = scored(30, 90, true);
+    assert!(across > PAIR_BOX_PX, "{across}");
+    assert_eq!(kept, 0.9);
 }
