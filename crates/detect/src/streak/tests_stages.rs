@@ -607,11 +607,11 @@ fn a_long_full_line_candidate_is_scored_with_its_credit() {
         ..long
     };
     let mp = 1_048_576.0;
-    assert!((score(&long, true, mp, &p) - 0.5).abs() < 1e-6);
+    assert!((score(&long, true, false, mp, &p) - 0.5).abs() < 1e-6);
     let plain = confidence(snr, long.elongation, mp, &p);
     assert!(plain < 0.2, "{plain}");
-    assert_eq!(score(&long, false, mp, &p), plain);
-    assert_eq!(score(&short, false, mp, &p), plain);
+    assert_eq!(score(&long, false, false, mp, &p), plain);
+    assert_eq!(score(&short, false, false, mp, &p), plain);
 }
 
 /// A horizontal streak on row 30 of a 400 x 60 map: 3 (unit noise) from x `x0` to 249 px on,
@@ -666,8 +666,8 @@ fn a_long_line_is_credited_where_stars_are_points_unless_open() {
         let area = (world.w * world.h) as f64;
         (
             cands[0].2,
-            score(&s, true, area, &world.p),
-            score(&s, false, area, &world.p),
+            score(&s, true, points, area, &world.p),
+            score(&s, false, points, area, &world.p),
         )
     };
     let (closed, credited, plain) = scored(0.1, true);
@@ -675,6 +675,11 @@ fn a_long_line_is_credited_where_stars_are_points_unless_open() {
     assert_eq!(closed, credited);
     assert_eq!(scored(0.1, false).0, plain);
     assert_eq!(scored(0.4, true).0, plain);
+    // The credit where stars are points is larger than a full line's elsewhere.
+    let area = (W * H) as f64;
+    let (_, s) = open_world(20, 0.1);
+    let p = params();
+    assert!(score(&s, true, true, area, &p) > score(&s, true, false, area, &p));
 }
 
 /// Step 8, the box: where stars are points, a candidate whose fitted box is at most
