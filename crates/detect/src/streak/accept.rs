@@ -165,8 +165,18 @@ pub(super) fn score(s: &Seg, credited: bool, points: bool, area_px: f64, p: &San
     confidence(s.snr + credit, s.elongation, area_px, p)
 }
 
-/// Where stars are points, the confidence of a candidate whose fitted box is at most
-/// [`PAIR_BOX_PX`] across, with [`PAIR_DEBIT`] less SNR (see there).
+/// The confidence of candidate `s` once its box is fitted, `across_px` along its diagonal:
+/// where stars are points and the box is at most [`PAIR_BOX_PX`] across (two star blobs side
+/// by side), [`pair_score`]; otherwise `score`, as [`accept`] gave it.
+pub(super) fn boxed_score(maps: &Maps, s: &Seg, across_px: f64, score: f64) -> f64 {
+    if maps.points && across_px <= PAIR_BOX_PX {
+        pair_score(s, (maps.w * maps.h) as f64, maps.p)
+    } else {
+        score
+    }
+}
+
+/// The confidence of a candidate with [`PAIR_DEBIT`] less SNR (see [`PAIR_BOX_PX`]).
 pub(super) fn pair_score(s: &Seg, area_px: f64, p: &Sanitized) -> f64 {
     confidence(s.snr - PAIR_DEBIT, s.elongation, area_px, p)
 }

@@ -1,6 +1,6 @@
 //! Step 7, output: the candidate, its score and its box in the generator's label convention.
 
-use super::accept::{PAIR_BOX_PX, pair_score};
+use super::accept::boxed_score;
 use super::fit::fitted_box;
 use super::maps::Maps;
 use super::params::Sanitized;
@@ -58,13 +58,8 @@ pub(super) fn boxed(maps: &Maps, s: &Seg, c: Candidate) -> Candidate {
     let Some(b) = fitted_box(maps, s) else {
         return c;
     };
-    // Where stars are points a short box is most often two star blobs side by side.
-    let pair = maps.points && (b.x_max - b.x_min).hypot(b.y_max - b.y_min) <= PAIR_BOX_PX;
-    let score = if pair {
-        pair_score(s, (maps.w * maps.h) as f64, maps.p)
-    } else {
-        c.detection.score
-    };
+    let across = (b.x_max - b.x_min).hypot(b.y_max - b.y_min);
+    let score = boxed_score(maps, s, across, c.detection.score);
     let detection = Detection {
         x1: b.x_min,
         y1: b.y_min,

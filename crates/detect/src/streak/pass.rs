@@ -63,6 +63,11 @@ pub(super) fn pass<R>(
         (None, None) => full_line_components(&flat.zc, w, h, None, binned),
         _ => Vec::new(),
     };
+    let star_test = match (&sky, trail) {
+        (Some((sky, z_sky)), _) => StarTest::Predicted(sky, z_sky),
+        (None, Some(a)) => StarTest::Along(a),
+        (None, None) => StarTest::Round,
+    };
     let maps = Maps {
         w,
         h,
@@ -73,13 +78,8 @@ pub(super) fn pass<R>(
         noise: &noise,
         under_trails: flat.under_trails.as_deref(),
         removed: flat.removed.as_deref(),
-        points: sky.is_none() && trail.is_none(),
+        points: matches!(star_test, StarTest::Round),
         sample_corr: Default::default(),
-    };
-    let star_test = match (&sky, trail) {
-        (Some((sky, z_sky)), _) => StarTest::Predicted(sky, z_sky),
-        (None, Some(a)) => StarTest::Along(a),
-        (None, None) => StarTest::Round,
     };
     // Each segment's answer kept: `accept` asks again of every segment it is given, each
     // one a fragment or a joined segment that was asked of already (`fragments`, `merge`).
@@ -115,7 +115,6 @@ pub(super) fn pass<R>(
         let segs = merge(&maps, frags, Regime::of(seeds), &is_star);
         merged.extend(segs.into_iter().map(|s| (s, seeds)));
     }
-    debug_assert_eq!(maps.points, matches!(star_test, StarTest::Round));
     let (cands, d) = accept(&maps, merged, &is_star);
     dropped.extend(d);
     let (kept, d) = explain_away(&maps, cands);
