@@ -76,6 +76,16 @@ const SEARCH_IN_PX: f64 = 40.0;
 /// 0.8628, one false box fewer and two more found at confidence 0.5.
 const EXIT_ODDS: f64 = 10.0;
 
+/// `EXIT_ODDS` where stars are points (fixed pointing): there streaks are shorter and most end
+/// in the frame. Of the streak ends of the faint-limit-fixed development set (seed 9422, 300
+/// images) 184 lie beyond the frame and 416 in it, against the survey set's 413 and 119 above,
+/// so the odds are about 8 times lower: 1. With 10 a faint streak whose light beside the line
+/// is below its level was carried on to the border by the prior alone (faint-limit-fixed 9423,
+/// image 126: a 150 px streak boxed to the frame's edge, 50 px too long, IoU 0.35; with 1, 0.9).
+/// Faint-limit-fixed development 9423 (600 images): found 404 -> 405, false boxes 23 -> 22;
+/// 9421 and 9422 the same.
+const POINTS_EXIT_ODDS: f64 = 1.0;
+
 /// The share of its brightness at which the streak, in the hypothesis that it leaves the frame,
 /// goes on over the stretch between its change point and the border. A tumbling streak's light
 /// varies by a factor 2-3 along it (the survey rows' tumble amplitudes are up to 0.5), so its
@@ -429,7 +439,12 @@ fn end(maps: &Maps, s: &Seg, fit: &Fit, sign: f64, (lo, hi): (f64, f64), beyond:
         // The samples after the change point (none: it is the last).
         let stretch = last + 0.5 * STEP_PX - best_d;
         let bright = centre_in.max(2.0 * level);
-        if stretch < 0.5 * STEP_PX || goes_on(&at, sign, (best_d, last), bright, sz) {
+        let odds = if maps.points {
+            POINTS_EXIT_ODDS
+        } else {
+            EXIT_ODDS
+        };
+        if stretch < 0.5 * STEP_PX || goes_on(&at, sign, (best_d, last), (bright, sz), odds) {
             return border + beyond;
         }
     }
@@ -443,13 +458,14 @@ fn end(maps: &Maps, s: &Seg, fit: &Fit, sign: f64, (lo, hi): (f64, f64), beyond:
 /// star's trail across it no streak; less the median of the lines beside it,
 /// `BESIDE_SIGMAS`, where that is above zero) between `GOES_ON_SHARE` of `bright` and none,
 /// over its white-noise variance (z's correlation length, 2 sqrt(pi) sigma, over the
-/// stretch's length), against the prior odds `EXIT_ODDS` that it leaves the frame.
+/// stretch's length), against the prior `odds` that it leaves the frame (`EXIT_ODDS`,
+/// `POINTS_EXIT_ODDS`).
 fn goes_on(
     at: &impl Fn(f64, f64) -> f64,
     sign: f64,
     (from, to): (f64, f64),
-    bright: f64,
-    sz: f64,
+    (bright, sz): (f64, f64),
+    odds: f64,
 ) -> bool {
     let mean_along = |v: f64| {
         let (mut sum, mut count) = (0.0, 0.0);
@@ -469,7 +485,7 @@ fn goes_on(
     let stretch = to + 0.5 * STEP_PX - from;
     let var = 2.0 * std::f64::consts::PI.sqrt() * sz / stretch;
     let lit = GOES_ON_SHARE * bright;
-    lit * (mean - 0.5 * lit) / var > -EXIT_ODDS.ln()
+    lit * (mean - 0.5 * lit) / var > -odds.ln()
 }
 
 impl Fit {

@@ -92,11 +92,17 @@ fn gap_between_star_blobs_in_a_row() {
         ),
         None
     );
-    // A long segment is tested in its chunks only.
+    // A long segment is tested in its chunks only: five blobs in a row, the segment within
+    // them (beyond the blobs, its ends would be gaps by any reading).
+    let mut z = vec![0f32; W * H];
+    for cx in [36.0, 50.0, 64.0, 78.0, 92.0] {
+        blob(&mut z, cx, 7.0);
+    }
+    let five = World::new(z);
     let long = Seg { length: 65.0, ..s };
     let reading = Reading::of(&long, true, Regime::Resolved, false);
     assert_eq!(reading, Reading::Chunks);
-    assert_eq!(gap(&world.maps(), &long, reading), None);
+    assert_eq!(gap(&five.maps(), &long, reading), None);
 }
 
 /// Step 7, the gap test where stars are points, on a resolved segment longer than

@@ -519,18 +519,27 @@ fn the_box_ends_at_the_footprint_outline() {
 }
 
 /// Step 7 at the border: the last 12 px of a streak dark before the border are noise on a
-/// faint streak (it leaves the frame, `EXIT_ODDS`) and the streak's own end on a bright one.
+/// faint survey streak (it leaves the frame, `EXIT_ODDS`) and the streak's own end on a
+/// bright one; where stars are points, most streaks end in the frame (`POINTS_EXIT_ODDS`) and
+/// the faint one ends there too.
 #[test]
 fn a_dark_stretch_at_the_border_ends_only_a_bright_streak() {
     let end = W - 1 - 12;
-    let faint = World::new(streak_map(0.8, 64.0, 0, end));
+    let mut faint = World::new(streak_map(0.8, 64.0, 0, end));
+    faint.points = false;
     let c = candidate(&faint.maps(), &across(8.0), 0.9).detection;
     // On to the border; the box's last 2 px are the 0.5 % of the flux it leaves out, dimmer
     // there than along the rest of the streak.
     assert!(c.x2 >= W as f64 - 3.0, "{c:?}");
-    let bright = World::new(streak_map(6.0, 64.0, 0, end));
-    let c = candidate(&bright.maps(), &across(60.0), 0.9).detection;
+    faint.points = true;
+    let c = candidate(&faint.maps(), &across(8.0), 0.9).detection;
     assert!((c.x2 - (end as f64 + 1.0)).abs() <= 2.0, "{c:?}");
+    for points in [false, true] {
+        let mut bright = World::new(streak_map(6.0, 64.0, 0, end));
+        bright.points = points;
+        let c = candidate(&bright.maps(), &across(60.0), 0.9).detection;
+        assert!((c.x2 - (end as f64 + 1.0)).abs() <= 2.0, "{c:?}");
+    }
 }
 
 /// Step 7 at the border: a tumbling streak dims along its length, and where its far part falls
