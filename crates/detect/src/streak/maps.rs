@@ -81,9 +81,9 @@ impl Maps<'_> {
     /// (offsets -1, 0, 1) less the mean of side bands beyond the streak's smoothed
     /// cross-section (z falls below 1 % of its peak by 3 sqrt(2) psf_sigma), six samples on
     /// each side, 1 px apart (`POINTS_SIDE_STEP_PX` apart where stars are points and the noise
-    /// is white, `WHITE_EXCESS`). A line
-    /// through a patch of raised background (a dark frame's warm region, the halo of a bright
-    /// object) has its sides raised too and no contrast; a streak keeps its level.
+    /// is white, `WHITE_EXCESS`). A line through a patch of raised background (a dark frame's
+    /// warm region, the halo of a bright object) has its sides raised too and no contrast; a
+    /// streak keeps its level.
     pub(super) fn contrast_taps(&self) -> Vec<(f64, f64)> {
         let d = (3.0 * std::f64::consts::SQRT_2 * self.p.psf_sigma).ceil() + 1.0;
         let step = if self.points && self.noise.long_excess() <= WHITE_EXCESS {

@@ -30,6 +30,22 @@ pub(super) struct LineNoise {
     /// others): computed once here for the line filter too (an exp per pair of a line's
     /// pixels, 96 orientations of 51 px at the binned levels).
     model: Vec<f64>,
+    /// The upper median over orientations of the longest filter's ratio (a filter the pass
+    /// does not run counts as 1; where stars are points it runs them all): near 1 where the
+    /// frame's noise is white on a line's scale (synthetic frames: 1.02-1.38 measured on
+    /// three fixed images), above where it is correlated (the NEOSSat dark frame under fixed
+    /// stars: 1.18-1.72). Taken once here: every contrast sample's taps ask for it
+    /// (`Maps::contrast_taps`).
+    long_excess: f64,
+}
+
+/// [`LineNoise`]'s `long_excess` of its `ratio` table (`n_angles` rows of `n_lengths`).
+fn long_excess(ratio: &[f64], n_angles: usize, n_lengths: usize) -> f64 {
+    let mut v: Vec<f64> = (0..n_angles)
+        .map(|j| ratio[j * n_lengths + n_lengths - 1])
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
 }
 
 /// The sums along a line of two lengths at `centres` (a multiple of four, each centre's lines
@@ -107,6 +123,7 @@ impl LineNoise {
             n_angles: p.n_angles,
             lengths: p.half_lengths.iter().map(|&h| 2 * h + 1).collect(),
             ratio: vec![1.0; p.n_angles * p.half_lengths.len()],
+            long_excess: 1.0,
             model: (0..p.n_angles)
                 .flat_map(|j| {
                     if p.uses(j) {
@@ -130,20 +147,14 @@ impl LineNoise {
         self.ratio[j * self.lengths.len() + l]
     }
 
+    /// See [`LineNoise::long_excess`]'s field.
+    pub(super) fn long_excess(&self) -> f64 {
+        self.long_excess
+    }
+
     /// The ratio for a sum of `n` samples along orientation `theta` (rad): the nearest
     /// orientation, linear in length between the filter lengths, constant beyond them (the
     /// measured correlations are short-range, so the ratio levels off).
-    /// The median over orientations of the longest filter's ratio: near 1 where the frame's
-    /// noise is white on a line's scale (synthetic frames: 1.02-1.38 measured on three fixed
-    /// images), above where it is correlated (the NEOSSat dark frame under fixed stars:
-    /// 1.18-1.72).
-    pub(super) fn long_excess(&self) -> f64 {
-        let l = self.lengths.len() - 1;
-        let mut v: Vec<f64> = (0..self.n_angles).map(|j| self.at(j, l)).collect();
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    }
-
     pub(super) fn for_sum(&self, theta: f64, n: usize) -> f64 {
         let j =
             ((theta.rem_euclid(PI) / PI * self.n_angles as f64).round() as usize) % self.n_angles;
@@ -303,6 +314,7 @@ pub(super) fn measured_at(
     }
     LineNoise {
         n_angles: p.n_angles,
+        long_excess: long_excess(&ratio, p.n_angles, lengths.len()),
         lengths,
         ratio,
         model: models,
