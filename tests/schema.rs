@@ -187,7 +187,7 @@ const CAMPAIGN_HASHES: &[(&str, &str)] = &[
     ),
     (
         "results/campaigns/faint-limit-fixed.toml",
-        "12a76498fadb684109ab7c416a41df8811e0763f3d2f304fb0378d7f95270cb6",
+        "e2b3025feb89c7928f19ca993bddcb55c8abecc82003931aca9d4b034102b241",
     ),
     (
         "results/campaigns/faint-limit-survey-semisynthetic.toml",
