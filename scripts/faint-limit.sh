@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The streak detector's faint limit (issue #44): run the faint-limit campaigns of
 # results/campaigns/ (a results test set with dim debris and no SNR gate; 1-3 min each on 2
-# cores) and write, from each, the recall against the streak's integrated matched-filter SNR,
-# its 50% point and the precision (scripts/faint_limit.py): the streak detector's in the folder,
+# cores, faint-limit-fixed's 1200 images about 10) and write, from each, the recall against
+# the streak's integrated matched-filter SNR, its 50% point and the precision
+# (scripts/faint_limit.py): the streak detector's in the folder,
 # YOLO's (the row's model, run beside it) in its yolo/:
 #   faint-limit-survey                -> results/faint-limit/ (survey, synthetic noise)
 #   faint-limit-fixed                 -> results/faint-limit-fixed/ (point stars)
