@@ -50,6 +50,19 @@ const SEGMENT_SIGMA: f64 = 5.0;
 /// false box on each of two survey development sets (seeds 777 and 778).
 pub(super) const CONFIDENCE_CREDIT: f64 = 2.0;
 
+/// In the star-aware pass (the predicted trails subtracted first, `sky`) lines are summed to
+/// within this many degrees of the trails, not `star_trail_tolerance_deg`: a faint streak a few
+/// degrees off them is left to no other stage that reaches its line SNR, and the star test
+/// still judges each seed. Nearer than this a whole line runs along one trail's residual (and
+/// the pass drops a full-line segment refined or merged to nearer). Development sets
+/// (`examples/sky_eval`; found / false boxes at confidence 0.5), tolerance 5 -> 2 degrees: survey
+/// faint limit, linearised (seed 9402, 300 images) 199 / 5 -> 209 / 7, SNR50 fitted 9.97 ->
+/// 9.35 (1 degree: 211 / 9; 0: 212 / 19; both without the drop); not linearised 169 / 8 -> 176
+/// / 7; on the dark frame's noise, linearised (seed 9432) 120 / 2 -> 125 / 2, SNR50 13.61 ->
+/// 12.92. Survey rows' development sets (150 images, mAP50-95): rotated semisynthetic 778
+/// 0.9185 -> 0.9253 (four streaks more), 777 0.9567 -> 0.9558, three others within 0.0001.
+pub(super) const PREDICTED_SKIP_DEG: f64 = 2.0;
+
 /// A full line within the reach of its side bands (`SIDE`) of the frame's outline (a padded
 /// or rotated frame's footprint, see [`Footprint`], else the frame's border) and within
 /// `OUTLINE_DEG` of its direction measures its contrast against the edge: a real frame's edge

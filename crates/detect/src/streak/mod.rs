@@ -31,8 +31,8 @@
 //!    that a sum covers 100-400 pixels and a streak too faint per pixel for step 3 but long
 //!    enough (integrated SNR grows as the square root of its length) still gives a component.
 //!    3c. **Full lines** (`full_lines`, the star-aware pass only): a Radon transform of the
-//!    clipped map binned by 4, every line through the frame at every angle beyond the trails'
-//!    tolerance, each against the bins beside it; the best segment of each of the most
+//!    clipped map binned by 4, every line through the frame at every angle more than 2 degrees
+//!    from the predicted trails (`PREDICTED_SKIP_DEG`; they are subtracted first), each against the bins beside it; the best segment of each of the most
 //!    significant lines seeds step 5, which finds its ends as the most significant stretch of
 //!    its profile and measures its SNR with a clipped mean (a frame-crossing survey streak is
 //!    600-1100 px long, and each of its pixels far below the noise).

@@ -7,11 +7,11 @@ use std::cell::RefCell;
 use std::collections::HashMap;
 
 use super::accept::accept;
-use super::explain::{Dropped, Seeds};
+use super::explain::{Dropped, Reason, Seeds};
 use super::explain_away::explain_away;
 use super::flatten::flatten;
 use super::fragments::fragments;
-use super::full_lines::full_line_components;
+use super::full_lines::{PREDICTED_SKIP_DEG, full_line_components};
 use super::maps::Maps;
 use super::merge::merge;
 use super::output::{Candidate, boxed, unboxed};
@@ -20,7 +20,7 @@ use super::radon::long_line_components;
 use super::reach::reach;
 use super::refine::Regime;
 use super::seeds::{line_noise, local_seeds};
-use super::segment::Seg;
+use super::segment::{Seg, angle_diff_deg};
 use super::sky::{Sky, StarTrail};
 use super::star_test::StarTest;
 
@@ -50,15 +50,17 @@ pub(super) fn pass<R>(
     let local = local_seeds(&flat.zc, w, h, p, &noise);
     let (long, binned) = long_line_components(&flat.zc, w, h, p);
     // Lines across the frame (`full_lines`): in the star-aware pass with predicted trails
-    // subtracted, away from the trails, and where stars are points, at every angle
+    // subtracted, to within `PREDICTED_SKIP_DEG` of the trails, and where stars are points,
+    // at every angle
     // (faint-limit-fixed development seed 9422, 300 images: found 162 -> 181, false boxes 13
     // -> 10 with the tumbling floor of `accept::gap`; the fixed rows' development sets, seed
     // 777, the same but one box). Not in the pass along a frame's own trails (none
     // predicted, none subtracted: every line across the frame crosses them all, which made 5
     // false boxes for 4 in `tests/own_trails.rs`).
+    let skip = p.trail_tol.min(PREDICTED_SKIP_DEG);
     let full = match (trail, stars) {
         (Some(a), Some(t)) if !t.is_empty() => {
-            full_line_components(&flat.zc, w, h, Some((a, p.trail_tol)), binned)
+            full_line_components(&flat.zc, w, h, Some((a, skip)), binned)
         }
         (None, None) => full_line_components(&flat.zc, w, h, None, binned),
         _ => Vec::new(),
@@ -112,7 +114,24 @@ pub(super) fn pass<R>(
         (long_frags, Seeds::LongLine),
         (full_frags, Seeds::FullLine),
     ] {
-        let segs = merge(&maps, frags, Regime::of(seeds), &is_star);
+        let mut segs = merge(&maps, frags, Regime::of(seeds), &is_star);
+        // A full line refined or merged to nearer the trails than the stage looks has come to
+        // lie along a trail's residual, or beside a trough where trails were subtracted (the
+        // side bands below zero): `debris_running_through_overlapping_trails_is_boxed_whole`
+        // got two such boxes crossing its streak's ends, and the faint development set (seed
+        // 9402, not linearised) lost 3 false boxes of 10.
+        if seeds == Seeds::FullLine
+            && stars.is_some()
+            && let Some(a) = trail
+        {
+            segs.retain(|s| {
+                let along = angle_diff_deg(s.theta.to_degrees(), a) < skip;
+                if along {
+                    dropped.push(Dropped::of_seg(s, seeds, Reason::StarTrail));
+                }
+                !along
+            });
+        }
         merged.extend(segs.into_iter().map(|s| (s, seeds)));
     }
     let (cands, d) = accept(&maps, merged, &is_star);
